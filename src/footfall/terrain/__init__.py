@@ -1,0 +1,14 @@
+"""Terrain generation: LittleDog-like terrain modules and boards made of them."""
+
+from footfall.terrain.modules import (
+    KINDS,
+    MODULE_CELLS,
+    MODULE_RESOLUTION,
+    MODULE_SIZE,
+    make_board,
+    make_module,
+    parse_module_spec,
+)
+
+__all__ = ["KINDS", "MODULE_CELLS", "MODULE_RESOLUTION", "MODULE_SIZE", "make_board",
+           "make_module", "parse_module_spec"]

@@ -1,0 +1,99 @@
+"""Terrain templates: Eq. 4, NaN rules, the library and its file."""
+
+import numpy as np
+import pytest
+
+from footfall.errors import FootfallError
+from footfall.heightmap import HeightMap
+from footfall.reward import analytic_templates
+from footfall.scales import FeatureConfig
+from footfall.templates import (TemplateLibrary, bandwidth_for_rms, extract_templates,
+                                merge_libraries, rbf_features, squared_distances)
+
+CONFIG = FeatureConfig()
+
+
+def test_rbf_matches_equation_4_computed_directly():
+    rng = np.random.default_rng(0)
+    c = rng.normal(size=(7, 81)) * 0.01
+    t = rng.normal(size=(5, 81)) * 0.01
+    h = 300.0
+    direct = np.array([[np.exp(-h * np.sum([(t[j, i] - c[k, i]) ** 2 for i in range(81)]))
+                        for j in range(5)] for k in range(7)])
+    np.testing.assert_allclose(rbf_features(c, t, h), direct, rtol=1e-10)
+    assert rbf_features(t[:1], t[:1], h)[0, 0] == pytest.approx(1.0)  # identical patch
+
+
+def test_holes_are_left_out_and_the_sum_rescaled():
+    rng = np.random.default_rng(1)
+    t = rng.normal(size=(3, 50))
+    c = rng.normal(size=(2, 50))
+    c[1, :10] = np.nan
+    d = squared_distances(c, t)
+    np.testing.assert_allclose(d[1], ((t[:, 10:] - c[1, 10:]) ** 2).sum(axis=1) * 50 / 40)
+    np.testing.assert_allclose(d[0], ((t - c[0]) ** 2).sum(axis=1))
+    assert np.isfinite(rbf_features(c, t, 0.1)).all()
+    assert np.isnan(squared_distances(np.full((1, 50), np.nan), t)).all()
+
+
+def test_bandwidth_for_rms():
+    grid = CONFIG.grids[0]
+    h = bandwidth_for_rms(0.004, grid)
+    assert np.exp(-h * grid.size * 0.004 ** 2) == pytest.approx(np.exp(-1))
+    with pytest.raises(FootfallError):
+        bandwidth_for_rms(0.0, grid)
+
+
+def _bumpy_map():
+    rng = np.random.default_rng(2)
+    from scipy.ndimage import gaussian_filter
+    return HeightMap(gaussian_filter(rng.normal(size=(400, 300)), 5) * 0.05 + 0.1, 0.001,
+                     (0.0, -0.15))
+
+
+def test_extracted_templates_are_relative_patches_of_the_footholds():
+    hm = _bumpy_map()
+    pos = np.array([[0.1, 0.0], [0.2, 0.05], [0.385, 0.0]])  # the last runs off the map
+    lib = extract_templates(hm, pos, 0.0, False, CONFIG)
+    assert lib.counts == (3, 2, 2)  # only the small patch still fits at x = 0.385
+    # A template compared with its own foothold gives exactly 1.
+    from footfall.patches import foothold_patches
+    fp = foothold_patches(hm, pos[:2], 0.0, False, CONFIG)
+    x = lib.features(fp.relative, (50.0, 50.0, 50.0))
+    np.testing.assert_allclose(x[[0, 1], [0, 1]], 1.0)
+    # Relative heights: the foothold's own sample is zero.
+    for t, g in zip(lib.templates, CONFIG.grids):
+        np.testing.assert_allclose(t[:, g.size // 2], 0.0, atol=1e-12)
+    assert lib.terrain_hashes == (hm.content_hash(),)
+
+
+def test_library_save_load_round_trip_and_merge(tmp_path):
+    hm = _bumpy_map()
+    lib = extract_templates(hm, np.array([[0.1, 0.0], [0.2, 0.05]]), 0.3, True, CONFIG)
+    path = tmp_path / "lib.npz"
+    lib.save(path)
+    back = TemplateLibrary.load(path)
+    assert back.config == lib.config and back.terrain_hashes == lib.terrain_hashes
+    for a, b in zip(back.templates + back.sources, lib.templates + lib.sources):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_allclose(back.sources[0][:, 2:], [[0.3, 1.0], [0.3, 1.0]])
+    analytic, names = analytic_templates(CONFIG)
+    merged = merge_libraries([lib, analytic])
+    assert merged.counts == (5, 5, 5)
+    assert merged.names()[:2] == ("small.template_0", "small.template_1")
+    sub = merged.subset(tuple(np.array([0, 4]) for _ in range(3)))
+    np.testing.assert_array_equal(sub.templates[1][1], analytic.templates[1][2])
+
+
+def test_incomplete_or_misshapen_templates_are_rejected():
+    analytic, _ = analytic_templates(CONFIG)
+    bad = list(analytic.templates)
+    bad[0] = bad[0].copy()
+    bad[0][0, 0] = np.nan
+    with pytest.raises(FootfallError, match="complete"):
+        TemplateLibrary(CONFIG, tuple(bad), analytic.sources)
+    with pytest.raises(FootfallError, match="shape"):
+        TemplateLibrary(CONFIG, (analytic.templates[1],) + analytic.templates[1:], analytic.sources)
+    other = FeatureConfig(template_resolution=0.002)
+    with pytest.raises(FootfallError, match="different feature configurations"):
+        merge_libraries([analytic, analytic_templates(other)[0]])

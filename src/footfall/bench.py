@@ -63,12 +63,18 @@ def bench_scoring(repeats: int = 7, baseline_sample: int = 300, seed: int = 0) -
     t0 = time.perf_counter()
     grid = score_grid(board, reward)
     first = time.perf_counter() - t0
-    times = []
-    for _ in range(repeats):
+    times, times64 = [], []
+    for _ in range(repeats):  # alternate the two precisions: both see the same machine load
         t0 = time.perf_counter()
         grid = score_grid(board, reward)
         times.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        grid64 = score_grid(board, reward, dtype=np.float64)
+        times64.append(time.perf_counter() - t0)
     dense = float(np.median(times))
+    finite = np.isfinite(grid64.reward)
+    float32_error = float(np.max(np.abs(grid.reward[finite] - grid64.reward[finite]))
+                          / np.max(np.abs(grid64.reward[finite])))
     tracemalloc.start()
     score_grid(board, reward)
     _, peak = tracemalloc.get_traced_memory()
@@ -84,7 +90,7 @@ def bench_scoring(repeats: int = 7, baseline_sample: int = 300, seed: int = 0) -
         loop_values[k] = reward.terrain_reward(fp)[0]
     per_candidate = (time.perf_counter() - t0) / sample.size
     loop_total = per_candidate * pts.shape[0]
-    dense_values = grid.reward.ravel()[sample]
+    dense_values = grid64.reward.ravel()[sample]
     both = np.isfinite(loop_values) & np.isfinite(dense_values)
     flops = _flops(pts.shape[0], config, reward.library)
     return {
@@ -97,6 +103,8 @@ def bench_scoring(repeats: int = 7, baseline_sample: int = 300, seed: int = 0) -
         "dense_seconds_median": dense,
         "dense_seconds_all": times,
         "dense_seconds_first_call": first,
+        "dense_float64_seconds_median": float(np.median(times64)),
+        "float32_max_relative_difference": float32_error,
         "target_seconds": 0.1,
         "baseline_per_candidate_seconds": per_candidate,
         "baseline_sample": int(sample.size),
@@ -121,9 +129,11 @@ def format_scoring(r: dict) -> str:
         f"  dense:    {r['dense_seconds_median'] * 1000:8.1f} ms median of "
         f"{len(r['dense_seconds_all'])} (first call {r['dense_seconds_first_call'] * 1000:.1f} ms;"
         f" target {r['target_seconds'] * 1000:.0f} ms)",
+        f"  float64:  {r['dense_float64_seconds_median'] * 1000:8.1f} ms median "
+        f"(float32 differs by {r['float32_max_relative_difference']:.1e} of the reward scale)",
         f"  loop:     {r['baseline_seconds_extrapolated'] * 1000:8.1f} ms extrapolated from "
         f"{r['baseline_sample']} candidates ({r['baseline_per_candidate_seconds'] * 1e6:.0f} us each)",
-        f"  speed-up: {r['speedup_vs_loop']:8.1f} x   (max |dense - loop| = "
+        f"  speed-up: {r['speedup_vs_loop']:8.1f} x   (max |dense float64 - loop| = "
         f"{r['max_abs_difference_vs_loop']:.2e})",
         f"  work:     {r['gflop']:8.2f} GFLOP, {r['gflop_per_second']:.1f} GFLOP/s;"
         f" peak memory {r['peak_memory_mib']:.1f} MiB; {r['cores']} cores",

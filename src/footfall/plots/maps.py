@@ -35,8 +35,7 @@ def draw_score_map(ax: Axes, grid: ScoreGrid, *, title: str = "", label: str = "
               else (np.nanmin(values), np.nanmax(values)))
     if not hi > lo:
         hi = lo + 1e-12
-    colours = matplotlib.colormaps[cmap].copy()
-    colours.set_bad(INVALID_RGBA)
+    colours = matplotlib.colormaps[cmap].with_extremes(bad=INVALID_RGBA)
     step_x = grid.x[1] - grid.x[0] if grid.x.size > 1 else 1.0
     step_y = grid.y[1] - grid.y[0] if grid.y.size > 1 else 1.0
     extent = (grid.x[0] - step_x / 2, grid.x[-1] + step_x / 2,

@@ -92,7 +92,7 @@ def test_fast_path_equals_the_interpolating_path(yaw, mirror):
 
 @pytest.mark.parametrize("yaw, mirror", [(0.0, False), (np.pi, True), (np.pi, False)])
 def test_dense_scores_equal_the_per_candidate_definitions(yaw, mirror):
-    grid = score_grid(HMAP, REWARD, spacing=SPACING, yaw=yaw, mirror=mirror)
+    grid = score_grid(HMAP, REWARD, spacing=SPACING, yaw=yaw, mirror=mirror, dtype=np.float64)
     x, y = grid.x, grid.y
     # Interior points, points by the hole and points whose patches run off the map.
     picks = [(60, 20), (39, 15), (43, 15), (40, 13), (40, 17), (10, 15), (75, 5), (20, 28),
@@ -116,7 +116,7 @@ def _one_template_reward(hmap: HeightMap, s: int) -> LinearReward:
 @pytest.mark.parametrize("s", [0, 1, 2])
 def test_masked_template_distance_is_rescaled_over_the_data(s):
     reward = _one_template_reward(HMAP, s)
-    grid = score_grid(HMAP, reward, spacing=SPACING)
+    grid = score_grid(HMAP, reward, spacing=SPACING, dtype=np.float64)
     cfg = reward.config.grids[s]
     template = reward.library.templates[s][0]
     h = reward.bandwidths[s]
@@ -137,7 +137,7 @@ def test_low_coverage_makes_a_point_invalid():
     h = np.array(HMAP.heights)
     h[:, 100:] = np.nan  # no data for y >= y0 + 0.1 m: coverage falls off towards it
     hmap = HeightMap(h, RES, HMAP.origin)
-    grid = score_grid(hmap, REWARD, spacing=SPACING)
+    grid = score_grid(hmap, REWARD, spacing=SPACING, dtype=np.float64)
     slow = score_grid(hmap, REWARD, spacing=SPACING, fast=False)
     np.testing.assert_array_equal(grid.valid, slow.valid)
     # Coverage of every scale, from the patches themselves.

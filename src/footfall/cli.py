@@ -199,6 +199,209 @@ def demo(out: str, seed: int, as_json: bool) -> None:
     _emit(as_json, result, "\n".join(f"wrote {p}" for p in result["files"]))
 
 
+# --------------------------------------------------------------------- demos
+@cli.group()
+def demos() -> None:
+    """Collect and inspect demonstrated footholds (a demonstration store, .sqlite)."""
+
+
+def _terrain_label(info: dict) -> str:
+    modules = info.get("metadata", {}).get("modules")
+    if isinstance(modules, list) and modules and all(isinstance(m, dict) for m in modules):
+        return ", ".join(str(m.get("kind")) if m.get("kind") == "flat" or m.get("difficulty")
+                         is None else f"{m.get('kind')}:{m.get('difficulty')}" for m in modules)
+    shape = info.get("shape", ["?", "?"])
+    return f"{shape[0]} x {shape[1]} cells at {info.get('resolution', 0) * 1000:g} mm"
+
+
+@demos.command("collect")
+@click.option("--terrain", "terrains", multiple=True, required=True, metavar="FILE.npz",
+              help="Terrain height map to walk on; more files may follow it.")
+@click.argument("more_terrains", nargs=-1, metavar="[FILE.npz]...")
+@click.option("-n", "--n", "n", type=click.IntRange(min=1), required=True,
+              help="Number of demonstrations to add.")
+@click.option("--seed", type=click.IntRange(min=0), required=True, help="Random seed.")
+@click.option("-o", "--output", required=True,
+              help="Demonstration store (.sqlite): appended to, created if missing.")
+@click.option("--noise", type=click.FloatRange(min=0.0), default=None,
+              help="Noise of the expert's foothold values (default: the expert's).")
+@click.option("--second-best", type=click.FloatRange(0.0, 1.0), default=None,
+              help="Probability that the expert picks its second-best foothold "
+                   "(default: the expert's).")
+@click.option("--steps", type=click.Choice(["rough", "all"]), default="rough", show_default=True,
+              help="Record footholds on a board's non-flat modules only, or every step.")
+@json_option
+def demos_collect(terrains: tuple[str, ...], more_terrains: tuple[str, ...], n: int, seed: int,
+                  output: str, noise: float | None, second_best: float | None, steps: str,
+                  as_json: bool) -> None:
+    """Add the synthetic expert's foothold choices on terrains to a store.
+
+    The kinematic walker crosses each terrain along a few lateral paths in the
+    crawl gait; the N demonstrations are spread over terrains and paths. The
+    store is written in one transaction at the end: a failed or interrupted
+    command leaves it as it was.
+    """
+    from tqdm import tqdm
+
+    from footfall.heightmap import HeightMap
+    from footfall.store import DemoStore
+    from footfall.walker import collect_demonstrations
+
+    out = _out_path(output)
+    hmaps = [HeightMap.load(path) for path in terrains + more_terrains]
+    if out.exists():
+        with DemoStore(out):  # refuse a bad store before walking, not after
+            pass
+    try:
+        from footfall.expert import ExpertConfig, SyntheticExpert
+    except ImportError as exc:
+        raise FootfallError(f"the synthetic expert is not available ({exc})") from None
+    settings = {k: v for k, v in (("noise", noise), ("second_best_prob", second_best))
+                if v is not None}
+    expert = SyntheticExpert(config=ExpertConfig(**settings))
+    with tqdm(total=n, unit="demo", desc="collect", file=sys.stderr, dynamic_ncols=True,
+              disable=as_json or not sys.stderr.isatty()) as bar:
+        collected = collect_demonstrations(hmaps, expert, n, seed, rough_only=steps == "rough",
+                                           progress=lambda _: bar.update(1))
+    if not collected:
+        raise FootfallError("the walker recorded no demonstrations on these terrains "
+                            "(too short, or no rough modules on its paths: try --steps all)")
+    used = {d.terrain_hash for d in collected}
+    with DemoStore(out, create=True) as store:
+        ids = store.add_demonstrations(collected, terrains=[h for h in hmaps
+                                                            if h.content_hash() in used])
+        summary = store.summary()
+    by_terrain: dict[str, int] = {}
+    by_leg: dict[str, int] = {}
+    for d in collected:
+        by_terrain[d.terrain_hash] = by_terrain.get(d.terrain_hash, 0) + 1
+        by_leg[d.swing_leg] = by_leg.get(d.swing_leg, 0) + 1
+    data = {"store": str(out), "requested": n, "added": len(ids), "first_id": ids[0],
+            "last_id": ids[-1], "added_by_terrain": by_terrain, "added_by_leg": by_leg,
+            "expert": collected[0].expert, "seed": seed, "steps": steps,
+            "total": summary["demonstrations"], "terrains": summary["terrains"]}
+    text = (f"added {len(ids)} demonstrations (ids {ids[0]}..{ids[-1]}) to {out}: now "
+            f"{summary['demonstrations']} on {summary['terrains']} "
+            f"terrain{'s' if summary['terrains'] != 1 else ''}")
+    if len(ids) < n:
+        text += f" (only {len(ids)} of the {n} requested fit on these terrains)"
+    _emit(as_json, data, text)
+
+
+@demos.command("info")
+@click.argument("store_path", metavar="DEMOS.sqlite")
+@json_option
+def demos_info(store_path: str, as_json: bool) -> None:
+    """Count a store's demonstrations by terrain, swing leg and source; check the file."""
+    from footfall.store import DemoStore
+
+    with DemoStore(store_path) as store:
+        store.check()
+        summary = store.summary()
+        terrains = store.terrain_info()
+    data = {"store": str(store_path), **summary,
+            "terrain_info": {h: {k: v for k, v in t.items() if k != "metadata"}
+                             | {"label": _terrain_label(t)} for h, t in terrains.items()}}
+    n_t = summary["terrains"]
+    lines = [(f"{store_path}: {summary['demonstrations']} demonstrations on {n_t} "
+              f"terrain{'s' if n_t != 1 else ''} "
+              f"({summary['format']} v{summary['schema_version']})")]
+    for digest, count in summary["by_terrain"].items():
+        lines.append(f"  terrain {digest[:12]}  {count:6d}  {_terrain_label(terrains[digest])}")
+    lines.append("  legs:    " + ", ".join(f"{k} {v}" for k, v in summary["by_leg"].items()))
+    lines.append("  sources: " + (", ".join(f"{k} {v}" for k, v in summary["by_source"].items())
+                                  or "none"))
+    if summary["candidates"]:
+        c = summary["candidates"]
+        lines.append(f"  candidates per demonstration: {c['min']} .. {c['max']} "
+                     f"(mean {c['mean']:.0f})")
+    _emit(as_json, data, "\n".join(lines))
+
+
+def _load_demos(store_path: str, ids: str | None = None):
+    """All demonstrations of a store (or those with the given ids) and a terrain lookup."""
+    from footfall.store import DemoStore
+
+    with DemoStore(store_path) as store:
+        wanted = None if ids is None else [int(i) for i in ids.split(",") if i.strip()]
+        demos = store.demonstrations(ids=wanted)
+        if not demos:
+            raise FootfallError(f"{store_path}: the store holds no demonstrations")
+        maps = {h: store.terrain(h) for h in {d.terrain_hash for d in demos}}
+    return demos, maps
+
+
+@cli.command()
+@click.argument("store_path", metavar="DEMOS.sqlite")
+@click.option("--features", "feature_set", type=click.Choice(["terrain", "templates", "both"]),
+              required=True, help="Feature set (each with the pose features).")
+@click.option("--learner", type=click.Choice(["l1", "l2", "svm"]), default="l1",
+              show_default=True, help="L1 / L2 logistic regression or a linear SVM.")
+@click.option("--library-size", type=click.IntRange(3, 100000), default=1000, show_default=True,
+              help="Templates in the library, over the three scales.")
+@click.option("--training-candidates", type=click.IntRange(1, 100000), default=100,
+              show_default=True, help="Other candidates per demonstration used for pairs.")
+@click.option("--bandwidth-rms", type=float, nargs=3, default=None, metavar="S M L",
+              help="Fix the RBF bandwidths as RMS height differences [m] per scale "
+                   "(default: chosen by cross-validation).")
+@click.option("--cv", type=click.IntRange(2, 50), default=5, show_default=True)
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("-o", "--output", required=True, help="Output model (.npz).")
+@json_option
+def learn(store_path: str, feature_set: str, learner: str, library_size: int,
+          training_candidates: int, bandwidth_rms, cv: int, seed: int, output: str,
+          as_json: bool) -> None:
+    """Learn front- and hind-leg foothold ranking functions from demonstrations."""
+    from footfall.train import TrainingDemo, learn_model
+
+    out = _out_path(output)
+    demos, maps = _load_demos(store_path)
+    training = [TrainingDemo(maps[d.terrain_hash], d.state, d.candidates, d.chosen) for d in demos]
+    log = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
+    model = learn_model(training, feature_set, learner, library_size=library_size,
+                        training_candidates=training_candidates, bandwidth_rms=bandwidth_rms,
+                        cv=cv, seed=seed, log=log)
+    model.save(out)
+    summary = {"model": str(out), "feature_set": feature_set, "learner": learner,
+               "demonstrations": len(demos), "seconds": model.info["seconds"], "groups": {}}
+    for g, f in model.functions.items():
+        summary["groups"][g] = {
+            "lambda": f.info["lambda"], "cv_error": f.info["cv_error"],
+            "bandwidths_per_m2": list(f.bandwidths), "bandwidth_rms_m": f.info["bandwidth_rms_m"],
+            "templates_kept": f.info["kept_counts"], "library": f.info["library_counts"],
+            "non_zero_weights": f.info["n_nonzero"]}
+    lines = [f"wrote {out}: {feature_set}/{learner} from {len(demos)} demonstrations "
+             f"in {model.info['seconds']:.1f} s"]
+    for g, v in summary["groups"].items():
+        lines.append(f"  {g}: lambda {v['lambda']:.4g}, cv error {v['cv_error']:.4f}, "
+                     f"templates kept {v['templates_kept']} of {v['library']}")
+    _emit(as_json, summary, "\n".join(lines))
+
+
+@cli.command("rank-eval")
+@click.argument("model_path", metavar="MODEL.npz")
+@click.argument("store_path", metavar="DEMOS.sqlite")
+@click.option("--no-expert", is_flag=True, help="Skip the reward loss (needs the expert).")
+@json_option
+def rank_eval(model_path: str, store_path: str, no_expert: bool, as_json: bool) -> None:
+    """Top-1 agreement, mean percentile rank and mean reward loss of a model on demonstrations."""
+    from footfall.evaluation import rank_scores
+    from footfall.model import FootholdModel
+
+    model = FootholdModel.load(model_path)
+    demos, maps = _load_demos(store_path)
+    expert = None
+    if not no_expert:
+        from footfall.expert import SyntheticExpert
+        expert = SyntheticExpert(robot=model.robot)
+    scores = rank_scores(model, demos, maps.__getitem__, expert)
+    data = {"model": model_path, "feature_set": model.feature_set, "learner": model.learner,
+            **scores.as_dict()}
+    _emit(as_json, data, f"{model.feature_set}/{model.learner} on {scores.n} demonstrations: "
+          f"top-1 {scores.top1:.3f}, percentile {scores.percentile:.3f}, "
+          f"reward loss {scores.reward_loss:.3f} +- {scores.reward_loss_std:.3f}")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point: run the CLI, turning user errors into one line and exit status 2."""
     args = list(sys.argv[1:] if argv is None else argv)

@@ -75,7 +75,8 @@ def _triangle_margins(tri: np.ndarray, point: np.ndarray) -> tuple[np.ndarray, n
     for start, edge, length in ((a, ab, la), (b, bc, lb), (c, ca, lc)):  # three edges
         rel = point[None, :] - start
         signed = orient * (edge[:, 0] * rel[:, 1] - edge[:, 1] * rel[:, 0])
-        dists.append(np.divide(signed, length, out=np.full_like(signed, -np.inf), where=length > 0))
+        # A degenerate edge (two feet on one spot) leaves no margin: distance 0.
+        dists.append(np.divide(signed, length, out=np.zeros_like(signed), where=length > 0))
     return inradius, np.min(np.stack(dists), axis=0)
 
 

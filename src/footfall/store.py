@@ -15,8 +15,9 @@ import os
 import re
 import sqlite3
 from dataclasses import dataclass, field
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
-from typing import Any, Iterable, Iterator, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -217,6 +218,7 @@ class DemoStore:
     def __init__(self, path: str | os.PathLike, create: bool = False,
                  busy_timeout: float = DEFAULT_BUSY_TIMEOUT) -> None:
         self.path = Path(path)
+        self.schema_version = SCHEMA_VERSION  # of the open file, set by _check_meta
         self._con: sqlite3.Connection | None = None
         self._terrains: dict[str, HeightMap] = {}  # verified terrains, by hash
         if not (isinstance(busy_timeout, numbers.Real) and busy_timeout >= 0):
@@ -257,7 +259,7 @@ class DemoStore:
             self._con.close()
             self._con = None
 
-    def __enter__(self) -> "DemoStore":
+    def __enter__(self) -> DemoStore:
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -287,7 +289,7 @@ class DemoStore:
         """Turn SQLite errors into one-line :class:`FootfallError` messages."""
         try:
             yield
-        except sqlite3.OperationalError as exc:
+        except (sqlite3.OperationalError, sqlite3.IntegrityError) as exc:  # locked, read-only, ...
             raise FootfallError(f"{self.path}: {exc}") from None
         except sqlite3.DatabaseError as exc:  # malformed image, not a database, ...
             raise FootfallError(f"{self.path}: corrupt demonstration store ({exc})") from None
@@ -443,6 +445,29 @@ class DemoStore:
         with self._errors():
             return [h for (h,) in self._connection.execute(
                 "SELECT hash FROM terrains ORDER BY rowid")]
+
+    def terrain_info(self) -> dict[str, dict[str, Any]]:
+        """Geometry and metadata of every stored terrain, without loading its heights.
+
+        Returns
+        -------
+        dict
+            {hash: {"shape": [nx, ny] [cells], "resolution" [m/cell],
+            "origin": [x, y] [m], "frame", "metadata"}}, in the order added.
+        """
+        with self._errors():
+            rows = self._connection.execute(
+                "SELECT hash, shape, resolution, origin_x, origin_y, frame, metadata "
+                "FROM terrains ORDER BY rowid").fetchall()
+        info = {}
+        for digest, shape, resolution, ox, oy, frame, metadata in rows:
+            try:
+                info[digest] = {"shape": json.loads(shape), "resolution": float(resolution),
+                                "origin": [float(ox), float(oy)], "frame": str(frame),
+                                "metadata": json.loads(metadata)}
+            except (TypeError, ValueError) as exc:
+                raise FootfallError(f"{self.path}: terrain {digest} is corrupt ({exc})") from None
+        return info
 
     # --------------------------------------------------------- demonstrations
     def add_demonstration(self, demo: Demonstration) -> int:

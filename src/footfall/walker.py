@@ -11,7 +11,8 @@ import dataclasses
 import json
 import math
 import numbers
-from typing import Any, Callable, Protocol, Sequence
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -86,8 +87,8 @@ def walk_demonstrations(hmap: HeightMap, expert: Expert, rng: np.random.Generato
                         x_range: tuple[float, float] | None = None,
                         robot: RobotDescription = LITTLEDOG, spacing: float = DEFAULT_SPACING,
                         config: FeatureConfig | None = None, expert_info: dict | None = None,
-                        progress: Callable[[Demonstration], None] | None = None
-                        ) -> list[Demonstration]:
+                        progress: Callable[[Demonstration], None] | None = None,
+                        record_every: int = 1, record_phase: int = 0) -> list[Demonstration]:
     """Walk straight along +x (heading 0) at lateral position ``y``, recording each foothold choice.
 
     The robot starts standing in its nominal stance with the body at
@@ -138,6 +139,11 @@ def walk_demonstrations(hmap: HeightMap, expert: Expert, rng: np.random.Generato
         Expert settings to record; default :func:`expert_settings` of ``expert``.
     progress : callable, optional
         Called with each recorded demonstration.
+    record_every, record_phase : int
+        Record only eligible steps (those ``x_range`` keeps) number
+        ``record_phase``, ``record_phase + record_every``, ... (counting from
+        0), to spread a few demonstrations along the path; an odd
+        ``record_every`` rotates them through the legs.
 
     Returns
     -------
@@ -165,6 +171,12 @@ def walk_demonstrations(hmap: HeightMap, expert: Expert, rng: np.random.Generato
         lo, hi = (_finite(v, "x_range") for v in x_range)
         if lo > hi:
             raise FootfallError(f"x_range must be (low, high), got {tuple(x_range)}")
+    for value, what in ((record_every, "record_every"), (record_phase, "record_phase")):
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 0:
+            raise FootfallError(f"{what} must be a non-negative integer, got {value!r}")
+    if not 0 <= record_phase < record_every:
+        raise FootfallError(f"record_phase must be in [0, record_every), got {record_phase} "
+                            f"with record_every {record_every}")
     config = FeatureConfig() if config is None else config
     info = expert_settings(expert) if expert_info is None else dict(expert_info)
 
@@ -179,6 +191,7 @@ def walk_demonstrations(hmap: HeightMap, expert: Expert, rng: np.random.Generato
     step = stride / 4  # [m] body advance per swing
     out: list[Demonstration] = []
     k = 0
+    eligible = 0  # steps so far whose foothold x_range keeps
     while len(out) < n_max:
         body_x = start_x + (k + 1) * step  # [m] at the touch-down of step k
         if body_x > stop_x:
@@ -196,10 +209,12 @@ def walk_demonstrations(hmap: HeightMap, expert: Expert, rng: np.random.Generato
                                 f"{candidates.shape[0]} candidates")
         foothold = candidates[int(choice)]
         if x_range is None or lo <= foothold[0] <= hi:
-            demo = Demonstration(terrain_hash, state, candidates, int(choice), source, info)
-            out.append(demo)
-            if progress is not None:
-                progress(demo)
+            if eligible % record_every == record_phase:
+                demo = Demonstration(terrain_hash, state, candidates, int(choice), source, info)
+                out.append(demo)
+                if progress is not None:
+                    progress(demo)
+            eligible += 1
         feet[LEG_NAMES.index(leg)] = foothold
         k += 1
     return out
@@ -226,6 +241,34 @@ def rough_x_range(hmap: HeightMap) -> tuple[float, float] | None:
     return float(min(m["x_start"] for m in rough)), float(max(m["x_end"] for m in rough))
 
 
+def estimated_steps(hmap: HeightMap, x_range: tuple[float, float] | None,
+                    stride: float = DEFAULT_STRIDE, robot: RobotDescription = LITTLEDOG) -> int:
+    """About how many steps of a default walk across ``hmap`` have footholds in ``x_range``.
+
+    Assumes each foot lands half a stride ahead of its hip's position [m];
+    ``x_range`` None counts every step.
+    """
+    x_min, x_max, _, _ = hmap.bounds
+    start = x_min + robot.hip_x + EDGE_MARGIN  # [m] as in walk_demonstrations
+    stop = x_max - robot.hip_x - EDGE_MARGIN
+    step = stride / 4
+    k = np.arange(max(math.floor((stop - start) / step + 1e-9), 0))
+    hip_x = np.array([robot.leg(leg).hip[0] for leg in robot.gait_order])
+    foot = start + (k + 1) * step + hip_x[k % len(hip_x)] + stride / 2
+    if x_range is None:
+        return int(k.size)
+    return int(np.count_nonzero((foot >= x_range[0]) & (foot <= x_range[1])))
+
+
+def _path_offsets(round_: int) -> list[float]:
+    """Lateral offsets [m] of round ``round_``: PATH_OFFSETS, then midpoints of all before."""
+    if round_ == 0:
+        return list(PATH_OFFSETS)
+    n = (len(PATH_OFFSETS) - 1) * 2 ** (round_ - 1)  # gaps between the earlier paths
+    edges = np.linspace(-PATH_HALF_WIDTH, PATH_HALF_WIDTH, n + 1)
+    return [round(float(o), 12) + 0.0 for o in 0.5 * (edges[:-1] + edges[1:])]
+
+
 def lateral_paths(hmap: HeightMap, round_: int, robot: RobotDescription = LITTLEDOG
                   ) -> list[float]:
     """The lateral positions y [m] of the walker's paths in one round.
@@ -233,37 +276,41 @@ def lateral_paths(hmap: HeightMap, round_: int, robot: RobotDescription = LITTLE
     Round 0: the board's centre plus :data:`PATH_OFFSETS`; round r > 0: the
     midpoints between all paths of the earlier rounds, so every round fills
     the gaps. Paths whose nominal feet would come within 0.05 m of the
-    board's sides are dropped (round 0 keeps the centre line).
+    board's sides are dropped; if that drops all of round 0, it walks the
+    centre line, and no later round repeats a path.
     """
     _, _, y_min, y_max = hmap.bounds
     centre = 0.5 * (y_min + y_max)
     half = 0.5 * (y_max - y_min) - robot.nominal_foot_y - 0.05  # [m] room for the feet
-    if round_ == 0:
-        offsets = list(PATH_OFFSETS)
-    else:
-        n = (len(PATH_OFFSETS) - 1) * 2 ** (round_ - 1)  # gaps between the earlier paths
-        edges = np.linspace(-PATH_HALF_WIDTH, PATH_HALF_WIDTH, n + 1)
-        offsets = list(0.5 * (edges[:-1] + edges[1:]))
-    kept = [centre + o for o in offsets if abs(o) <= half]
-    if not kept and round_ == 0:
-        kept = [centre]
-    return kept
+    earlier: list[float] = []
+    for r in range(round_ + 1):
+        kept = [o for o in _path_offsets(r) if abs(o) <= half
+                and all(abs(o - e) > 1e-9 for e in earlier)]
+        if r == 0 and not kept:
+            kept = [0.0]
+        if r < round_:
+            earlier += kept
+    return [centre + o for o in kept]
 
 
 def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, seed: int,
                            rough_only: bool = True, stride: float = DEFAULT_STRIDE,
                            robot: RobotDescription = LITTLEDOG, spacing: float = DEFAULT_SPACING,
                            config: FeatureConfig | None = None, source: str = "walker",
-                           progress: Callable[[Demonstration], None] | None = None
-                           ) -> list[Demonstration]:
+                           progress: Callable[[Demonstration], None] | None = None,
+                           max_rounds: int = MAX_PATH_ROUNDS) -> list[Demonstration]:
     """About ``n`` demonstrations spread evenly over terrains and lateral paths.
 
     In round r every terrain is walked along each path of
     :func:`lateral_paths` (round r), each walk recording an equal share of
     the demonstrations still missing. Rounds continue, with new paths
     between the old ones, until ``n`` are collected, a round adds none, or
-    after :data:`MAX_PATH_ROUNDS` rounds; so fewer than ``n`` come back only
-    when the terrains are too short for them.
+    after ``max_rounds`` rounds; so fewer than ``n`` come back only
+    when the terrains are too short for them. A walk whose share is smaller
+    than the eligible steps on its path (:func:`estimated_steps`) records
+    every m-th of them (m odd, so the legs take turns), so that a small
+    ``n`` is spread along the rough modules and over all four legs rather
+    than taken from where they begin.
 
     Parameters
     ----------
@@ -281,11 +328,13 @@ def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, s
         (:func:`rough_x_range`; boards without module metadata count whole).
     stride, robot, spacing, config, source, progress
         As for :func:`walk_demonstrations`.
+    max_rounds : int
+        Most rounds of lateral paths (>= 1).
 
     Returns
     -------
     list of Demonstration
-        At most ``n``, terrain by terrain within each round.
+        At most ``n``, in walking order.
     """
     if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 1:
         raise FootfallError(f"the number of demonstrations must be >= 1, got {n!r}")
@@ -299,24 +348,31 @@ def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, s
         raise FootfallError("collecting demonstrations needs at least one terrain")
     info = expert_settings(expert)
     out: list[Demonstration] = []
-    for round_ in range(MAX_PATH_ROUNDS):
-        walks = [(t, j, y) for t, hmap in enumerate(terrains)
-                 for j, y in enumerate(lateral_paths(hmap, round_, robot))]
-        missing = n - len(out)
+    for round_ in range(max_rounds):
+        paths = [lateral_paths(hmap, round_, robot) for hmap in terrains]
+        # Path by path, terrain by terrain: the shares even out over the terrains.
+        walks = [(t, j, ys[j]) for j in range(max(map(len, paths)))
+                 for t, ys in enumerate(paths) if j < len(ys)]
         before = len(out)
         for w, (t, j, y) in enumerate(walks):
-            quota = (n - len(out)) // (len(walks) - w) if w < len(walks) - 1 else n - len(out)
-            quota = max(quota, -(-missing // len(walks)) if w == 0 else quota)
-            if quota <= 0:
-                continue
+            remaining = n - len(out)
+            if remaining <= 0:
+                break
+            quota = -(-remaining // (len(walks) - w))  # an equal share; later walks make up
             hmap = terrains[t]
+            x_range = rough_x_range(hmap) if rough_only else None
+            # Spread a small share along the path: every m-th eligible step, m odd so
+            # that the legs take turns, each walk starting at another phase.
+            every = max(estimated_steps(hmap, x_range, stride, robot) // quota, 1)
+            if every % 2 == 0:
+                every -= 1
             rng = np.random.default_rng(np.random.SeedSequence(int(seed),
                                                                spawn_key=(t, round_, j)))
             out += walk_demonstrations(hmap, expert, rng, quota, y=y, stride=stride,
-                                       source=source,
-                                       x_range=rough_x_range(hmap) if rough_only else None,
-                                       robot=robot, spacing=spacing, config=config,
-                                       expert_info=info, progress=progress)
+                                       source=source, x_range=x_range, robot=robot,
+                                       spacing=spacing, config=config, expert_info=info,
+                                       progress=progress, record_every=every,
+                                       record_phase=(every // 2 + w) % every)
         if len(out) >= n or len(out) == before:
             break
     return out[:n]

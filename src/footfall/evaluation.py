@@ -1,0 +1,62 @@
+"""How well a ranking function agrees with the expert on demonstrations.
+
+For each demonstration, the model ranks the whole candidate set F; the
+measures are top-1 agreement (the model's best is the expert's choice), the
+percentile rank of the expert's choice among the candidates (1.0 = ranked
+first), and the reward loss: the expert's own value of its best candidate
+minus its value of the candidate the model picks (in the expert's value
+units, 1 unit = 1 cm of progress). The last needs the expert's judgement:
+evaluation may ask the expert, the learner never does.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import numpy as np
+
+from footfall.errors import FootfallError
+from footfall.scoring import score_footholds
+
+
+@dataclass(frozen=True)
+class RankScores:
+    """Agreement of a model with the expert on a set of demonstrations."""
+
+    n: int  # demonstrations
+    top1: float  # fraction whose chosen candidate the model ranks first
+    percentile: float  # mean fraction of other candidates the chosen one outranks
+    reward_loss: float  # mean expert value of its best minus of the model's pick [value units]
+    reward_loss_std: float  # standard deviation of the above
+
+    def as_dict(self) -> dict:
+        return dict(vars(self))
+
+
+def rank_scores(model, demos: Sequence, terrain: Callable[[str], object],
+                expert=None) -> RankScores:
+    """Score ``model`` on demonstrations; ``terrain(hash)`` returns each map.
+
+    Without an ``expert`` the reward loss is NaN.
+    """
+    if not demos:
+        raise FootfallError("no demonstrations to evaluate on")
+    top1, pct, loss = [], [], []
+    for d in demos:  # one demonstration at a time, vectorised over its candidates
+        hmap = terrain(d.terrain_hash)
+        model.check_compatible(map_resolution=hmap.resolution)
+        reward = model.reward_for(d.state.swing_leg)
+        r = score_footholds(hmap, d.state, d.candidates, reward, model.robot)
+        if not np.isfinite(r).all():
+            raise FootfallError(f"demonstration {d.id}: a candidate has no valid features")
+        pick = int(np.argmax(r))
+        others = np.delete(r, d.chosen)
+        top1.append(pick == d.chosen or r[pick] == r[d.chosen])
+        pct.append(float(np.mean(others < r[d.chosen])) if others.size else 1.0)
+        if expert is not None:
+            v = expert.values(hmap, d.state, d.candidates)
+            loss.append(float(v.max() - v[pick]))
+    return RankScores(len(demos), float(np.mean(top1)), float(np.mean(pct)),
+                      float(np.mean(loss)) if loss else float("nan"),
+                      float(np.std(loss)) if loss else float("nan"))

@@ -1,0 +1,275 @@
+"""The synthetic expert: Fig. 2's ordering, physical terrain judgement, and its choices."""
+
+import math
+
+import numpy as np
+import pytest
+
+from footfall.candidates import reachable_footholds
+from footfall.errors import FootfallError
+from footfall.expert import EXPERT_TERM_NAMES, EXPERT_TERMS, ExpertConfig, SyntheticExpert, \
+    _sphere_surface
+from footfall.heightmap import HeightMap
+from footfall.kinematics import body_to_world, inverse_kinematics, knee_position, world_to_body
+from footfall.robot import LITTLEDOG
+from footfall.state import RobotState, nominal_state
+from footfall.terrain.modules import make_board
+
+RES = 0.001  # [m] the scan resolution
+SHAPE = (600, 600)
+ORIGIN = (-0.3, -0.3)  # cell (300, 300) is at (0, 0)
+EXPERT = SyntheticExpert()
+TERRAIN_TERMS = ("slip_margin", "pinch", "trap_depth", "drop_off", "leg_clearance", "unknown")
+
+
+def grid():
+    x = ORIGIN[0] + np.arange(SHAPE[0]) * RES
+    y = ORIGIN[1] + np.arange(SHAPE[1]) * RES
+    return x[:, None], y[None, :]
+
+
+def hmap(z):
+    return HeightMap(np.broadcast_to(z, SHAPE).copy(), RES, ORIGIN)
+
+
+FLAT = hmap(0.0)
+STATE = nominal_state(FLAT, (0.0, 0.0), 0.0, "LF")  # the same state on every test terrain
+P = STATE.feet[STATE.swing_index, :2]  # the LF nominal foothold (0.101, 0.080), a cell centre
+
+
+def judge(terrain, xy=P):
+    """Value and terms of one candidate at xy on a terrain (height taken from the map)."""
+    cand = np.array([[xy[0], xy[1], float(terrain.height_at(np.asarray(xy)))]])
+    terms = EXPERT.terms(terrain, STATE, cand)
+    return float(EXPERT.values(terrain, STATE, cand)[0]), {k: float(v[0]) for k, v in terms.items()}
+
+
+def radius_from(xy=P):
+    x, y = grid()
+    return np.hypot(x - xy[0], y - xy[1])
+
+
+def bowl(depth, across):
+    """A spherical dent ``depth`` [m] deep and ``across`` [m] wide, centred on P."""
+    a = across / 2
+    big = (a * a + depth * depth) / (2 * depth)  # [m] radius of the sphere
+    rho = radius_from()
+    return hmap(np.minimum(big - depth - np.sqrt(np.clip(big * big - rho * rho, 0, None)), 0.0))
+
+
+def hole(width, depth):
+    """A steep-walled cylindrical hole, flat bottom, centred on P."""
+    return hmap(np.where(radius_from() <= width / 2, -depth, 0.0))
+
+
+# ------------------------------------------------------------------ geometry
+def test_ball_surface_is_the_lowered_ball():
+    """B(x, y) = max over cells within r of h + sqrt(r^2 - d^2), holes giving no support."""
+    rng = np.random.default_rng(0)
+    h = 0.004 * rng.standard_normal((60, 60))
+    h[20:30, 25:40] = np.nan
+    m = HeightMap(h, RES, (0.0, 0.0))
+    r = LITTLEDOG.foot_radius
+    surf = _sphere_surface(m, np.array([0.015, 0.015]), np.array([0.045, 0.045]), r)
+    for i, j in [(30, 30), (22, 30), (15, 45), (40, 18)]:
+        d2 = ((np.arange(60)[:, None] - i) ** 2 + (np.arange(60)[None, :] - j) ** 2) * RES ** 2
+        lift = np.where((d2 <= r * r) & ~np.isnan(h), h + np.sqrt(np.clip(r * r - d2, 0, None)),
+                        -np.inf)
+        assert surf.at(np.array([i * RES, j * RES])) == pytest.approx(lift.max(), abs=1e-12)
+    # On a 45 deg plane the ball sits r / cos(45 deg) above the point under its centre.
+    x, _ = grid()
+    plane = hmap(x - P[0] + 0 * x)
+    _, t = judge(plane)
+    cand = np.array([[*P, 0.0]])
+    seat = _sphere_surface(plane, P, P, r).at(cand[:, :2])[0]
+    assert seat == pytest.approx(r * math.sqrt(2), abs=2e-5)
+    assert t["slip_margin"] == pytest.approx(math.atan(LITTLEDOG.foot_friction) - math.pi / 4,
+                                             abs=0.02)
+
+
+def test_terms_are_named_documented_and_finite():
+    assert set(EXPERT_TERMS) == set(EXPERT_TERM_NAMES)
+    assert all(doc.startswith("[") for doc in EXPERT_TERMS.values())  # unit first
+    cand = reachable_footholds(FLAT, STATE)
+    terms = EXPERT.terms(FLAT, STATE, cand)
+    assert tuple(terms) == EXPERT_TERM_NAMES
+    assert all(v.shape == (cand.shape[0],) and np.isfinite(v).all() for v in terms.values())
+    # On flat open ground the ball is neither held, pinched, trapped nor near a drop.
+    phi = math.atan(LITTLEDOG.foot_friction)
+    np.testing.assert_allclose(terms["slip_margin"], phi)
+    for name in ("pinch", "trap_depth", "drop_off", "unknown"):
+        np.testing.assert_allclose(terms[name], 0.0, atol=1e-12, err_msg=name)
+
+
+# ------------------------------------------------------------- Fig. 2 order
+def test_fig2_mild_hollow_beats_flat_beats_deep_narrow_hole():
+    v_flat, t_flat = judge(FLAT)
+    v_bowl, t_bowl = judge(bowl(depth=0.003, across=0.04))
+    v_hole, t_hole = judge(hole(width=0.015, depth=0.03))
+    assert v_bowl > v_flat + 0.5 > v_hole + 2.0
+    # Why: the hollow holds the ball from every side; the hole pinches it on its rim.
+    assert t_bowl["slip_margin"] > t_flat["slip_margin"]
+    assert t_bowl["pinch"] < 0.05 and t_hole["pinch"] > 0.6
+    # The ball (2 cm) rests on the rim of the 1.5 cm hole, 3.4 mm down, not at its bottom.
+    r, a = LITTLEDOG.foot_radius, 0.0075
+    assert t_hole["trap_depth"] == pytest.approx(r - math.sqrt(r * r - a * a), abs=3e-4)
+
+
+@pytest.mark.parametrize("depth, across", [(0.002, 0.03), (0.004, 0.05), (0.005, 0.04)])
+def test_mild_hollows_of_several_sizes_beat_flat(depth, across):
+    assert judge(bowl(depth, across))[0] > judge(FLAT)[0]
+
+
+def test_a_hole_the_ball_falls_into_traps_it():
+    v_flat, _ = judge(FLAT)
+    v_hole, t_hole = judge(hole(width=0.024, depth=0.03))
+    assert t_hole["trap_depth"] == pytest.approx(0.03, abs=1e-3)
+    assert v_hole < v_flat - 5.0
+
+
+def test_steep_face_beyond_the_friction_cone_is_worse_than_flat():
+    _, y = grid()
+    v_flat, _ = judge(FLAT)
+    slopes = {deg: judge(hmap(math.tan(math.radians(deg)) * (y - P[1])))
+              for deg in (15, 30, 45, 60)}  # faces rising outward, away from the leg
+    values = [slopes[deg][0] for deg in (15, 30, 45, 60)]
+    assert v_flat > values[0] > values[1] > values[2] > values[3]
+    assert slopes[30][1]["slip_margin"] > 0 > slopes[45][1]["slip_margin"]  # cone: 38.7 deg
+    assert v_flat - slopes[45][0] > 10.0
+
+
+def test_drop_off_edge_near_the_foot_is_worse_than_far_from_it():
+    _, y = grid()
+    near = hmap(np.where(y > P[1] + 0.005, -0.04, 0.0))  # ground falls 4 cm, 5 mm from the foot
+    far = hmap(np.where(y > P[1] + 0.08, -0.04, 0.0))  # the same edge 8 cm away
+    v_near, t_near = judge(near)
+    v_far, t_far = judge(far)
+    assert t_far["drop_off"] == 0 and t_near["drop_off"] > 0.015
+    assert v_near < v_far - 5.0
+    assert v_far == pytest.approx(judge(FLAT)[0])
+
+
+def test_shin_or_knee_hitting_a_wall_is_worse_than_without():
+    leg = LITTLEDOG.leg("LF")
+    centre = np.array([*P, LITTLEDOG.foot_radius])
+    q, ok = inverse_kinematics(leg, world_to_body(centre, STATE.body_position, STATE.body_rpy),
+                               LITTLEDOG)
+    knee = body_to_world(knee_position(leg, q, LITTLEDOG), STATE.body_position, STATE.body_rpy)
+    assert ok and knee[0] > P[0] + 0.03  # the front knee points forward, over the terrain ahead
+    x, y = grid()
+    # A block under the lower leg, starting 2.4 cm ahead of the foot: the ball never touches it.
+    wall = hmap(np.where((x >= P[0] + 0.024) & (np.abs(y - knee[1]) < 0.03), 0.045, 0.0))
+    v_flat, t_flat = judge(FLAT)
+    v_wall, t_wall = judge(wall)
+    assert t_flat["leg_clearance"] > LITTLEDOG.lower_leg_radius and t_wall["leg_clearance"] < 0
+    for name in ("slip_margin", "pinch", "trap_depth", "drop_off", "unknown"):
+        assert t_wall[name] == pytest.approx(t_flat[name]), name  # the foot itself is unchanged
+    assert v_wall < v_flat - 5.0
+
+
+def test_more_progress_is_preferred_on_flat_ground():
+    xs = P[0] + np.arange(-0.02, 0.031, 0.005)
+    cand = np.column_stack([xs, np.full_like(xs, P[1]), np.zeros_like(xs)])
+    v = EXPERT.values(FLAT, STATE, cand)
+    assert np.all(np.diff(v) > 0)
+    # Over the whole candidate set, the pose terms alone decide on flat ground.
+    cand = reachable_footholds(FLAT, STATE)
+    parts = EXPERT.contributions(FLAT, STATE, cand)
+    terrain = sum(parts[k] for k in ("slip_margin", "pinch", "trap_depth", "drop_off", "unknown"))
+    np.testing.assert_allclose(terrain, 0.0, atol=1e-9)
+    best = cand[np.argmax(EXPERT.values(FLAT, STATE, cand))]
+    assert best[0] > P[0] + 0.02  # a real step forward
+
+
+# ------------------------------------------------------------------- choice
+def test_choose_without_imperfection_is_argmax_and_second_best_when_asked():
+    cand = reachable_footholds(FLAT, STATE)
+    v = EXPERT.values(FLAT, STATE, cand)
+    rng = np.random.default_rng(5)
+    assert EXPERT.choose(FLAT, STATE, cand, rng) == int(np.argmax(v))
+    second = SyntheticExpert(ExpertConfig(second_best_prob=1.0))
+    assert second.choose(FLAT, STATE, cand, rng) == int(np.argsort(-v, kind="stable")[1])
+
+
+def test_choose_is_deterministic_for_a_seed_and_noise_varies_it():
+    cand = reachable_footholds(FLAT, STATE)[::8]
+    noisy = SyntheticExpert(ExpertConfig(noise=2.0, second_best_prob=0.3))
+    first = [noisy.choose(FLAT, STATE, cand, np.random.default_rng(s)) for s in range(12)]
+    again = [noisy.choose(FLAT, STATE, cand, np.random.default_rng(s)) for s in range(12)]
+    assert first == again
+    assert len(set(first)) > 3  # the imperfection does change the choice
+    with pytest.raises(FootfallError, match="empty"):
+        EXPERT.choose(FLAT, STATE, np.zeros((0, 3)), np.random.default_rng(0))
+
+
+def test_bad_settings_and_candidates_are_refused():
+    with pytest.raises(FootfallError, match="second_best_prob"):
+        ExpertConfig(second_best_prob=1.5)
+    with pytest.raises(FootfallError, match="noise"):
+        ExpertConfig(noise=-1.0)
+    with pytest.raises(FootfallError, match="directions"):
+        ExpertConfig(directions=7)
+    with pytest.raises(FootfallError, match=r"\(n, 3\)"):
+        EXPERT.values(FLAT, STATE, np.zeros((4, 2)))
+    with pytest.raises(FootfallError, match="finite"):
+        EXPERT.values(FLAT, STATE, np.array([[np.nan, 0.0, 0.0]]))
+
+
+# -------------------------------------------------------------- missing data
+def test_values_are_finite_with_holes_in_the_map():
+    x, y = grid()
+    h = np.zeros(SHAPE)
+    h[(np.abs(x - P[0] - 0.01) < 0.006) & (np.abs(y - P[1]) < 0.02)] = np.nan  # no scan here
+    h[(np.abs(x - P[0] + 0.04) < 0.01)[:, 0], :] = np.nan  # and a strip across the map
+    holey = HeightMap(h, RES, ORIGIN)
+    cand = reachable_footholds(FLAT, STATE)  # including points in the holes, with NaN height
+    cand[:, 2] = holey.height_at(cand[:, :2])
+    assert np.isnan(cand[:, 2]).any()
+    terms = EXPERT.terms(holey, STATE, cand)
+    v = EXPERT.values(holey, STATE, cand)
+    assert np.isfinite(v).all() and all(np.isfinite(t).all() for t in terms.values())
+    # Missing data is seen and penalised near the holes, not far from them.
+    far = np.hypot(cand[:, 0] - P[0] - 0.01, cand[:, 1] - P[1]) > 0.06
+    far &= np.abs(cand[:, 0] - P[0] + 0.04) > 0.04
+    assert terms["unknown"][np.isnan(cand[:, 2])].min() > 0.1
+    np.testing.assert_allclose(terms["unknown"][far], 0.0)
+    np.testing.assert_allclose(v[far], EXPERT.values(FLAT, STATE, cand)[far])
+
+
+# ------------------------------------------------------------- real terrain
+def test_a_right_leg_is_judged_like_a_left_leg_on_the_mirrored_terrain():
+    board = make_board([("rocky", 0.7)], 5)
+    state = nominal_state(board, (0.95, 0.02), 0.05, "LF")
+    cand = reachable_footholds(board, state)
+    flip = np.array([1.0, -1.0, 1.0])
+    swap = [1, 0, 3, 2]  # LF <-> RF, LH <-> RH
+    mirrored = RobotState(state.feet[swap] * flip, state.body_position * flip,
+                          state.body_rpy * np.array([-1.0, 1.0, -1.0]), "RF",
+                          state.goal * flip[:2])
+    np.testing.assert_allclose(EXPERT.values(board.mirrored_y(), mirrored, cand * flip),
+                               EXPERT.values(board, state, cand), rtol=1e-9, atol=1e-9)
+
+
+def test_on_rocky_terrain_the_terrain_changes_the_choice():
+    board = make_board([("rocky", 0.7)], 3)  # flat, rocky (x in [0.61, 1.22] m), flat
+    phi = math.atan(LITTLEDOG.foot_friction)
+    differs_from_progress = differs_from_pose = 0
+    cases = [(bx, leg) for bx in (0.85, 1.0) for leg in ("LF", "RF", "LH", "RH")]
+    for bx, leg in cases:
+        state = nominal_state(board, (bx, 0.0), 0.0, leg)
+        cand = reachable_footholds(board, state)
+        terms = EXPERT.terms(board, state, cand)
+        parts = EXPERT.utilities(terms)
+        v = sum(parts.values())
+        pose_only = sum(p for k, p in parts.items() if k not in TERRAIN_TERMS)
+        i, i_progress, i_pose = np.argmax(v), np.argmax(terms["progress"]), np.argmax(pose_only)
+        differs_from_progress += i != i_progress
+        differs_from_pose += i != i_pose
+        # The chosen foothold is physically sound, which the pose-only pick often is not.
+        assert terms["slip_margin"][i] > 0.5 * phi
+        assert terms["pinch"][i] < 1.0 and terms["leg_clearance"][i] > 0
+        assert terms["trap_depth"][i] < 0.01 and terms["drop_off"][i] < 0.01
+        terrain = sum(parts[k] for k in TERRAIN_TERMS)
+        assert terrain[i] > terrain[i_pose] or i == i_pose
+    assert differs_from_progress == len(cases)
+    assert differs_from_pose >= len(cases) // 2

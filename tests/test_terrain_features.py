@@ -135,3 +135,20 @@ def test_low_coverage_makes_a_foothold_invalid():
     # In the corner only 25 x 10 of 49 x 19 large-patch samples have data: not a candidate.
     assert fp.coverage[2, 2] == pytest.approx(250 / 931)
     assert fp.valid.tolist() == [True, True, False, False]
+
+
+def test_patch_coverage_equals_the_coverage_of_the_patches():
+    from footfall.patches import patch_coverage
+
+    rng = np.random.default_rng(4)
+    h = rng.normal(size=(200, 150)) * 0.01
+    h[60:90, 40:47] = np.nan
+    hm = HeightMap(h, RES, (0.0, 0.0))
+    pos = np.column_stack([rng.uniform(-0.01, 0.21, 400), rng.uniform(-0.01, 0.16, 400)])
+    yaw = rng.uniform(-np.pi, np.pi, 400)
+    mirror = rng.random(400) < 0.5
+    expected = foothold_patches(hm, pos, yaw, mirror, CONFIG).coverage
+    np.testing.assert_allclose(patch_coverage(hm, pos, yaw, mirror, CONFIG), expected)
+    full = HeightMap(np.zeros((200, 150)), RES)  # no holes: only the border counts
+    np.testing.assert_allclose(patch_coverage(full, pos, yaw, mirror, CONFIG),
+                               foothold_patches(full, pos, yaw, mirror, CONFIG).coverage)

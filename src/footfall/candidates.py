@@ -13,7 +13,7 @@ import numpy as np
 from footfall.errors import FootfallError
 from footfall.heightmap import HeightMap
 from footfall.kinematics import inverse_kinematics, world_to_body, body_to_world
-from footfall.patches import foothold_patches
+from footfall.patches import patch_coverage
 from footfall.robot import LITTLEDOG, RobotDescription
 from footfall.scales import FeatureConfig
 from footfall.state import RobotState
@@ -54,6 +54,6 @@ def reachable_footholds(hmap: HeightMap, state: RobotState, robot: RobotDescript
     _, ok = inverse_kinematics(leg, world_to_body(centre, state.body_position, state.body_rpy), robot)
     out = np.column_stack([pts, z])[ok]
     if config is not None and out.shape[0]:
-        fp = foothold_patches(hmap, out, state.yaw, leg.mirrored, config)
-        out = out[fp.valid]
+        cov = patch_coverage(hmap, out, state.yaw, leg.mirrored, config)
+        out = out[np.all(cov >= config.min_coverage, axis=1)]
     return out

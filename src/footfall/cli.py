@@ -402,6 +402,27 @@ def rank_eval(model_path: str, store_path: str, no_expert: bool, as_json: bool) 
           f"reward loss {scores.reward_loss:.3f} +- {scores.reward_loss_std:.3f}")
 
 
+@cli.command()
+@click.option("--out", "out", default="out/offline", show_default=True, help="Report folder.")
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--quick", is_flag=True,
+              help="A small version (fewer demonstrations, L1 only) for a smoke test.")
+@json_option
+def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
+    """The offline experiment: learn from demonstrations, rank unseen terrain (Table I)."""
+    from footfall.offline import OfflineConfig, run_offline
+
+    config = OfflineConfig(seed=seed)
+    if quick:
+        config = OfflineConfig(seed=seed, n_train=30, n_test_modules=12, n_test_kind=8,
+                               learners=("l1",), library_size=150,
+                               train_difficulties=(0.5,), test_difficulties=(0.6,),
+                               extra_rocky_train=1)
+    log = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
+    summary = run_offline(Path(out), config, log=log)
+    _emit(as_json, summary, f"wrote {Path(out) / 'report.md'}")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point: run the CLI, turning user errors into one line and exit status 2."""
     args = list(sys.argv[1:] if argv is None else argv)

@@ -34,16 +34,24 @@ class RankScores:
         return dict(vars(self))
 
 
+def expert_values(demos: Sequence, terrain: Callable[[str], object], expert) -> list[np.ndarray]:
+    """The expert's noiseless values of every candidate of each demonstration."""
+    return [expert.values(terrain(d.terrain_hash), d.state, d.candidates) for d in demos]
+
+
 def rank_scores(model, demos: Sequence, terrain: Callable[[str], object],
-                expert=None) -> RankScores:
+                expert=None, values: Sequence[np.ndarray] | None = None) -> RankScores:
     """Score ``model`` on demonstrations; ``terrain(hash)`` returns each map.
 
-    Without an ``expert`` the reward loss is NaN.
+    The reward loss uses the expert's ``values`` of each demonstration's
+    candidates (computed with ``expert`` when not given; NaN without either).
     """
+    if values is None and expert is not None:
+        values = expert_values(demos, terrain, expert)
     if not demos:
         raise FootfallError("no demonstrations to evaluate on")
     top1, pct, loss = [], [], []
-    for d in demos:  # one demonstration at a time, vectorised over its candidates
+    for k, d in enumerate(demos):  # one demonstration at a time, vectorised over its candidates
         hmap = terrain(d.terrain_hash)
         model.check_compatible(map_resolution=hmap.resolution)
         reward = model.reward_for(d.state.swing_leg)
@@ -54,9 +62,8 @@ def rank_scores(model, demos: Sequence, terrain: Callable[[str], object],
         others = np.delete(r, d.chosen)
         top1.append(pick == d.chosen or r[pick] == r[d.chosen])
         pct.append(float(np.mean(others < r[d.chosen])) if others.size else 1.0)
-        if expert is not None:
-            v = expert.values(hmap, d.state, d.candidates)
-            loss.append(float(v.max() - v[pick]))
+        if values is not None:
+            loss.append(float(values[k].max() - values[k][pick]))
     return RankScores(len(demos), float(np.mean(top1)), float(np.mean(pct)),
                       float(np.mean(loss)) if loss else float("nan"),
                       float(np.std(loss)) if loss else float("nan"))

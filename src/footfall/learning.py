@@ -105,10 +105,12 @@ def grouped_folds(pair_groups: np.ndarray, n_splits: int) -> list[tuple[np.ndarr
 
 def _classifier(learner: str, C: float, tol: float, max_iter: int):
     if learner == "svm":
-        return LinearSVC(C=C, fit_intercept=False, tol=tol, max_iter=max_iter, dual=True)
+        return LinearSVC(C=C, fit_intercept=False, tol=tol, max_iter=max_iter, dual=True,
+                         random_state=0)
+    # liblinear shuffles the data: a fixed seed makes every fit reproducible.
     return LogisticRegression(C=C, l1_ratio=1.0 if learner == "l1" else 0.0,
                               solver="liblinear", fit_intercept=False, tol=tol,
-                              max_iter=max_iter)
+                              max_iter=max_iter, random_state=0)
 
 
 def _fit_coef(learner: str, C: float, X: np.ndarray, y: np.ndarray, tol: float,

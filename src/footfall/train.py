@@ -130,13 +130,12 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
         bandwidths: tuple[float, ...] = ()
         if uses_templates:
             start = 27 if feature_set == "both" else 0
-            idx, per_scale = [], []
+            per_scale = []
             for c in library.counts:
                 nz = np.flatnonzero(coef[start:start + c] != 0)
                 per_scale.append(nz)
                 keep[start:start + c] = coef[start:start + c] != 0
                 start += c
-            del idx
             kept_library = library.subset(tuple(per_scale))
             bandwidths = _bandwidths(rms, config)
         info = {"lambda": ranker.lambda_, "C": ranker.C_, "cv_error": ranker.cv_error_,
@@ -145,8 +144,13 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
                 "kept_counts": list(kept_library.counts) if kept_library is not None else [0, 0, 0],
                 "bandwidth_rms_m": list(rms) if rms is not None else None,
                 "bandwidth_search": search, "n_nonzero": int(np.count_nonzero(coef))}
-        functions[group] = RankingFunction(tuple(n for n, k in zip(names, keep) if k),
-                                           coef[keep], scale[keep], kept_library, bandwidths, info)
+        kept_names = tuple(n for n, k in zip(names, keep) if k)
+        if kept_library is not None:  # the kept templates are renumbered within their library
+            n_terrain = 27 if feature_set == "both" else 0
+            kept_names = (kept_names[:n_terrain] + kept_library.names()
+                          + kept_names[n_terrain + sum(kept_library.counts):])
+        functions[group] = RankingFunction(kept_names, coef[keep], scale[keep], kept_library,
+                                           bandwidths, info)
         log(f"  lambda {ranker.lambda_:.4g}, cv error {ranker.cv_error_:.4f}, "
             f"{info['n_nonzero']} non-zero weights, templates kept {info['kept_counts']}")
     return FootholdModel(feature_set, learner, functions, config, robot,

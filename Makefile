@@ -1,10 +1,10 @@
-# footfall: `make demo` sets everything up and runs the main job; `make test` runs the tests.
+# footfall: `make run` sets everything up and runs the main job; `make test` runs the tests.
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench clean
+.PHONY: run demo test bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -12,6 +12,11 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[test]'
 	touch $(STAMP)
 
+# The main job: the offline experiment (learn from demonstrations, rank unseen terrain).
+run: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/footfall offline --out out/offline
+
+# Pictures of a board scored densely with the hand-tuned reward.
 demo: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/footfall demo --out out/demo
 
@@ -20,6 +25,7 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/footfall bench scoring
+	$(BIN)/footfall bench learning
 
 clean:
 	rm -rf $(VENV) out

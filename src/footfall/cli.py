@@ -186,6 +186,18 @@ def bench_scoring_cmd(repeats: int, baseline_sample: int, as_json: bool) -> None
     _emit(as_json, result, format_scoring(result))
 
 
+@bench.command("learning")
+@click.option("--demos", "n_demos", type=click.IntRange(10, 10000), default=100, show_default=True)
+@click.option("--library-size", type=click.IntRange(3, 100000), default=1000, show_default=True)
+@json_option
+def bench_learning_cmd(n_demos: int, library_size: int, as_json: bool) -> None:
+    """Paper-scale learning against scikit-learn's LogisticRegressionCV."""
+    from footfall.bench import bench_learning, format_learning
+
+    result = bench_learning(n_demos=n_demos, library_size=library_size)
+    _emit(as_json, result, format_learning(result))
+
+
 # ---------------------------------------------------------------------- demo
 @cli.command()
 @click.option("--out", "out", default="out/demo", show_default=True, help="Output folder.")
@@ -388,7 +400,10 @@ def rank_eval(model_path: str, store_path: str, no_expert: bool, as_json: bool) 
     from footfall.evaluation import rank_scores
     from footfall.model import FootholdModel
 
+    from footfall.robot import LITTLEDOG
+
     model = FootholdModel.load(model_path)
+    model.check_compatible(robot=LITTLEDOG)  # the robot whose states the store holds
     demos, maps = _load_demos(store_path)
     expert = None
     if not no_expert:

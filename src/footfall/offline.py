@@ -158,15 +158,18 @@ def _figures(out: Path, models: dict, maps: dict, splits: dict, config: OfflineC
         if model is None:
             continue
         f = model.functions["front"]
-        if f.library is None or min(f.library.counts) == 0:
+        if f.library is None or max(f.library.counts) == 0:
             continue
         w = dict(zip(f.names, f.coef))
         rows, titles = [], []
-        for rank in range(min(3, min(f.library.counts))):
+        for rank in range(min(3, max(f.library.counts))):
             row = []
             for s, names in enumerate(_by_scale(f.library)):
-                order = np.argsort([-abs(w[n]) for n in names])
-                row.append(f.library.templates[s][order[rank]])
+                if rank < len(names):
+                    order = np.argsort([-abs(w[n]) for n in names])
+                    row.append(f.library.templates[s][order[rank]])
+                else:  # fewer templates kept on this scale: an empty (NaN) panel
+                    row.append(np.full(model.config.grids[s].size, np.nan))
             rows.append(row)
             titles.append(f"#{rank + 1} by |weight|")
         save_template_figure(rows, model.config.grids, titles, model.config.scale_names,

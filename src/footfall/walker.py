@@ -25,6 +25,7 @@ from footfall.state import RobotState, nominal_state
 from footfall.store import Demonstration
 
 DEFAULT_STRIDE = 0.08  # [m] body advance per gait cycle of four steps (0.02 m per step)
+APPROACH = 0.12  # [m] flat approach walked before the recorded x range begins
 EDGE_MARGIN = 0.15  # [m] the hips stay this far inside the board's x ends (start and stop)
 PATH_OFFSETS = (-0.15, -0.05, 0.05, 0.15)  # [m] lateral paths, relative to the board's centre
 MAX_PATH_ROUNDS = 6  # rounds of ever denser lateral paths before collect gives up
@@ -166,11 +167,16 @@ def walk_demonstrations(hmap: HeightMap, expert: Expert, rng: np.random.Generato
         raise FootfallError(f"stride must be > 0 m, got {stride}")
     y = _finite(y, "y")
     x_min, x_max, _, _ = hmap.bounds
+    default_start = start_x is None
     start_x = x_min + robot.hip_x + EDGE_MARGIN if start_x is None else _finite(start_x, "start_x")
     if x_range is not None:
         lo, hi = (_finite(v, "x_range") for v in x_range)
         if lo > hi:
             raise FootfallError(f"x_range must be (low, high), got {tuple(x_range)}")
+        if default_start:
+            # Steps long before the recorded range only cost time: start an
+            # approach of APPROACH metres before the front feet reach it.
+            start_x = max(start_x, lo - robot.hip_x - APPROACH)
     for value, what in ((record_every, "record_every"), (record_phase, "record_phase")):
         if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 0:
             raise FootfallError(f"{what} must be a non-negative integer, got {value!r}")
@@ -196,6 +202,8 @@ def walk_demonstrations(hmap: HeightMap, expert: Expert, rng: np.random.Generato
         body_x = start_x + (k + 1) * step  # [m] at the touch-down of step k
         if body_x > stop_x:
             break
+        if x_range is not None and body_x - robot.hip_x - robot.max_reach > hi:
+            break  # no foot can land in the recorded range any more
         leg = robot.gait_order[k % len(robot.gait_order)]
         body = np.array([body_x, y, feet[:, 2].mean() + robot.nominal_height])
         state = RobotState(feet, body, np.zeros(3), leg, goal)

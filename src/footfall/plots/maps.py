@@ -74,7 +74,8 @@ def save_template_figure(patches: Sequence[Sequence[np.ndarray]], grids: Sequenc
     widths = [g.length_x for g in grids]
     fig = Figure(figsize=(2.2 + 8.0, 1.9 * rows + 0.6), layout="constrained")
     axes = fig.subplots(rows, cols, squeeze=False, width_ratios=widths)
-    limit = max(float(np.nanmax(np.abs(p))) for row in patches for p in row) * 1000 or 1.0
+    finite = [np.abs(p)[np.isfinite(p)] for row in patches for p in row]
+    limit = max((float(f.max()) for f in finite if f.size), default=0.0) * 1000 or 1.0
     image = None
     for r in range(rows):
         for s, grid in enumerate(grids):

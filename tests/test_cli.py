@@ -7,22 +7,11 @@ import sys
 import numpy as np
 import pytest
 
+from cli_helpers import assert_user_error, run
 from footfall.cli import main
 from footfall.heightmap import HeightMap
 
 
-def run(capsys, *args):
-    code = main(list(args))
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def assert_user_error(code, err, match):
-    assert code == 2
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert lines[0].startswith("footfall: error:") and match in lines[0], lines[0]
-    assert "Traceback" not in err
 
 
 @pytest.fixture(scope="module")

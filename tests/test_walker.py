@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from scipy.ndimage import gaussian_filter
 
+from cli_helpers import assert_user_error, run
 from footfall.candidates import reachable_footholds
-from footfall.cli import main
 from footfall.errors import FootfallError
 from footfall.heightmap import HeightMap
 from footfall.robot import LEG_NAMES, LITTLEDOG
@@ -280,17 +280,6 @@ def terrain_file(tmp_path_factory):
     return path
 
 
-def run(capsys, *args):
-    code = main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def assert_user_error(code, err, match):
-    assert code == 2
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert lines[0].startswith("footfall: error:") and match in lines[0], lines[0]
 
 
 def test_collect_appends_and_info_counts(tmp_path, terrain_file, fake_expert, capsys):

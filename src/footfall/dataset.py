@@ -57,9 +57,11 @@ def build_library(maps: Sequence[HeightMap], states: Sequence[RobotState],
                   robot: RobotDescription = LITTLEDOG) -> TemplateLibrary:
     """A template library from training demonstrations (paper §III-A).
 
-    The chosen footholds and a random sample of the other reachable ones,
-    about ``size`` templates over the three scales; right-leg footholds are
-    mirrored. ``maps[k]`` is the terrain of demonstration k.
+    Every chosen foothold, then a random sample of the other reachable ones
+    up to ``size / 3`` per scale (so more than ``size`` templates when there
+    are more demonstrations than that); right-leg footholds are mirrored.
+    Footholds whose patch on a scale is incomplete give no template there.
+    ``maps[k]`` is the terrain of demonstration k.
     """
     if not states:
         raise FootfallError("no demonstrations to build a template library from")

@@ -7,8 +7,8 @@ from footfall.candidates import lattice, reachable_footholds
 from footfall.errors import FootfallError
 from footfall.heightmap import HeightMap
 from footfall.kinematics import inverse_kinematics, world_to_body
-from footfall.pose_features import POSE_FEATURE_DOCS, POSE_FEATURE_NAMES, _hull_area, \
-    _triangle_margins, pose_features
+from footfall.pose_features import POSE_FEATURE_DOCS, POSE_FEATURE_NAMES, hull_area, \
+    triangle_margins, pose_features
 from footfall.robot import LEG_NAMES, LITTLEDOG
 from footfall.scales import FeatureConfig
 from footfall.state import RobotState, nominal_state
@@ -96,13 +96,13 @@ def test_right_leg_features_mirror_left_leg_features():
 
 def test_triangle_margins_and_hull_area():
     tri = np.array([[[0, 0], [1, 0], [0, 1]]], float)
-    inradius, margin = _triangle_margins(tri, np.array([0.25, 0.25]))
+    inradius, margin = triangle_margins(tri, np.array([0.25, 0.25]))
     assert inradius[0] == pytest.approx(1 / (2 + np.sqrt(2)))
     assert margin[0] == pytest.approx(0.25)
-    assert _triangle_margins(tri[:, ::-1], np.array([2.0, 2.0]))[1][0] < 0  # outside, any winding
+    assert triangle_margins(tri[:, ::-1], np.array([2.0, 2.0]))[1][0] < 0  # outside, any winding
     quads = np.array([[[0, 0], [1, 0], [1, 1], [0, 1]], [[0, 0], [1, 1], [1, 0], [0, 1]],
                       [[0, 0], [2, 0], [0, 2], [0.2, 0.2]]], float)
-    np.testing.assert_allclose(_hull_area(quads), [1.0, 1.0, 2.0])
+    np.testing.assert_allclose(hull_area(quads), [1.0, 1.0, 2.0])
 
 
 def test_state_validation_and_vector_round_trip():

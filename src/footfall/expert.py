@@ -37,7 +37,7 @@ from footfall.errors import FootfallError
 from footfall.heightmap import HeightMap
 from footfall.kinematics import body_to_world, inverse_kinematics, joint_limit_margin, \
     knee_position, world_to_body
-from footfall.pose_features import _triangle_margins
+from footfall.pose_features import triangle_margins
 from footfall.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.state import RobotState
 
@@ -367,7 +367,7 @@ def _pose_terms(state: RobotState, f: np.ndarray, robot: RobotDescription) -> di
     margins = []
     for ahead in (1, 2):  # the next two swings of the crawl gait
         lifted = LEG_NAMES.index(order[(order.index(state.swing_leg) + ahead) % 4])
-        inradius, _ = _triangle_margins(after[:, [j for j in range(4) if j != lifted]], body_xy)
+        inradius, _ = triangle_margins(after[:, [j for j in range(4) if j != lifted]], body_xy)
         margins.append(inradius)
     return {"progress": progress, "stability": np.minimum(*margins)}
 

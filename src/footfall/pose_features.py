@@ -61,7 +61,7 @@ POSE_FEATURE_DOCS: dict[str, str] = {
 POSE_FEATURE_NAMES: tuple[str, ...] = tuple(POSE_FEATURE_DOCS)
 
 
-def _triangle_margins(tri: np.ndarray, point: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def triangle_margins(tri: np.ndarray, point: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Inradius [m] and signed edge distance [m] of a point, triangles (n, 3, 2), point (2,)."""
     a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
     ab, bc, ca = b - a, c - b, a - c
@@ -80,7 +80,7 @@ def _triangle_margins(tri: np.ndarray, point: np.ndarray) -> tuple[np.ndarray, n
     return inradius, np.min(np.stack(dists), axis=0)
 
 
-def _hull_area(points: np.ndarray) -> np.ndarray:
+def hull_area(points: np.ndarray) -> np.ndarray:
     """Area [m^2] of the convex hull of 4 points, (n, 4, 2) -> (n,).
 
     For four points in convex position the non-crossing ordering has the
@@ -158,10 +158,10 @@ def pose_features(hmap: HeightMap, state: RobotState, footholds: np.ndarray,
     for label, ahead in (("next", 1), ("second", 2)):
         lifted = LEG_NAMES.index(order[(order.index(leg.name) + ahead) % 4])
         tri = after[:, [k for k in range(4) if k != lifted]]
-        inradius, margin = _triangle_margins(tri, body_xy)
+        inradius, margin = triangle_margins(tri, body_xy)
         out[f"{label}_inradius"] = inradius
         out[f"{label}_cog_margin"] = margin
-    out["support_area"] = _hull_area(after)
+    out["support_area"] = hull_area(after)
 
     # Reachability at the current body pose.
     centre = f + np.array([0.0, 0.0, robot.foot_radius])

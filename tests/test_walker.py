@@ -387,21 +387,20 @@ def test_collect_failing_mid_walk_changes_nothing(tmp_path, terrain_file, base_s
     store = tmp_path / "demos.sqlite"
     shutil.copyfile(base_store, store)
     before = store_snapshot(store)
-    fake_expert.calls, fake_expert.fail_at = 0, 3  # after a demonstration was collected
-    try:
-        code, _, err = run(capsys, "demos", "collect", "--terrain", terrain_file, "--n", 2,
-                           "--seed", 1, "-o", store)
-    finally:
-        fake_expert.fail_at = None
+
+    def collect_failing_at(call, n, out):
+        fake_expert.calls, fake_expert.fail_at = 0, call
+        try:
+            return run(capsys, "demos", "collect", "--terrain", terrain_file, "--n", n,
+                       "--seed", 1, "-o", out)
+        finally:
+            fake_expert.fail_at = None
+
+    code, _, err = collect_failing_at(3, 2, store)  # after a demonstration was collected
     assert_user_error(code, err, "the expert gave up")
     assert store_snapshot(store) == before
     new = tmp_path / "new.sqlite"  # nor is a new store left behind
-    fake_expert.calls, fake_expert.fail_at = 0, 1
-    try:
-        code, _, err = run(capsys, "demos", "collect", "--terrain", terrain_file, "--n", 1,
-                           "--seed", 1, "-o", new)
-    finally:
-        fake_expert.fail_at = None
+    code, _, err = collect_failing_at(1, 1, new)
     assert_user_error(code, err, "the expert gave up")
     assert not new.exists()
 

@@ -413,8 +413,9 @@ def rank_eval(model_path: str, store_path: str, no_expert: bool, as_json: bool) 
     data = {"model": model_path, "feature_set": model.feature_set, "learner": model.learner,
             **scores.as_dict()}
     _emit(as_json, data, f"{model.feature_set}/{model.learner} on {scores.n} demonstrations: "
-          f"top-1 {scores.top1:.3f}, percentile {scores.percentile:.3f}, "
-          f"reward loss {scores.reward_loss:.3f} +- {scores.reward_loss_std:.3f}")
+          f"top-1 {scores.top1:.3f}, within 1 cm {scores.top1_near:.3f}, "
+          f"percentile {scores.percentile:.3f}, reward loss {scores.reward_loss:.3f} "
+          f"(95 % CI {scores.reward_loss_ci[0]:.3f} to {scores.reward_loss_ci[1]:.3f})")
 
 
 @cli.command()

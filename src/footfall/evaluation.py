@@ -3,10 +3,13 @@
 For each demonstration, the model ranks the whole candidate set F; the
 measures are top-1 agreement (the model's best is the expert's choice), the
 percentile rank of the expert's choice among the candidates (1.0 = ranked
-first), and the reward loss: the expert's own value of its best candidate
-minus its value of the candidate the model picks (in the expert's value
-units, 1 unit = 1 cm of progress). The last needs the expert's judgement:
-evaluation may ask the expert, the learner never does.
+first), the share of picks within ``NEAR`` (1 cm) of the expert's choice
+(candidates are 5 mm apart, so an exact match is a strict test), and the
+reward loss: the expert's own value of its best candidate minus its value
+of the candidate the model picks (in the expert's value units, 1 unit = 1 cm
+of progress), with a bootstrap confidence interval over demonstrations. The
+loss needs the expert's judgement: evaluation may ask the expert, the learner
+never does.
 """
 
 from __future__ import annotations
@@ -19,6 +22,9 @@ import numpy as np
 from footfall.errors import FootfallError
 from footfall.scoring import score_footholds
 
+NEAR = 0.01  # [m] a pick this close (horizontally) to the expert's choice counts as "near"
+BOOTSTRAP = 2000  # resamples of the demonstrations for confidence intervals
+
 
 @dataclass(frozen=True)
 class RankScores:
@@ -28,10 +34,34 @@ class RankScores:
     top1: float  # fraction whose chosen candidate the model ranks first
     percentile: float  # mean fraction of other candidates the chosen one outranks
     reward_loss: float  # mean expert value of its best minus of the model's pick [value units]
-    reward_loss_std: float  # standard deviation of the above
+    reward_loss_std: float  # standard deviation of the above over demonstrations
+    top1_near: float = float("nan")  # fraction of picks within NEAR [m] of the expert's choice
+    reward_loss_ci: tuple[float, float] = (float("nan"), float("nan"))  # 95 % bootstrap CI
+    losses: tuple[float, ...] = ()  # per-demonstration reward loss, in demonstration order
 
     def as_dict(self) -> dict:
-        return dict(vars(self))
+        """Plain data for JSON (the per-demonstration losses included)."""
+        d = dict(vars(self))
+        d["reward_loss_ci"] = list(self.reward_loss_ci)
+        d["losses"] = list(self.losses)
+        return d
+
+
+def bootstrap_ci(values: np.ndarray, level: float = 0.95, n: int = BOOTSTRAP,
+                 seed: int = 0) -> tuple[float, float]:
+    """Percentile bootstrap interval of the mean of ``values`` (n,) over resampled entries.
+
+    For a paired comparison pass the per-demonstration differences. Seeded:
+    the same values give the same interval.
+    """
+    v = np.asarray(values, dtype=np.float64).ravel()
+    if v.size == 0:
+        return float("nan"), float("nan")
+    rng = np.random.default_rng(seed)
+    means = v[rng.integers(0, v.size, size=(n, v.size))].mean(axis=1)
+    a = (1.0 - level) / 2.0
+    lo, hi = np.quantile(means, [a, 1.0 - a])
+    return float(lo), float(hi)
 
 
 def expert_values(demos: Sequence, terrain: Callable[[str], object], expert) -> list[np.ndarray]:
@@ -50,7 +80,7 @@ def rank_scores(model, demos: Sequence, terrain: Callable[[str], object],
         values = expert_values(demos, terrain, expert)
     if not demos:
         raise FootfallError("no demonstrations to evaluate on")
-    top1, pct, loss = [], [], []
+    top1, near, pct, loss = [], [], [], []
     for k, d in enumerate(demos):  # one demonstration at a time, vectorised over its candidates
         hmap = terrain(d.terrain_hash)
         model.check_compatible(map_resolution=hmap.resolution)
@@ -61,9 +91,14 @@ def rank_scores(model, demos: Sequence, terrain: Callable[[str], object],
         pick = int(np.argmax(r))
         others = np.delete(r, d.chosen)
         top1.append(pick == d.chosen or r[pick] == r[d.chosen])
+        near.append(bool(np.hypot(*(d.candidates[pick, :2] - d.candidates[d.chosen, :2]))
+                         <= NEAR + 1e-9))
         pct.append(float(np.mean(others < r[d.chosen])) if others.size else 1.0)
         if values is not None:
             loss.append(float(values[k].max() - values[k][pick]))
     return RankScores(len(demos), float(np.mean(top1)), float(np.mean(pct)),
                       float(np.mean(loss)) if loss else float("nan"),
-                      float(np.std(loss)) if loss else float("nan"))
+                      float(np.std(loss)) if loss else float("nan"),
+                      top1_near=float(np.mean(near)),
+                      reward_loss_ci=bootstrap_ci(np.array(loss)) if loss else (float("nan"),) * 2,
+                      losses=tuple(loss))

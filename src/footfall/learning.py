@@ -29,6 +29,7 @@ from sklearn.utils.validation import check_is_fitted
 from footfall.errors import FootfallError
 
 LEARNERS = ("l1", "l2", "svm")
+L2_LOG_C = (-6.0, 0.0)  # log10 of the smallest and largest C on the L2 / SVM path
 
 
 def pairwise_transform(X: np.ndarray, y: np.ndarray, groups: np.ndarray,
@@ -176,8 +177,9 @@ class FootholdRanker(BaseEstimator):
         loss, L2), all without intercept, on pairwise differences.
     Cs : int or array-like
         The regularisation path: values of C = 1 / lambda, or how many
-        log-spaced values to try (from the smallest C that keeps a weight
-        non-zero for L1, upward over four decades).
+        log-spaced values to try (for L1 from just above the smallest C that
+        keeps a weight non-zero, upward over 3.7 decades; for L2 and the SVM
+        over ``L2_LOG_C``).
     cv : int
         Number of folds, grouped by demonstration.
     tol, max_iter : solver tolerance and iteration limit.
@@ -215,9 +217,11 @@ class FootholdRanker(BaseEstimator):
         if self.learner == "l1":
             # The smallest C at which a weight leaves zero: 1 / max |X^T y| / 2 (logistic loss).
             c_min = 2.0 / np.max(np.abs(pairs.T @ labels))
-        else:
-            c_min = 1e-4
-        return c_min * np.logspace(0.3, 4.0, n)
+            return c_min * np.logspace(0.3, 4.0, n)
+        # L2 and the SVM have no such end: as C -> 0 their weights shrink toward
+        # the direction of the mean pairwise difference, whose ranking no longer
+        # changes with C. Six decades reach from that limit to weak regularisation.
+        return np.logspace(L2_LOG_C[0], L2_LOG_C[1], n)
 
     def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray) -> "FootholdRanker":
         """Learn from stacked candidate features of demonstrations (see :func:`pairwise_transform`).

@@ -75,6 +75,16 @@ class RobotDescription:
     foot_friction: float = 0.8  # [-] Coulomb friction coefficient, ball foot on terrain
     front_knees_forward: bool = True  # LittleDog: front knees forward, hind knees backward
     gait_order: tuple[str, ...] = ("LH", "LF", "RH", "RF")  # crawl gait swing sequence
+    # Simulation (footfall.sim): link shapes for inertia and collision, the servo and the drives.
+    hip_link_radius: float = 0.015  # [m] hip link housing, a capsule from roll axis to thigh (inertia)
+    upper_leg_radius: float = 0.010  # [m] half thickness of the thigh capsule (inertia)
+    knee_radius: float = 0.012  # [m] knee housing sphere, collides with the terrain
+    foot_mass: float = 0.010  # [kg] ball foot, part of lower_leg_mass (carries the force sensor)
+    servo_rate: float = 400.0  # [Hz] rate of the on-board PD joint servo (paper §IV-B)
+    joint_kp: float = 10.0  # [N m/rad] PD servo stiffness (3 N m at 0.3 rad error)
+    joint_kd: float = 0.15  # [N m s/rad] PD servo damping (about critical on a loaded leg)
+    joint_armature: float = 5e-4  # [kg m^2] reflected rotor inertia of a geared joint motor
+    joint_damping: float = 0.01  # [N m s/rad] viscous friction of a joint's gearbox
     legs: tuple[Leg, ...] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -82,6 +92,8 @@ class RobotDescription:
                      "nominal_height"):
             if not getattr(self, name) > 0:
                 raise FootfallError(f"robot description: {name} must be > 0")
+        if not 0 < self.foot_mass < self.lower_leg_mass:
+            raise FootfallError("robot description: foot_mass must be > 0 and < lower_leg_mass")
         if sorted(self.gait_order) != sorted(LEG_NAMES):
             raise FootfallError(f"robot description: gait_order must be a permutation of {LEG_NAMES}")
         lo, hi = self.hip_pitch_limits_front

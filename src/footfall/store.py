@@ -2,7 +2,9 @@
 
 Walkers, walking runs and the teaching interface add demonstrations (paper
 §II-B) to the same store while learners read it; every write is one SQLite
-transaction in WAL mode, so readers never see half a demonstration.
+transaction in WAL mode, so readers never see half a demonstration. The
+same file keeps the run logs of the simulated robot (:mod:`footfall.runlog`):
+a whole run, with all its steps, is one transaction.
 """
 
 from __future__ import annotations
@@ -24,10 +26,11 @@ import numpy as np
 from footfall.errors import FootfallError
 from footfall.heightmap import HeightMap
 from footfall.robot import LEG_NAMES
+from footfall.runlog import RunRecord, RunStep
 from footfall.state import RobotState
 
 FORMAT = "footfall.demostore"
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2  # 1: terrains and demonstrations; 2: + runs and run_steps
 DEFAULT_BUSY_TIMEOUT = 30.0  # [s] how long a write waits for another writer's lock
 _SQLITE_MAGIC = b"SQLite format 3\x00"
 _DTYPE = "<f8"  # every array is stored as little-endian float64, nothing else is read
@@ -71,6 +74,42 @@ CREATE TABLE demonstrations (
 )""",
     "CREATE INDEX demonstrations_terrain ON demonstrations (terrain_hash)",
     "CREATE INDEX demonstrations_source ON demonstrations (source)",
+)
+
+_RUN_SCHEMA = (  # schema version 2: the run logs (added to a version-1 store when opened)
+    """
+CREATE TABLE runs (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,  -- creation order, never reused
+    key TEXT UNIQUE,                   -- optional unique name (resuming experiments), or NULL
+    terrain_hash TEXT NOT NULL REFERENCES terrains(hash),
+    seed INTEGER NOT NULL,
+    settings TEXT NOT NULL,            -- JSON: reward, controller, perturbation settings
+    result TEXT NOT NULL,              -- JSON: success, reason, distance [m], time [s], slip [m], ...
+    n_steps INTEGER NOT NULL
+)""",
+    """
+CREATE TABLE run_steps (
+    run_id INTEGER NOT NULL REFERENCES runs(id),
+    k INTEGER NOT NULL,                -- step number in the run, from 0
+    swing_leg TEXT NOT NULL,
+    state BLOB NOT NULL,               -- RobotState.to_vector(), see meta state_layout
+    state_shape TEXT NOT NULL,
+    state_dtype TEXT NOT NULL,
+    candidates BLOB NOT NULL,          -- (n, 3) x, y, terrain height z [m]
+    candidates_shape TEXT NOT NULL,
+    candidates_dtype TEXT NOT NULL,
+    rewards BLOB NOT NULL,             -- (n,) reward of each candidate (-inf: invalid)
+    rewards_shape TEXT NOT NULL,
+    rewards_dtype TEXT NOT NULL,
+    chosen INTEGER NOT NULL,           -- index of the planned foothold
+    t_liftoff REAL NOT NULL,           -- [s]
+    t_touchdown REAL,                  -- [s], NULL: never touched down
+    touchdown BLOB NOT NULL,           -- (3,) foot-centre position at touch-down [m] (NaN: none)
+    touchdown_shape TEXT NOT NULL,
+    touchdown_dtype TEXT NOT NULL,
+    slip REAL,                         -- [m], NULL: the foot did not swing again
+    PRIMARY KEY (run_id, k)
+)""",
 )
 
 
@@ -347,7 +386,7 @@ class DemoStore:
         with self._write():
             if self._has_table(con, "meta"):  # another process initialised it meanwhile
                 return
-            for statement in _SCHEMA:
+            for statement in _SCHEMA + _RUN_SCHEMA:
                 con.execute(statement)
             con.executemany("INSERT INTO meta (key, value) VALUES (?, ?)",
                             [("format", FORMAT), ("schema_version", str(SCHEMA_VERSION)),
@@ -372,7 +411,21 @@ class DemoStore:
         if version < 1:
             raise FootfallError(f"{self.path}: corrupt demonstration store "
                                 f"(schema version {version})")
+        if version == 1:
+            self._upgrade_to_2()
+            version = 2
         self.schema_version = version
+
+    def _upgrade_to_2(self) -> None:
+        """Add the run-log tables to a version-1 store (one transaction; data untouched)."""
+        con = self._connection
+        with self._write():
+            row = con.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
+            if row is not None and row[0] == "1":  # not upgraded meanwhile by another process
+                if not self._has_table(con, "runs"):
+                    for statement in _RUN_SCHEMA:
+                        con.execute(statement)
+                con.execute("UPDATE meta SET value = '2' WHERE key = 'schema_version'")
 
     # --------------------------------------------------------------- terrains
     def add_terrain(self, hmap: HeightMap) -> str:
@@ -621,7 +674,7 @@ class DemoStore:
             LEG_NAMES order, ``by_source`` {kind: count} where the kind is the
             source up to its first ``:`` (``"run:3:step:7"`` counts as
             ``"run"``), ``candidates`` {min, mean, max} per demonstration
-            (None when empty) and ``first_id``/``last_id``.
+            (None when empty), ``first_id``/``last_id`` and ``runs`` (run logs stored).
         """
         with self._errors(), self._read() as con:
             total, first, last, cmin, cmean, cmax = con.execute(
@@ -632,6 +685,7 @@ class DemoStore:
                 "ON d.terrain_hash = t.hash GROUP BY t.hash ORDER BY t.rowid"))
             legs = dict(con.execute(
                 "SELECT swing_leg, count(*) FROM demonstrations GROUP BY swing_leg"))
+            n_runs = int(con.execute("SELECT count(*) FROM runs").fetchone()[0])
             by_source = dict(con.execute(
                 "SELECT substr(source, 1, instr(source || ':', ':') - 1) AS kind, count(*) "
                 "FROM demonstrations GROUP BY kind ORDER BY kind"))
@@ -642,7 +696,111 @@ class DemoStore:
                 "by_terrain": by_terrain, "by_leg": by_leg, "by_source": by_source,
                 "candidates": None if not total else {"min": int(cmin), "mean": float(cmean),
                                                       "max": int(cmax)},
-                "first_id": first, "last_id": last}
+                "first_id": first, "last_id": last, "runs": n_runs}
+
+    # ------------------------------------------------------------------- runs
+    def add_run(self, run: RunRecord, terrains: Iterable[HeightMap] = ()) -> int:
+        """Store a whole run with all its steps in ONE transaction; return its id.
+
+        Parameters
+        ----------
+        run : RunRecord
+            Its ``id`` is ignored. Its terrain must be stored, or be among
+            ``terrains`` (added in the same transaction).
+        terrains : iterable of HeightMap
+            Terrains to add first.
+
+        Raises
+        ------
+        FootfallError
+            If the terrain is missing or a run with the same key is stored;
+            nothing is written then.
+        """
+        if not isinstance(run, RunRecord):
+            raise FootfallError(f"expected a RunRecord, got {type(run).__name__}")
+        terrains = list(terrains)
+        with self._errors(), self._write() as con:
+            for hmap in terrains:
+                self._insert_terrain(con, hmap)
+            if con.execute("SELECT 1 FROM terrains WHERE hash = ?",
+                           (run.terrain_hash,)).fetchone() is None:
+                raise FootfallError(f"terrain {run.terrain_hash} is not in the store; "
+                                    f"add it before its runs")
+            if run.key is not None and con.execute("SELECT 1 FROM runs WHERE key = ?",
+                                                   (run.key,)).fetchone() is not None:
+                raise FootfallError(f"a run with key {run.key!r} is already in the store")
+            cur = con.execute(
+                "INSERT INTO runs (key, terrain_hash, seed, settings, result, n_steps) "
+                "VALUES (?, ?, ?, ?, ?, ?)",
+                (run.key, run.terrain_hash, int(run.seed), json.dumps(run.settings, sort_keys=True),
+                 json.dumps(run.result, sort_keys=True), len(run.steps)))
+            run_id = int(cur.lastrowid)
+            con.executemany(
+                "INSERT INTO run_steps (run_id, k, swing_leg, state, state_shape, state_dtype, "
+                "candidates, candidates_shape, candidates_dtype, rewards, rewards_shape, "
+                "rewards_dtype, chosen, t_liftoff, t_touchdown, touchdown, touchdown_shape, "
+                "touchdown_dtype, slip) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, "
+                "?, ?, ?)",
+                [(run_id, st.k, st.swing_leg, *_encode(st.state.to_vector()),
+                  *_encode(st.candidates), *_encode(st.rewards), st.chosen, float(st.t_liftoff),
+                  None if math.isnan(st.t_touchdown) else float(st.t_touchdown),
+                  *_encode(st.touchdown), None if math.isnan(st.slip) else float(st.slip))
+                 for st in run.steps])
+        return run_id
+
+    def runs(self, key_prefix: str | None = None) -> list[dict[str, Any]]:
+        """Every stored run without its steps: id, key, terrain_hash, seed, settings, result, n_steps.
+
+        ``key_prefix`` keeps only runs whose key starts with it. In creation order.
+        """
+        sql = "SELECT id, key, terrain_hash, seed, settings, result, n_steps FROM runs"
+        params: list[Any] = []
+        if key_prefix is not None:
+            sql += " WHERE key IS NOT NULL AND substr(key, 1, length(?)) = ?"
+            params = [key_prefix, key_prefix]
+        with self._errors():
+            rows = self._connection.execute(sql + " ORDER BY id", params).fetchall()
+        out = []
+        for id_, key, th, seed, settings, result, n in rows:
+            try:
+                out.append({"id": int(id_), "key": key, "terrain_hash": th, "seed": int(seed),
+                            "settings": json.loads(settings), "result": json.loads(result),
+                            "n_steps": int(n)})
+            except (TypeError, ValueError) as exc:
+                raise FootfallError(f"{self.path}: run {id_} is corrupt ({exc})") from None
+        return out
+
+    def run(self, run_id: int) -> RunRecord:
+        """The stored run ``run_id`` with all its steps, validated."""
+        run_id = self._check_id(run_id)
+        with self._errors(), self._read() as con:
+            head = con.execute("SELECT key, terrain_hash, seed, settings, result FROM runs "
+                               "WHERE id = ?", (run_id,)).fetchone()
+            rows = con.execute(
+                "SELECT k, swing_leg, state, state_shape, state_dtype, candidates, "
+                "candidates_shape, candidates_dtype, rewards, rewards_shape, rewards_dtype, "
+                "chosen, t_liftoff, t_touchdown, touchdown, touchdown_shape, touchdown_dtype, "
+                "slip FROM run_steps WHERE run_id = ? ORDER BY k", (run_id,)).fetchall()
+        if head is None:
+            raise FootfallError(f"run {run_id} is not in the store")
+        what = f"{self.path}: run {run_id}"
+        try:
+            steps = []
+            for (k, leg, st, st_s, st_d, c, c_s, c_d, r, r_s, r_d, chosen, t0, t1, td, td_s,
+                 td_d, slip) in rows:
+                if leg not in LEG_NAMES:
+                    raise FootfallError(f"unknown swing leg {leg!r}")
+                state = RobotState.from_vector(_decode(st, st_s, st_d, "a state"), leg)
+                steps.append(RunStep(int(k), state, _decode(c, c_s, c_d, "candidates"),
+                                     _decode(r, r_s, r_d, "rewards"), int(chosen), float(t0),
+                                     math.nan if t1 is None else float(t1),
+                                     _decode(td, td_s, td_d, "a touch-down"),
+                                     math.nan if slip is None else float(slip)))
+            key, th, seed, settings, result = head
+            return RunRecord(th, int(seed), json.loads(settings), json.loads(result),
+                             tuple(steps), key, run_id)
+        except (FootfallError, TypeError, ValueError) as exc:
+            raise FootfallError(f"{what} is corrupt ({exc})") from None
 
     def check(self) -> None:
         """Check the whole file's structure (SQLite ``quick_check``); reads every page.

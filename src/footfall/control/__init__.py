@@ -1,0 +1,1 @@
+"""The control architecture of the paper (§IV-B): planners, trajectories, low-level control."""

@@ -1,0 +1,1 @@
+"""The simulated robot: MuJoCo model, terrain and physics (issue 4)."""

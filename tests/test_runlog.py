@@ -1,0 +1,107 @@
+"""Run logs in the store: round trip, atomicity, keys, and upgrading a version-1 store."""
+
+import math
+import sqlite3
+
+import numpy as np
+import pytest
+
+from footfall.errors import FootfallError
+from footfall.runlog import RunRecord, RunStep
+from footfall.state import nominal_state
+from footfall.store import SCHEMA_VERSION, DemoStore
+
+from test_store import demo, terrain
+
+
+def _run(hmap, n_steps=3, key="table2:flat:0", seed=4):
+    rng = np.random.default_rng(seed)
+    steps = []
+    for k in range(n_steps):
+        leg = ("LH", "LF", "RH", "RF")[k % 4]
+        state = nominal_state(hmap, (0.2 + 0.02 * k, 0.0), 0.0, leg)
+        cand = np.column_stack([rng.uniform(0.2, 0.4, 6), rng.uniform(-0.1, 0.1, 6),
+                                np.zeros(6)])
+        rewards = rng.normal(size=6)
+        rewards[1] = -np.inf  # an invalid candidate keeps its -inf
+        last = k == n_steps - 1
+        steps.append(RunStep(k, state, cand, rewards, int(np.argmax(rewards)), 0.5 * k,
+                             math.nan if last else 0.5 * k + 0.3,
+                             np.full(3, np.nan) if last else cand[0] + 0.001,
+                             math.nan if last else 0.002 * k))
+    return RunRecord(hmap.content_hash(), seed, {"reward": "default", "gait": {"swing": 0.3}},
+                     {"success": True, "reason": "goal", "distance": 1.2}, tuple(steps), key)
+
+
+def test_run_round_trip_is_bit_identical(tmp_path):
+    hm = terrain()
+    run = _run(hm)
+    with DemoStore(tmp_path / "s.sqlite", create=True) as store:
+        run_id = store.add_run(run, terrains=[hm])
+        back = store.run(run_id)
+        listed = store.runs()
+    assert back.id == run_id and back.key == run.key and back.seed == run.seed
+    assert back.settings == run.settings and back.result == run.result
+    assert len(back.steps) == 3
+    for a, b in zip(run.steps, back.steps):
+        assert a.swing_leg == b.swing_leg and a.chosen == b.chosen
+        assert a.state.to_vector().tobytes() == b.state.to_vector().tobytes()
+        assert a.candidates.tobytes() == b.candidates.tobytes()
+        assert a.rewards.tobytes() == b.rewards.tobytes()
+        assert a.touchdown.tobytes() == b.touchdown.tobytes()
+        assert (a.slip == b.slip) or (math.isnan(a.slip) and math.isnan(b.slip))
+    assert back.slips().tolist() == [0.0, 0.002]
+    assert [r["n_steps"] for r in listed] == [3] and listed[0]["result"]["success"] is True
+
+
+def test_runs_filter_by_key_and_keys_are_unique(tmp_path):
+    hm = terrain()
+    with DemoStore(tmp_path / "s.sqlite", create=True) as store:
+        store.add_terrain(hm)
+        store.add_run(_run(hm, key="a:1"))
+        store.add_run(_run(hm, key="b:1"))
+        store.add_run(_run(hm, key=None))
+        with pytest.raises(FootfallError, match="already in the store"):
+            store.add_run(_run(hm, key="a:1"))
+        assert [r["key"] for r in store.runs("a:")] == ["a:1"]
+        assert len(store.runs()) == 3
+
+
+def test_a_failed_run_write_leaves_nothing(tmp_path):
+    hm = terrain()
+    with DemoStore(tmp_path / "s.sqlite", create=True) as store:
+        with pytest.raises(FootfallError, match="not in the store"):
+            store.add_run(_run(hm))  # its terrain was never added
+        assert store.runs() == []
+        assert store.terrain_hashes() == []
+
+
+def test_bad_run_steps_are_rejected():
+    hm = terrain()
+    state = nominal_state(hm, (0.3, 0.0), 0.0, "LF")
+    with pytest.raises(FootfallError, match="outside"):
+        RunStep(0, state, np.zeros((3, 3)), np.zeros(3), 3, 0.0)
+    with pytest.raises(FootfallError, match="one reward per candidate"):
+        RunStep(0, state, np.zeros((3, 3)), np.zeros(2), 0, 0.0)
+    with pytest.raises(FootfallError, match="numbered"):
+        RunRecord(hm.content_hash(), 0, {}, {}, (RunStep(1, state, np.zeros((2, 3)),
+                                                         np.zeros(2), 0, 0.0),))
+    with pytest.raises(FootfallError, match="without NaN"):
+        RunRecord(hm.content_hash(), 0, {}, {"slip": float("nan")})
+
+
+def test_a_version_1_store_is_upgraded_in_place_without_losing_anything(tmp_path):
+    path = tmp_path / "old.sqlite"
+    hm = terrain()
+    with DemoStore(path, create=True) as store:
+        store.add_demonstrations([demo(hm)], terrains=[hm])
+    con = sqlite3.connect(path, isolation_level=None)  # make it look like a version-1 file
+    con.execute("DROP TABLE run_steps")
+    con.execute("DROP TABLE runs")
+    con.execute("UPDATE meta SET value = '1' WHERE key = 'schema_version'")
+    con.close()
+    with DemoStore(path) as store:
+        assert store.schema_version == SCHEMA_VERSION == 2
+        assert len(store.demonstrations()) == 1
+        store.add_run(_run(hm))
+        assert len(store.runs()) == 1

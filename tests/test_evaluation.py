@@ -1,9 +1,10 @@
-"""Confidence intervals and paired feature-set comparisons of the offline report."""
+"""Confidence intervals (bootstrap, Wilson) and paired feature-set comparisons."""
 
 import numpy as np
 import pytest
 
-from footfall.evaluation import bootstrap_ci
+from footfall.errors import FootfallError
+from footfall.stats import bootstrap_ci, wilson_interval
 from footfall.learning import L2_LOG_C, FootholdRanker
 from footfall.offline import compare_feature_sets
 
@@ -48,3 +49,13 @@ def test_l2_path_spans_its_six_decades():
     r = FootholdRanker(learner="l2", Cs=7)
     Cs = r._path(np.ones((4, 2)), np.array([1.0, -1.0, 1.0, -1.0]))
     assert Cs[0] == pytest.approx(10 ** L2_LOG_C[0]) and Cs[-1] == pytest.approx(10 ** L2_LOG_C[1])
+
+
+def test_wilson_interval_on_known_values():
+    # Reference values of the Wilson score interval (z = 1.959964).
+    assert wilson_interval(10, 21) == pytest.approx((0.2833, 0.6763), abs=5e-4)
+    assert wilson_interval(21, 21) == pytest.approx((0.8454, 1.0), abs=5e-4)
+    assert wilson_interval(0, 21) == pytest.approx((0.0, 0.1546), abs=5e-4)
+    assert wilson_interval(5, 10) == pytest.approx((0.2366, 0.7634), abs=5e-4)
+    with pytest.raises(FootfallError, match="successes <= trials"):
+        wilson_interval(22, 21)

@@ -21,9 +21,9 @@ import numpy as np
 
 from footfall.errors import FootfallError
 from footfall.scoring import score_footholds
+from footfall.stats import bootstrap_ci
 
 NEAR = 0.01  # [m] a pick this close (horizontally) to the expert's choice counts as "near"
-BOOTSTRAP = 2000  # resamples of the demonstrations for confidence intervals
 
 
 @dataclass(frozen=True)
@@ -45,23 +45,6 @@ class RankScores:
         d["reward_loss_ci"] = list(self.reward_loss_ci)
         d["losses"] = list(self.losses)
         return d
-
-
-def bootstrap_ci(values: np.ndarray, level: float = 0.95, n: int = BOOTSTRAP,
-                 seed: int = 0) -> tuple[float, float]:
-    """Percentile bootstrap interval of the mean of ``values`` (n,) over resampled entries.
-
-    For a paired comparison pass the per-demonstration differences. Seeded:
-    the same values give the same interval.
-    """
-    v = np.asarray(values, dtype=np.float64).ravel()
-    if v.size == 0:
-        return float("nan"), float("nan")
-    rng = np.random.default_rng(seed)
-    means = v[rng.integers(0, v.size, size=(n, v.size))].mean(axis=1)
-    a = (1.0 - level) / 2.0
-    lo, hi = np.quantile(means, [a, 1.0 - a])
-    return float(lo), float(hi)
 
 
 def expert_values(demos: Sequence, terrain: Callable[[str], object], expert) -> list[np.ndarray]:

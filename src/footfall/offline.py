@@ -22,7 +22,8 @@ import numpy as np
 
 from footfall.dataset import FEATURE_SETS
 from footfall.errors import FootfallError
-from footfall.evaluation import bootstrap_ci, expert_values, rank_scores
+from footfall.evaluation import expert_values, rank_scores
+from footfall.stats import bootstrap_ci
 from footfall.expert import SyntheticExpert
 from footfall.fileio import write_text_atomic
 from footfall.learning import LEARNERS

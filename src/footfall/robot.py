@@ -81,8 +81,8 @@ class RobotDescription:
     knee_radius: float = 0.012  # [m] knee housing sphere, collides with the terrain
     foot_mass: float = 0.010  # [kg] ball foot, part of lower_leg_mass (carries the force sensor)
     servo_rate: float = 400.0  # [Hz] rate of the on-board PD joint servo (paper §IV-B)
-    joint_kp: float = 10.0  # [N m/rad] PD servo stiffness (3 N m at 0.3 rad error)
-    joint_kd: float = 0.15  # [N m s/rad] PD servo damping (about critical on a loaded leg)
+    joint_kp: float = 15.0  # [N m/rad] PD servo stiffness (the torque limit at 0.2 rad error)
+    joint_kd: float = 0.2  # [N m s/rad] PD servo damping (damping ratio 0.6-1 on the joints)
     joint_armature: float = 5e-4  # [kg m^2] reflected rotor inertia of a geared joint motor
     joint_damping: float = 0.01  # [N m s/rad] viscous friction of a joint's gearbox
     legs: tuple[Leg, ...] = field(init=False, repr=False)

@@ -1,0 +1,435 @@
+"""The simulated robot and terrain as a MuJoCo model, generated from the robot description.
+
+Every length, mass, limit and gain comes from a
+:class:`~footfall.robot.RobotDescription`; the kinematic tree reproduces
+:mod:`footfall.kinematics` exactly, so MuJoCo's forward kinematics and the
+closed-form one agree to rounding. The terrain is made from a
+:class:`~footfall.heightmap.HeightMap`: MuJoCo height fields whose vertices
+are map cells, at most 2 mm apart (see :func:`terrain_layout`).
+
+Model layout (names are the API the simulation wrapper and tests rely on):
+
+- body ``trunk`` with a free joint ``root`` (or welded to the world for a
+  test rig), a box geom ``trunk``, an IMU site ``imu`` at the body origin
+  and a tracking camera ``track``;
+- per leg ``L`` in LEG_NAMES: bodies ``L_hip`` (joint ``L_hip_roll``),
+  ``L_upper`` (joint ``L_hip_pitch``), ``L_lower`` (joint ``L_knee``;
+  collision geoms ``L_knee`` and ``L_shin0`` ... ``L_shin2``) and a welded
+  ``L_foot`` (geom and site ``L_foot``); one position actuator per joint,
+  named after it. Masses sit on capsules ``L_hip_link``, ``L_thigh``,
+  ``L_lower_leg`` (which do not collide) and the foot sphere, so MuJoCo
+  derives every inertia from the link shapes;
+- sensors ``L_foot_force`` (3-axis force at the foot site), ``imu_quat``,
+  ``imu_gyro``, ``imu_accel``;
+- terrain geoms ``terrain0``, ``terrain1``, ... (or one plane ``terrain`` at
+  z = 0 without a map) and a catch-all ``floor`` plane below them. Robot
+  geoms collide with the terrain only, never with each other.
+
+Physics: the timestep is one period of the robot's PD servo
+(``1 / robot.servo_rate``, 2.5 ms at 400 Hz), so MuJoCo's position
+actuators *are* the 400 Hz servo: each step applies
+``kp (q* - q) - kd qdot`` clipped to the torque limit, as the robot's
+on-board loop does. The ``implicitfast`` integrator treats the servo damping,
+joint damping and armature implicitly, which keeps the light legs stable at
+this step; a finer step would only slow the simulation down. Contacts use
+elliptic friction cones with a high impedance ratio, so that a foot inside
+its friction cone stays put instead of creeping as MuJoCo's soft contacts
+otherwise do.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from itertools import pairwise
+
+os.environ.setdefault("MUJOCO_GL", "egl")  # headless rendering unless the caller chose otherwise
+
+import mujoco
+import numpy as np
+
+from footfall.errors import FootfallError
+from footfall.heightmap import HeightMap
+from footfall.robot import LEG_NAMES, RobotDescription
+
+JOINTS = ("hip_roll", "hip_pitch", "knee")  # joint name suffixes, in kinematics.py order
+TERRAIN_BASE = 0.02  # [m] thickness of the solid slab under the height field's lowest point
+MAX_HFIELD_SPACING = 0.002  # [m] coarsest height-field vertex spacing; finer maps are decimated
+# (MuJoCo tests every grid cell under a geom's bounding box against it: a 1 cm ball covers
+# 4x as many cells at 1 mm as at 2 mm, and collision is most of the cost of a step)
+CONTACT_TIMECONST_STEPS = 2.0  # [steps] contact time constant in physics steps: the stiffest
+# MuJoCo recommends, so that a foot sinks < 0.1 mm under the robot's weight
+IMPRATIO = 100.0  # [-] friction-to-normal impedance ratio of MuJoCo's elliptic friction cones:
+# makes static friction hold (a standing foot creeps < 0.2 mm in 4 s on a 0.3 slope, against
+# 14 mm with MuJoCo's defaults)
+TILE_CELLS = 32  # [cells] side of a terrain tile (64 mm at 2 mm): small enough that flat
+# stretches become boxes and a geom's bounding box meets few tiles' elevation ranges
+SHIN_PIECES = 3  # [-] the shin collides as this many collinear capsules: the same shape, but
+# each piece's bounding box covers fewer height-field cells than the whole slanted shin's
+FIXED_BASE_CLEARANCE = 0.5  # [m] test rig: trunk welded this far above the highest terrain point
+CAMERA_OFFSET = (0.25, -0.6, 0.25)  # [m] tracking camera position from the robot's centre of mass
+# (front right, above: the side view of the paper's Fig. 4)
+
+TERRAIN_GEOM_GROUP = 2  # MuJoCo geom group of every terrain geom (robot geoms use 0, 1 and 3),
+# so rays and renders can pick the terrain alone
+_ROBOT_GROUP = 1  # collision bit of robot geoms; the terrain has the matching affinity
+_VISUAL_RGBA = "0.75 0.75 0.78 1"
+_FOOT_RGBA = "0.15 0.15 0.15 1"
+_TERRAIN_RGBA = "0.72 0.62 0.48 1"
+
+
+def _f(*values: float) -> str:
+    """Numbers for XML, written so that they read back bit for bit."""
+    return " ".join(repr(float(v)) for v in values)
+
+
+# ----------------------------------------------------------------- height field
+def terrain_surface(hmap: HeightMap) -> np.ndarray:
+    """The heights [m] the simulator uses, shape (nx, ny): the map with its holes filled.
+
+    The planner sees the map with NaN cells (no data) and never steps on
+    them; the simulator needs a surface. A NaN cell becomes a hole down to
+    the map's lowest valid height -- what a missing scan of a terrain module
+    usually is (a shadow behind a step, a gap between modules) -- so that
+    nothing the robot might lean on appears where there is no data.
+    """
+    h = np.asarray(hmap.heights, dtype=np.float64)
+    return np.where(np.isnan(h), np.nanmin(h), h)
+
+
+def hfield_decimation(hmap: HeightMap, max_spacing: float | None = MAX_HFIELD_SPACING) -> int:
+    """Keep every k-th map cell as a height-field vertex: the largest k with k * resolution <= max_spacing.
+
+    1 (full resolution) for maps already that coarse, or with ``max_spacing`` None.
+    """
+    if max_spacing is None:
+        return 1
+    if not (isinstance(max_spacing, (int, float)) and math.isfinite(max_spacing)
+            and max_spacing > 0):
+        raise FootfallError(f"max_spacing must be a number > 0 [m] or None, got {max_spacing!r}")
+    k = max(1, math.floor(max_spacing / hmap.resolution + 1e-9))
+    return min(k, min(hmap.shape) - 1)  # keep at least 2 x 2 vertices
+
+
+def _finite(value, name: str, unit: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = math.nan
+    if not math.isfinite(v):
+        raise FootfallError(f"{name} must be a finite number [{unit}], got {value!r}")
+    return v
+
+
+def terrain_layout(hmap: HeightMap, terrain_offset=(0.0, 0.0, 0.0), terrain_yaw: float = 0.0,
+                   max_spacing: float | None = MAX_HFIELD_SPACING) -> list[dict]:
+    """The simulated terrain as MuJoCo geoms: height-field tiles, and boxes where a tile is flat.
+
+    Vertices are map cells: with decimation k (see :func:`hfield_decimation`;
+    1 mm maps get k = 2), map cell (k i, k j) is a vertex at exactly that
+    cell's position and height, so the vertex spacing is k * resolution and
+    the terrain spans k * floor((n - 1) / k) cells along each axis (at most
+    k - 1 cells short of the map's last cell centre). Between vertices
+    MuJoCo's surface is two planar triangles per grid square. The vertex grid
+    is cut into tiles of TILE_CELLS squares that share their edge vertices,
+    so the surface is continuous. Tiles whose vertices all have one height
+    become boxes with their top at that height, neighbours of equal height
+    merged into one box (exactly the same surface, and MuJoCo collides a
+    ball with a box in closed form instead of testing every triangle under
+    it); every other tile is a height field whose vertex (row r, column c)
+    is the tile's vertex (i0 + c, j0 + r) -- MuJoCo's rows run along y.
+    Every tile is TERRAIN_BASE thick below its lowest point.
+
+    The registration moves the terrain rigidly: a map point p becomes the
+    world point ``c + Rz(terrain_yaw) (p - c) + terrain_offset``, where c is
+    the centre of the vertex grid (at height 0).
+
+    Returns
+    -------
+    list of dict
+        One per geom: ``kind`` ("box" or "hfield"), ``pos`` (3,) [m] and
+        ``quat`` (4,) (w, x, y, z) of the geom; a box has ``size`` (3,) [m]
+        half extents; a height field has ``nrow``, ``ncol``, ``size`` (4,)
+        MuJoCo's (x radius [m], y radius [m], elevation range [m], base
+        thickness [m]) and ``data`` (nrow * ncol,) float32 heights
+        normalised to [0, 1].
+    """
+    offset = np.asarray(terrain_offset, dtype=np.float64)
+    if offset.shape != (3,) or not np.isfinite(offset).all():
+        raise FootfallError(f"terrain_offset must be 3 finite numbers [m], got {terrain_offset!r}")
+    yaw = _finite(terrain_yaw, "terrain_yaw", "rad")
+    k = hfield_decimation(hmap, max_spacing)
+    h = terrain_surface(hmap)[::k, ::k]
+    nx, ny = h.shape
+    step = k * hmap.resolution
+    origin = np.asarray(hmap.origin)
+    centre = origin + 0.5 * np.array([nx - 1, ny - 1]) * step
+    rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
+    quat = np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
+    edges_i = np.append(np.arange(0, nx - 1, TILE_CELLS), nx - 1)  # tile corner vertices
+    edges_j = np.append(np.arange(0, ny - 1, TILE_CELLS), ny - 1)
+    blocks = [[h[i0:i1 + 1, j0:j1 + 1] for j0, j1 in pairwise(edges_j)]
+              for i0, i1 in pairwise(edges_i)]  # tiles, sharing their edge vertices
+    lo = np.array([[block.min() for block in row] for row in blocks])
+    hi = np.array([[block.max() for block in row] for row in blocks])
+    flat = lo == hi
+
+    def placed(i0: int, i1: int, j0: int, j1: int, z: float) -> tuple[np.ndarray, np.ndarray]:
+        """World pose centre (3,) [m] and half extents (2,) [m] of vertex block [i0, i1] x [j0, j1]."""
+        mid = origin + 0.5 * np.array([i0 + i1, j0 + j1]) * step
+        xy = centre + rot @ (mid - centre) + offset[:2]
+        return np.array([xy[0], xy[1], z + offset[2]]), 0.5 * np.array([i1 - i0, j1 - j0]) * step
+
+    tiles = []
+    for a, b in zip(*np.nonzero(~flat)):  # a loop over tiles (dozens), not over cells
+        i0, i1, j0, j1 = edges_i[a], edges_i[a + 1], edges_j[b], edges_j[b + 1]
+        t = blocks[a][b]
+        pos, half = placed(i0, i1, j0, j1, lo[a, b])
+        tiles.append({"kind": "hfield", "quat": quat, "pos": pos,
+                      "nrow": j1 - j0 + 1, "ncol": i1 - i0 + 1,
+                      "size": np.array([half[0], half[1], hi[a, b] - lo[a, b], TERRAIN_BASE]),
+                      "data": ((t.T - lo[a, b]) / (hi[a, b] - lo[a, b])).astype(np.float32).ravel()})
+    for a0, a1, b0, b1 in _merge_flat(flat, lo):
+        pos, half = placed(edges_i[a0], edges_i[a1], edges_j[b0], edges_j[b1],
+                           lo[a0, b0] - 0.5 * TERRAIN_BASE)
+        tiles.append({"kind": "box", "quat": quat, "pos": pos,
+                      "size": np.array([half[0], half[1], 0.5 * TERRAIN_BASE])})
+    return tiles
+
+
+def _merge_flat(flat: np.ndarray, height: np.ndarray) -> list[tuple[int, int, int, int]]:
+    """Greedy cover of the flat tiles by rectangles of equal height, as [a0, a1) x [b0, b1).
+
+    Fewer, larger boxes mean fewer seams under a foot (each seam a second
+    contact) and fewer geoms in MuJoCo's broad phase.
+    """
+    free = flat.copy()
+    rects = []
+    for a0, b0 in zip(*np.nonzero(flat)):  # tiles, not cells
+        if not free[a0, b0]:
+            continue
+        z = height[a0, b0]
+        b1 = b0 + 1
+        while b1 < flat.shape[1] and free[a0, b1] and height[a0, b1] == z:
+            b1 += 1
+        a1 = a0 + 1
+        while a1 < flat.shape[0] and free[a1, b0:b1].all() and (height[a1, b0:b1] == z).all():
+            a1 += 1
+        free[a0:a1, b0:b1] = False
+        rects.append((int(a0), int(a1), int(b0), int(b1)))
+    return rects
+
+
+# ------------------------------------------------------------------------ robot
+def _camera_axes(offset) -> tuple[np.ndarray, np.ndarray]:
+    """x and y axes of a camera at ``offset`` [m] looking at the origin, horizon level."""
+    back = np.asarray(offset, dtype=np.float64)
+    back = back / np.linalg.norm(back)  # camera z axis: from the target towards the camera
+    x = np.cross([0.0, 0.0, 1.0], back)
+    x /= np.linalg.norm(x)
+    return x, np.cross(back, x)
+
+
+def _leg_xml(robot: RobotDescription, name: str, friction: float) -> str:
+    leg = robot.leg(name)
+    (rlo, rhi), (plo, phi), (klo, khi) = leg.limits
+    r_hip, r_up = robot.hip_link_radius, robot.upper_leg_radius
+    shin_end = robot.lower_leg - robot.foot_radius - robot.lower_leg_radius  # shin meets the ball
+    cuts = np.linspace(0.0, -shin_end, SHIN_PIECES + 1)
+    collide = (f'contype="{_ROBOT_GROUP}" conaffinity="0" condim="3" '
+               f'friction="{_f(friction)} 0 0" density="0"')
+    visual = 'contype="0" conaffinity="0" group="1"'
+    shin = "".join(
+        f"""
+          <geom name="{name}_shin{k}" type="capsule" fromto="0 0 {_f(cuts[k])} 0 0 {_f(cuts[k + 1])}"
+                size="{_f(robot.lower_leg_radius)}" {collide} group="3"/>"""
+        for k in range(SHIN_PIECES))
+    return f"""
+    <body name="{name}_hip" pos="{_f(*leg.hip)}">
+      <joint name="{name}_hip_roll" axis="1 0 0" range="{_f(rlo, rhi)}"/>
+      <geom name="{name}_hip_link" type="capsule" fromto="0 0 0 0 {_f(leg.side * robot.hip_offset)} 0"
+            size="{_f(r_hip)}" mass="{_f(robot.hip_link_mass)}" {visual} rgba="{_VISUAL_RGBA}"/>
+      <body name="{name}_upper" pos="0 {_f(leg.side * robot.hip_offset)} 0">
+        <joint name="{name}_hip_pitch" axis="0 1 0" range="{_f(plo, phi)}"/>
+        <geom name="{name}_thigh" type="capsule" fromto="0 0 0 0 0 {_f(-robot.upper_leg)}"
+              size="{_f(r_up)}" mass="{_f(robot.upper_leg_mass)}" {visual} rgba="{_VISUAL_RGBA}"/>
+        <body name="{name}_lower" pos="0 0 {_f(-robot.upper_leg)}">
+          <joint name="{name}_knee" axis="0 1 0" range="{_f(klo, khi)}"/>
+          <geom name="{name}_lower_leg" type="capsule" fromto="0 0 0 0 0 {_f(-shin_end)}"
+                size="{_f(robot.lower_leg_radius)}"
+                mass="{_f(robot.lower_leg_mass - robot.foot_mass)}" {visual}
+                rgba="{_VISUAL_RGBA}"/>
+          <geom name="{name}_knee" type="sphere" size="{_f(robot.knee_radius)}" {collide}
+                rgba="{_VISUAL_RGBA}"/>{shin}
+          <body name="{name}_foot" pos="0 0 {_f(-robot.lower_leg)}">
+            <geom name="{name}_foot" type="sphere" size="{_f(robot.foot_radius)}"
+                  {collide.replace('density="0"', f'mass="{_f(robot.foot_mass)}"')}
+                  rgba="{_FOOT_RGBA}"/>
+            <site name="{name}_foot" size="{_f(0.5 * robot.foot_radius)}"/>
+          </body>
+        </body>
+      </body>
+    </body>"""
+
+
+def build_mjcf(robot: RobotDescription, hmap: HeightMap | None, *,
+               terrain_offset=(0.0, 0.0, 0.0), terrain_yaw: float = 0.0,
+               friction: float | None = None, fixed_base: bool = False,
+               max_spacing: float | None = MAX_HFIELD_SPACING) -> str:
+    """The MJCF (MuJoCo XML) of the robot on a terrain.
+
+    The height field is declared with its size but no data (the data --
+    a million numbers for a board -- is filled in by :func:`compile_model`).
+
+    Parameters
+    ----------
+    robot : RobotDescription
+        The one source of every robot number.
+    hmap : HeightMap or None
+        The terrain; None: a flat plane at z = 0 (raised by ``terrain_offset[2]``;
+        horizontal offsets and yaw leave a plane unchanged).
+    terrain_offset : (3,) [m]
+        Translation of the simulated terrain relative to the map
+        (registration error); see :func:`terrain_layout`.
+    terrain_yaw : float [rad]
+        Rotation of the simulated terrain about the vertical through the
+        map's centre.
+    friction : float or None [-]
+        Coulomb friction of every robot-terrain contact; None:
+        ``robot.foot_friction``. The terrain's own friction is zero, so
+        MuJoCo's max rule takes the robot geom's.
+    fixed_base : bool
+        Test rig: no free joint, the trunk hangs level
+        FIXED_BASE_CLEARANCE above the highest terrain point.
+    max_spacing : float or None [m]
+        Coarsest height-field vertex spacing (see :func:`terrain_layout`);
+        None: the map's full resolution.
+
+    Returns
+    -------
+    str
+        The MJCF document.
+    """
+    tiles = _checked_layout(robot, hmap, terrain_offset, terrain_yaw, max_spacing)
+    return _mjcf(robot, tiles, terrain_offset, friction, fixed_base)
+
+
+def _checked_layout(robot, hmap, terrain_offset, terrain_yaw, max_spacing) -> list | None:
+    if not isinstance(robot, RobotDescription):
+        raise FootfallError(f"robot must be a RobotDescription, got {type(robot).__name__}")
+    if hmap is None:
+        offset = np.asarray(terrain_offset, dtype=np.float64)
+        if offset.shape != (3,) or not np.isfinite(offset).all():
+            raise FootfallError(f"terrain_offset must be 3 finite numbers [m], got {terrain_offset!r}")
+        return None
+    if not isinstance(hmap, HeightMap):
+        raise FootfallError(f"hmap must be a HeightMap or None, got {type(hmap).__name__}")
+    return terrain_layout(hmap, terrain_offset, terrain_yaw, max_spacing)
+
+
+def _terrain_xml(tiles: list[dict]) -> tuple[str, str, float]:
+    """(asset XML, worldbody XML, top height [m]) of terrain tiles and the floor under them."""
+    assets, geoms = [], []
+    common = (f'contype="0" conaffinity="{_ROBOT_GROUP}" friction="0 0 0" group="{TERRAIN_GEOM_GROUP}" '
+              f'rgba="{_TERRAIN_RGBA}"')
+    for n, t in enumerate(tiles):
+        pose = f'pos="{_f(*t["pos"])}" quat="{_f(*t["quat"])}"'
+        if t["kind"] == "box":
+            geoms.append(f'<geom name="terrain{n}" type="box" size="{_f(*t["size"])}" {pose} {common}/>')
+        else:
+            assets.append(f'<hfield name="terrain{n}" nrow="{t["nrow"]}" ncol="{t["ncol"]}" '
+                          f'size="{_f(*t["size"])}"/>')
+            geoms.append(f'<geom name="terrain{n}" type="hfield" hfield="terrain{n}" {pose} {common}/>')
+    top = max(float(t["pos"][2] + t["size"][2]) for t in tiles)  # box half height / elevation
+    bottom = min(float(t["pos"][2] - t["size"][3 if t["kind"] == "hfield" else 2]) for t in tiles)
+    geoms.append(f'<geom name="floor" type="plane" size="0 0 0.05" pos="0 0 {_f(bottom)}" '
+                 f'material="floor" contype="0" conaffinity="{_ROBOT_GROUP}" friction="0 0 0" '
+                 f'group="{TERRAIN_GEOM_GROUP}"/>')
+    return "\n    ".join(assets), "\n    ".join(geoms), top
+
+
+def _mjcf(robot: RobotDescription, tiles: list[dict] | None, terrain_offset,
+          friction: float | None, fixed_base: bool) -> str:
+    mu = robot.foot_friction if friction is None else friction
+    if not (isinstance(mu, (int, float)) and math.isfinite(mu) and mu > 0):
+        raise FootfallError(f"friction must be a finite number > 0, got {friction!r}")
+    timestep = 1.0 / robot.servo_rate
+
+    if tiles is None:  # a plane is invariant under xy shifts and yaw: only the height offset counts
+        terrain_top = float(terrain_offset[2])
+        asset_terrain = ""
+        terrain = (f'<geom name="terrain" type="plane" size="0 0 0.05" material="floor" '
+                   f'pos="0 0 {_f(terrain_top)}" contype="0" conaffinity="{_ROBOT_GROUP}" '
+                   f'friction="0 0 0" group="{TERRAIN_GEOM_GROUP}"/>')
+    else:
+        asset_terrain, terrain, terrain_top = _terrain_xml(tiles)
+
+    trunk_z = terrain_top + (FIXED_BASE_CLEARANCE if fixed_base else robot.nominal_height)
+    base_joint = "" if fixed_base else '<freejoint name="root"/>'
+    cam_x, cam_y = _camera_axes(CAMERA_OFFSET)
+    half = np.asarray(robot.trunk_size) / 2
+    legs = "".join(_leg_xml(robot, name, mu) for name in LEG_NAMES)
+    actuators = "\n    ".join(
+        f'<position name="{leg}_{j}" joint="{leg}_{j}" kp="{_f(robot.joint_kp)}" '
+        f'kv="{_f(robot.joint_kd)}" forcelimited="true" '
+        f'forcerange="{_f(-robot.max_joint_torque, robot.max_joint_torque)}"/>'
+        for leg in LEG_NAMES for j in JOINTS)
+    forces = "\n    ".join(f'<force name="{leg}_foot_force" site="{leg}_foot"/>'
+                           for leg in LEG_NAMES)
+    return f"""<mujoco model="{robot.name}">
+  <compiler angle="radian" autolimits="true" inertiafromgeom="true"/>
+  <option timestep="{_f(timestep)}" integrator="implicitfast" cone="elliptic"
+          impratio="{_f(IMPRATIO)}"/>
+  <visual><global offwidth="1920" offheight="1080"/><quality shadowsize="1024"/></visual>
+  <default>
+    <joint armature="{_f(robot.joint_armature)}" damping="{_f(robot.joint_damping)}"/>
+    <geom solref="{_f(CONTACT_TIMECONST_STEPS * timestep)} 1"/>
+  </default>
+  <asset>
+    <texture name="floor" type="2d" builtin="checker" width="512" height="512"
+             rgb1="0.35 0.37 0.40" rgb2="0.30 0.32 0.35"/>
+    <material name="floor" texture="floor" texrepeat="8 8"/>
+    {asset_terrain}
+  </asset>
+  <worldbody>
+    <light name="sun" pos="0 0 3" dir="0 0 -1" directional="true"/>
+    {terrain}
+    <body name="trunk" pos="0 0 {_f(trunk_z)}">
+      {base_joint}
+      <geom name="trunk" type="box" size="{_f(*half)}" mass="{_f(robot.trunk_mass)}"
+            contype="{_ROBOT_GROUP}" conaffinity="0" condim="3" friction="{_f(mu)} 0 0"
+            rgba="0.25 0.35 0.55 1"/>
+      <site name="imu" size="0.005"/>
+      <camera name="track" mode="trackcom" pos="{_f(*CAMERA_OFFSET)}"
+              xyaxes="{_f(*cam_x, *cam_y)}"/>{legs}
+    </body>
+  </worldbody>
+  <actuator>
+    {actuators}
+  </actuator>
+  <sensor>
+    {forces}
+    <framequat name="imu_quat" objtype="site" objname="imu"/>
+    <gyro name="imu_gyro" site="imu"/>
+    <accelerometer name="imu_accel" site="imu"/>
+  </sensor>
+</mujoco>
+"""
+
+
+def compile_model(robot: RobotDescription, hmap: HeightMap | None, *,
+                  terrain_offset=(0.0, 0.0, 0.0), terrain_yaw: float = 0.0,
+                  friction: float | None = None, fixed_base: bool = False,
+                  max_spacing: float | None = MAX_HFIELD_SPACING) -> mujoco.MjModel:
+    """The compiled MuJoCo model of :func:`build_mjcf`, height-field data filled in.
+
+    Same parameters as :func:`build_mjcf`.
+    """
+    tiles = _checked_layout(robot, hmap, terrain_offset, terrain_yaw, max_spacing)
+    model = mujoco.MjModel.from_xml_string(_mjcf(robot, tiles, terrain_offset, friction, fixed_base))
+    for n, tile in enumerate(tiles or ()):
+        if tile["kind"] == "hfield":
+            h = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_HFIELD, f"terrain{n}")
+            adr = model.hfield_adr[h]
+            model.hfield_data[adr:adr + tile["data"].size] = tile["data"]
+    return model

@@ -439,6 +439,114 @@ def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
     _emit(as_json, summary, f"wrote {Path(out) / 'report.md'}")
 
 
+# --------------------------------------------------------------------- walking
+def _load_terrain(path: str):
+    from footfall.heightmap import HeightMap
+
+    if not Path(path).exists():
+        raise FootfallError(f"no such terrain file: {path}")
+    return HeightMap.load(path)
+
+
+def _run_text(result: dict) -> str:
+    slip = ("" if result.get("slip_mean_mm") is None else
+            f", slip {result['slip_mean_mm']:.1f} +- {result['slip_std_mm']:.1f} mm "
+            f"({result['slip_count']} footholds)")
+    return (f"{'success' if result['success'] else 'failure'} ({result['reason']}): "
+            f"{result['distance']:.3f} m in {result['time']:.1f} s, {result['steps']} steps, "
+            f"{result['speed_cm_s']:.1f} cm/s{slip}; real-time factor "
+            f"{result['real_time_factor']:.1f}")
+
+
+@cli.command("walk")
+@click.option("--terrain", "terrain_path", required=True, help="Board height map (.npz).")
+@click.option("--model", "model_path", default=None,
+              help="Learned model (.npz); default: the hand-tuned reward.")
+@click.option("--seed", type=click.IntRange(min=0), required=True,
+              help="Run seed: start pose, terrain registration, friction, sensor noise.")
+@click.option("--snapshots", default=None, help="Write a strip of frames (.png).")
+@click.option("--frames", type=click.IntRange(2, 12), default=6, show_default=True,
+              help="Frames in the snapshot strip.")
+@click.option("--video", default=None, help="Write a video (.mp4).")
+@click.option("--log", "log_path", default=None, help="Append the run log to this store (.sqlite).")
+@json_option
+def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: str | None,
+             frames: int, video: str | None, log_path: str | None, as_json: bool) -> None:
+    """One run of the simulated robot across a board (success, slip, speed)."""
+    import os
+
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    from footfall.runs import reward_source, save_strip, save_video
+    from footfall.walk import Frames, walk
+
+    hmap = _load_terrain(terrain_path)
+    reward_for = reward_source(model_path, hmap)
+    for p in (snapshots, video):
+        if p is not None:
+            _out_path(p)
+    store = None
+    if log_path is not None:
+        from footfall.store import DemoStore
+
+        store = DemoStore(_out_path(log_path), create=True)  # checked before the run, not after
+    pictures = None
+    if snapshots or video:
+        pictures = Frames(snapshot_count=frames if snapshots else 0,
+                          video_fps=25.0 if video else 0.0)
+    record = walk(hmap, reward_for, seed, frames=pictures)
+    data = {"terrain": terrain_path, "model": model_path, "seed": seed, **record.result}
+    if snapshots:
+        save_strip(pictures.snapshots, snapshots)
+    if video:
+        save_video(pictures.video, video, pictures.video_fps)
+    if store is not None:
+        with store:
+            data["run_id"] = store.add_run(record, terrains=[hmap])
+    _emit(as_json, data, _run_text(record.result))
+
+
+@cli.command("walk-many")
+@click.option("--terrain", "terrain_path", required=True, help="Board height map (.npz).")
+@click.option("--model", "model_path", default=None,
+              help="Learned model (.npz); default: the hand-tuned reward.")
+@click.option("--runs", type=click.IntRange(min=1), default=21, show_default=True)
+@click.option("--seed", type=click.IntRange(min=0), required=True,
+              help="Run i has seed SEED + i.")
+@click.option("--log", "log_path", default=None, help="Append every run log to this store.")
+@json_option
+def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: int,
+                  log_path: str | None, as_json: bool) -> None:
+    """N runs in parallel processes: success rate (Wilson 95 % CI), slip, speed."""
+    from tqdm import tqdm
+
+    from footfall.runs import summarise, walk_many
+
+    hmap = _load_terrain(terrain_path)
+    store = None
+    if log_path is not None:
+        from footfall.store import DemoStore
+
+        store = DemoStore(_out_path(log_path), create=True)
+    with tqdm(total=runs, desc="runs", unit="run", disable=None, file=sys.stderr) as bar:
+        def progress(record) -> None:
+            bar.update(1)
+            if store is not None:  # each finished run is kept at once
+                store.add_run(record, terrains=[hmap])
+        records = walk_many(terrain_path, model_path, runs, seed, progress=progress)
+    if store is not None:
+        store.close()
+    summary = summarise(records)
+    d = summary.as_dict()
+    data = {"terrain": terrain_path, "model": model_path, "seed": seed, **d,
+            "runs_detail": [{"seed": seed + i, **r.result} for i, r in enumerate(records)]}
+    slip = ("no successful run" if summary.slip_mean_mm is None else
+            f"slip {summary.slip_mean_mm:.1f} +- {summary.slip_std_mm:.1f} mm over "
+            f"{summary.slip_count} footholds, {summary.speed_cm_s:.1f} cm/s")
+    _emit(as_json, data, f"{summary.successes} / {summary.runs} succeeded "
+          f"({100 * summary.success_rate:.1f} %, 95 % CI {100 * summary.success_ci[0]:.1f}-"
+          f"{100 * summary.success_ci[1]:.1f} %); {slip}")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point: run the CLI, turning user errors into one line and exit status 2."""
     args = list(sys.argv[1:] if argv is None else argv)

@@ -26,6 +26,7 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/footfall bench scoring
 	$(BIN)/footfall bench learning
+	$(BIN)/footfall bench sim
 
 clean:
 	rm -rf $(VENV) out

@@ -233,3 +233,63 @@ def format_learning(r: dict) -> str:
         f"  sklearn:  {r['baseline_seconds']:7.1f} s LogisticRegressionCV, "
         f"peak {r['baseline_peak_memory_mib']:.0f} MiB -> speed-up {r['speedup_vs_baseline']:.1f} x",
     ])
+
+
+def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0) -> dict:
+    """Real-time factor of the whole walking stack against bare MuJoCo stepping (the ceiling).
+
+    One seeded run of the hand-tuned reward over a flat | rocky | flat board
+    (planning, control and physics, on this process's one core: CPU time),
+    then bare stepping of the same model on the same terrain with the robot
+    standing on the rocky module, and on the flat start module. Also a run
+    on a flat board, for the walking speed on flat ground.
+    """
+    from footfall.reward import default_reward
+    from footfall.sim.simulation import Simulation, bench_stepping
+    from footfall.state import nominal_state
+    from footfall.walk import walk
+
+    reward = default_reward()
+    out: dict = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version()}}
+    boards = {"rocky": make_board([("rocky", difficulty)], seed=seed),
+              "flat": make_board([("flat", 0.0)] * 3, seed=seed)}
+    for name, board in boards.items():
+        cpu, wall = time.process_time(), time.perf_counter()
+        record = walk(board, lambda leg: reward, seed)
+        cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
+        r = record.result
+        out[f"walk_{name}"] = {
+            "success": r["success"], "reason": r["reason"], "simulated_s": r["time"],
+            "cpu_s": cpu, "wall_s": wall, "real_time_factor": r["time"] / cpu,
+            "wall_real_time_factor": r["time"] / wall,
+            "planning_ms_per_step": r["planning_ms_per_step"], "steps": r["steps"],
+            "speed_cm_s": r["speed_cm_s"], "speed_body_lengths_s": r["speed_body_lengths_s"]}
+    board = boards["rocky"]
+    for where, x in (("rocky", 0.915), ("flat", 0.3)):
+        sim = Simulation(hmap=board)
+        st = nominal_state(board, (x, 0.0), 0.0, "LF")
+        sim.stand(st.body_position, st.body_rpy, st.feet)
+        sim.advance(0.2)
+        out[f"bare_{where}"] = bench_stepping(sim, bare_seconds)
+        sim.close()
+    out["stack_over_bare_rocky"] = (out["walk_rocky"]["real_time_factor"]
+                                    / out["bare_rocky"]["real_time_factor"])
+    return out
+
+
+def format_sim(r: dict) -> str:
+    """Human-readable lines of :func:`bench_sim`."""
+    lines = []
+    for name in ("rocky", "flat"):
+        w = r[f"walk_{name}"]
+        lines.append(f"whole stack, {name} board: {w['real_time_factor']:.1f}x real time (CPU), "
+                     f"{w['wall_real_time_factor']:.1f}x wall; {w['simulated_s']:.1f} s walked "
+                     f"({'success' if w['success'] else w['reason']}), {w['steps']} steps, "
+                     f"planning {w['planning_ms_per_step']:.1f} ms/step, "
+                     f"{w['speed_cm_s']:.1f} cm/s ({w['speed_body_lengths_s']:.2f} body lengths/s)")
+    for where in ("rocky", "flat"):
+        b = r[f"bare_{where}"]
+        lines.append(f"bare MuJoCo stepping, robot on the {where} module: "
+                     f"{b['real_time_factor']:.1f}x real time ({b['steps_per_second']:.0f} steps/s)")
+    lines.append(f"whole stack / bare stepping on the rocky board: {r['stack_over_bare_rocky']:.2f}")
+    return "\n".join(lines)

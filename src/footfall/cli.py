@@ -439,6 +439,17 @@ def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
     _emit(as_json, summary, f"wrote {Path(out) / 'report.md'}")
 
 
+@bench.command("sim")
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True)
+@json_option
+def bench_sim_cmd(seed: int, as_json: bool) -> None:
+    """Real-time factor of the walking stack against bare MuJoCo stepping."""
+    from footfall.bench import bench_sim, format_sim
+
+    result = bench_sim(seed=seed)
+    _emit(as_json, result, format_sim(result))
+
+
 # --------------------------------------------------------------------- walking
 def _load_terrain(path: str):
     from footfall.heightmap import HeightMap

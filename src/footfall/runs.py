@@ -47,8 +47,13 @@ def reward_source(model_path: str | os.PathLike | None, hmap: HeightMap):
 
 def _one_run(terrain_path: str, model_path: str | None, seed: int, config: WalkConfig
              ) -> RunRecord:
+    from threadpoolctl import threadpool_limits
+
     hmap = HeightMap.load(terrain_path)
-    return walk(hmap, reward_source(model_path, hmap), seed, config)
+    # One core per run: the stack's small matrix products only lose to BLAS threads
+    # fighting over the cores the other runs use.
+    with threadpool_limits(limits=1):
+        return walk(hmap, reward_source(model_path, hmap), seed, config)
 
 
 def workers() -> int:

@@ -1,0 +1,463 @@
+"""The body (COG) trajectory of the crawl gait (paper §IV-B 4).
+
+Each step has a *shift* phase, all four feet down, in which the COG moves
+into the support triangle of the coming swing, and a *swing* phase, in which
+the COG and the zero-moment point (ZMP) stay inside that triangle inset by a
+stability margin while the body keeps moving. The trajectory is planned over
+the next 1-5 steps (a receding horizon: the controller uses the first step
+and replans at the next).
+
+Shape: one cubic per phase, joined with continuous position and velocity
+(the unknowns are the COG's position and velocity at every phase boundary).
+The constraints hold exactly, not just at sample times: a cubic lies in the
+convex hull of its four Bezier control points, and so does the ZMP,
+``p - (h / g) p''``, which is a cubic too; both sets of control points are
+kept inside the swing's inset triangle (a convex set), and the ZMP's inside
+the four feet's support polygon, inset by the same margin, during the shift.
+
+The boundary states solve a small convex quadratic programme (8 unknowns per
+step), solved exactly by one non-negative least-squares solve (see
+:func:`least_squares_inequality`): minimise the integrated squared
+acceleration of the whole path plus a weak pull of each swing's lift-off and
+touch-down positions toward the triangle's incentre. This is the paper's
+"continuous forward movement of the COG with optimal, velocity-dependent
+sway": the body never has to stop, and how far it sways follows from the
+least-acceleration trade-off at the pace the phase durations and foothold
+spacing set.
+
+Robustness: a swing whose triangle is too thin for the margin (inradius <=
+margin: the inset triangle is empty) pins the COG to the incentre, at rest,
+for that swing (it "slows down" to a stop there). If the shifts' ZMP
+constraints cannot be met, the plan is retried with every shift lengthened
+by ``slowdown`` (status "slowed"); if they still cannot, they are dropped
+(status "relaxed": the swings stay safe, the shifts may be abrupt); if even
+that fails numerically, the COG stops at every incentre (status "fallback").
+The COG is taken to be the body origin (centre of the hip roll axes); the
+legs' mass moves it by a few millimetres, well inside the margin.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+from scipy.interpolate import PPoly
+from scipy.linalg import solve_triangular
+from scipy.optimize import nnls
+from scipy.spatial import ConvexHull, QhullError
+
+from footfall.errors import FootfallError
+from footfall.robot import LEG_NAMES, LITTLEDOG, RobotDescription
+
+GRAVITY = 9.81  # [m/s^2] standard gravity, for the ZMP
+_SAFETY = 1e-6  # [m] extra inset given to the solver so its tolerance cannot eat the margin
+_TIME_TOLERANCE = 1e-9  # [s] how far outside [0, end] a query may be and still be answered
+
+
+@dataclass(frozen=True)
+class CogConfig:
+    """Every knob of the COG planner."""
+
+    margin: float = 0.02  # [m] inset of the support triangles (and shift polygons) the ZMP keeps
+    swing_duration: float = 0.3  # [s] one leg in the air
+    shift_duration: float = 0.15  # [s] four feet down, the COG moving into the next triangle
+    cog_height: float | None = None  # [m] COG height for the ZMP; None: robot.nominal_height
+    centring: float = 10.0  # [1/s^3] weight of the squared distance [m^2] of the COG at each
+    # lift-off and touch-down from the swing triangle's incentre, against the integrated squared
+    # acceleration [m^2/s^3]; small: it breaks ties and keeps the COG off the edges when that is cheap
+    slowdown: float = 2.0  # [-] factor on every shift's duration when the ZMP cannot be kept in
+
+    def __post_init__(self) -> None:
+        for name in ("swing_duration", "shift_duration"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value > 0):
+                raise FootfallError(f"COG config: {name} must be > 0 s, got {value}")
+        if not (np.isfinite(self.margin) and self.margin >= 0):
+            raise FootfallError(f"COG config: margin must be >= 0 m, got {self.margin}")
+        if self.cog_height is not None and not (np.isfinite(self.cog_height) and self.cog_height > 0):
+            raise FootfallError(f"COG config: cog_height must be > 0 m, got {self.cog_height}")
+        if not (np.isfinite(self.centring) and self.centring > 0):
+            raise FootfallError(f"COG config: centring must be > 0, got {self.centring}")
+        if not (np.isfinite(self.slowdown) and self.slowdown >= 1):
+            raise FootfallError(f"COG config: slowdown must be >= 1, got {self.slowdown}")
+
+
+def support_margin(triangle: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Signed distance [m] of points inside a triangle: > 0 inside, < 0 outside.
+
+    Parameters
+    ----------
+    triangle : array of shape (..., 3, 2)
+        Vertices [m], either orientation.
+    points : array of shape (..., 2)
+        Points [m]; broadcast against the triangles' leading shape.
+
+    Returns
+    -------
+    ndarray of shape (...)
+        The smallest signed distance to the three edge lines: inside, the
+        distance to the boundary; outside, minus at most the distance to it.
+        A triangle with a zero-length edge leaves no margin (0 on that edge).
+    """
+    tri = np.asarray(triangle, dtype=np.float64)
+    p = np.asarray(points, dtype=np.float64)
+    if tri.shape[-2:] != (3, 2) or p.shape[-1:] != (2,):
+        raise FootfallError(f"support_margin needs triangles (..., 3, 2) and points (..., 2), "
+                            f"got {tri.shape} and {p.shape}")
+    a, b, c = tri[..., 0, :], tri[..., 1, :], tri[..., 2, :]
+    cross = (b - a)[..., 0] * (c - a)[..., 1] - (b - a)[..., 1] * (c - a)[..., 0]
+    orient = np.where(cross >= 0, 1.0, -1.0)
+    out = None
+    for start, end in ((a, b), (b, c), (c, a)):  # the three edges
+        edge = end - start
+        length = np.hypot(edge[..., 0], edge[..., 1])
+        rel = p - start
+        signed = orient * (edge[..., 0] * rel[..., 1] - edge[..., 1] * rel[..., 0])
+        dist = np.divide(signed, length, out=np.zeros(np.broadcast_shapes(signed.shape, length.shape)),
+                         where=length > 0)
+        out = dist if out is None else np.minimum(out, dist)
+    return out
+
+
+def incircle(triangle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Incentres (..., 2) [m] and inradii (...) [m] of triangles (..., 3, 2).
+
+    A triangle without area has inradius 0 (its incentre then lies on it;
+    all three vertices on one spot give that spot).
+    """
+    tri = np.asarray(triangle, dtype=np.float64)
+    opposite = np.linalg.norm(tri[..., [1, 2, 0], :] - tri[..., [2, 0, 1], :], axis=-1)
+    perimeter = opposite.sum(axis=-1)
+    e1, e2 = tri[..., 1, :] - tri[..., 0, :], tri[..., 2, :] - tri[..., 0, :]
+    area = 0.5 * np.abs(e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0])
+    safe = np.where(perimeter > 0, perimeter, 1.0)
+    centre = np.where((perimeter > 0)[..., None],
+                      np.einsum("...k,...kd->...d", opposite, tri) / safe[..., None],
+                      tri.mean(axis=-2))
+    return centre, 2 * area / safe
+
+
+def _halfplanes(vertices: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """Inward unit normals (m, 2) and offsets (m,) of a convex polygon's edges, inset by margin.
+
+    A point p is inside the inset polygon iff ``normals @ p >= offsets``.
+    """
+    following = np.r_[1:len(vertices), 0]  # index of the next vertex
+    edges = vertices[following] - vertices
+    cross = np.sum(edges[:, 0] * edges[following, 1] - edges[:, 1] * edges[following, 0])
+    sign = 1.0 if cross >= 0 else -1.0
+    normals = sign * np.column_stack([-edges[:, 1], edges[:, 0]])
+    length = np.linalg.norm(normals, axis=1)
+    keep = length > 0
+    normals = normals[keep] / length[keep, None]
+    return normals, np.sum(normals * vertices[keep], axis=1) + margin
+
+
+def _triangle_halfplanes(triangles: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """Inward unit normals (K, 3, 2) and offsets (K, 3) of triangles (K, 3, 2), inset by margin.
+
+    A point p is inside the inset triangle k iff ``normals[k] @ p >= offsets[k]``; a
+    zero-length edge gets a zero normal (callers skip such degenerate triangles).
+    """
+    edges = np.roll(triangles, -1, axis=1) - triangles
+    cross = edges[:, 0, 0] * edges[:, 1, 1] - edges[:, 0, 1] * edges[:, 1, 0]
+    sign = np.where(cross >= 0, 1.0, -1.0)[:, None, None]
+    normals = sign * np.stack([-edges[..., 1], edges[..., 0]], axis=-1)
+    length = np.linalg.norm(normals, axis=-1, keepdims=True)
+    normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+    return normals, np.sum(normals * triangles, axis=-1) + margin
+
+
+@dataclass(frozen=True, eq=False)
+class CogTrajectory:
+    """The planned horizontal COG path over the next steps, and its phase times.
+
+    Times are in seconds from the start of the first shift phase. Step k
+    shifts during ``[shift_start[k], lift_off[k])`` and swings leg
+    ``legs[k]`` during ``[lift_off[k], touch_down[k])``; the next shift
+    starts at touch-down.
+    """
+
+    legs: tuple[str, ...]  # (K,) swing leg of each step
+    shift_start: np.ndarray  # (K,) [s] start of each step's shift phase
+    lift_off: np.ndarray  # (K,) [s] lift-off of each step's swing leg
+    touch_down: np.ndarray  # (K,) [s] touch-down of each step's swing leg
+    triangles: np.ndarray  # (K, 3, 2) [m] support triangle (x, y) of each swing
+    waypoints: np.ndarray  # (K, 2, 2) [m] COG at lift-off and at touch-down of each swing
+    margin: float  # [m] inset of the triangles the COG and ZMP keep during the swings
+    cog_height: float  # [m] COG height used for the ZMP
+    status: str  # 'optimal', 'slowed' (shifts lengthened), 'relaxed' (shift ZMP unconstrained)
+    # or 'fallback' (COG stops at every incentre)
+    pinned: np.ndarray  # (K,) bool: the inset triangle was empty; the COG stops at the incentre
+    _pos: PPoly  # position [m] of time
+    _vel: PPoly = field(init=False, repr=False)  # velocity [m/s] of time
+    _acc: PPoly = field(init=False, repr=False)  # acceleration [m/s^2] of time
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_vel", self._pos.derivative())
+        object.__setattr__(self, "_acc", self._pos.derivative(2))
+
+    @property
+    def end(self) -> float:
+        """Time [s] of the last touch-down."""
+        return float(self.touch_down[-1])
+
+    def _check(self, t: np.ndarray) -> np.ndarray:
+        t = np.asarray(t, dtype=np.float64)
+        if not np.all((t >= -_TIME_TOLERANCE) & (t <= self.end + _TIME_TOLERANCE)):
+            raise FootfallError(f"COG trajectory is defined for t in [0, {self.end:.6g}] s")
+        return np.clip(t, 0.0, self.end)
+
+    def position(self, t: np.ndarray) -> np.ndarray:
+        """COG position [m] (..., 2) at times ``t`` [s] (...)."""
+        return self._pos(self._check(t))
+
+    def velocity(self, t: np.ndarray) -> np.ndarray:
+        """COG velocity [m/s] (..., 2) at times ``t`` [s] (...)."""
+        return self._vel(self._check(t))
+
+    def acceleration(self, t: np.ndarray) -> np.ndarray:
+        """COG acceleration [m/s^2] (..., 2) at times ``t`` [s] (...); right-continuous at phase changes."""
+        return self._acc(self._check(t))
+
+    def zmp(self, t: np.ndarray) -> np.ndarray:
+        """Zero-moment point [m] (..., 2): position - (cog_height / g) * acceleration."""
+        t = self._check(t)
+        return self._pos(t) - (self.cog_height / GRAVITY) * self._acc(t)
+
+
+def _phase_weights(durations: np.ndarray, zmp_factor: float) -> dict[str, np.ndarray]:
+    """Weights on (p0, v0, p1, v1) of cubic phases of ``durations`` (P,) [s], each (P, rows, 4).
+
+    ``bezier``: the four Bezier control points of the position (the curve
+    lies in their convex hull); ``acc``: acceleration at the start and end
+    (it is linear in time); ``zmp``: the four Bezier control points of
+    position - zmp_factor [s^2] * acceleration, also a cubic in time.
+    """
+    T = np.asarray(durations, dtype=np.float64)[:, None]
+    one, zero = np.ones_like(T), np.zeros_like(T)
+    bezier = np.stack([np.hstack([one, zero, zero, zero]), np.hstack([one, T / 3, zero, zero]),
+                       np.hstack([zero, zero, one, -T / 3]), np.hstack([zero, zero, one, zero])],
+                      axis=1)
+    acc = np.stack([np.hstack([-6 / T**2, -4 / T, 6 / T**2, -2 / T]),
+                    np.hstack([6 / T**2, 2 / T, -6 / T**2, 4 / T])], axis=1)
+    elevate = np.array([[1.0, 0.0], [2 / 3, 1 / 3], [1 / 3, 2 / 3], [0.0, 1.0]])  # linear -> cubic
+    return {"bezier": bezier, "acc": acc, "zmp": bezier - zmp_factor * elevate @ acc}
+
+
+def _stances(feet: np.ndarray, steps: Sequence[tuple[str, np.ndarray]]
+             ) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Feet (K, 4, 2) down at each step's shift and each swing's support triangle (K, 3, 2)."""
+    current = feet[:, :2].copy()
+    stances, triangles, legs = [], [], []
+    for name, foothold in steps:  # the horizon: at most a handful of steps
+        k = LEG_NAMES.index(name)
+        stances.append(current.copy())
+        triangles.append(np.delete(current, k, axis=0))
+        legs.append(name)
+        current[k] = foothold[:2]
+    return np.array(stances), np.array(triangles), tuple(legs)
+
+
+def _solve(start: np.ndarray, v0: np.ndarray, stances: np.ndarray, triangles: np.ndarray,
+           durations: np.ndarray, config: CogConfig, height: float, shift_zmp: bool
+           ) -> tuple[np.ndarray | None, np.ndarray, np.ndarray]:
+    """COG states (2K + 1, 2, 2) = (position, velocity) at every phase boundary, or None if infeasible.
+
+    Also returns the swing triangles' incentres (K, 2) and which swings are
+    pinned to them (K,). Phase 2k is step k's shift, phase 2k + 1 its swing;
+    boundary 0 is the start. Every quantity is linear in the unknowns z (the
+    states at boundaries 1 .. 2K, 4 numbers each): it is built as a map
+    (..., n) and a constant (...).
+    """
+    n_steps = triangles.shape[0]
+    n_phases = 2 * n_steps
+    n = 4 * n_phases
+    # Column of each input (p0, v0, p1, v1) of each phase on each axis; the start's are constants
+    # and go to a scratch column n.
+    boundary = np.arange(n_phases)[:, None] + np.array([0, 0, 1, 1])  # (P, 4)
+    cols = 4 * (boundary - 1)[..., None] + np.array([0, 2, 0, 2])[:, None] + np.arange(2)
+    cols[0, :2] = n  # (P, 4, 2)
+    inputs_c = np.zeros((n_phases, 4, 2))
+    inputs_c[0, 0], inputs_c[0, 1] = start, v0
+
+    def linear(weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Weights (P, q, 4) on the inputs -> maps (P, q, 2, n) and constants (P, q, 2)."""
+        P, q, _ = weights.shape
+        m = np.zeros((P, q, 2, n + 1))
+        idx = (np.arange(P)[:, None, None, None], np.arange(q)[None, :, None, None],
+               np.arange(2)[None, None, :, None], cols.transpose(0, 2, 1)[:, None])
+        m[idx] = weights[:, :, None, :]
+        return m[..., :n], np.einsum("pqj,pjd->pqd", weights, inputs_c)
+
+    w = _phase_weights(durations, height / GRAVITY)
+    # Objective: integrated squared acceleration, linear in time within a phase (a0 -> a1):
+    # T/3 (a0^2 + a0 a1 + a1^2) = |sqrt(T/3) (a0 + a1/2)|^2 + |sqrt(T/4) a1|^2.
+    T = durations[:, None, None]
+    root = np.concatenate([np.sqrt(T / 3) * np.array([1.0, 0.5]), np.sqrt(T / 4) * np.array([0.0, 1.0])],
+                          axis=1)  # (P, 2, 2): residual rows as combinations of (a0, a1)
+    res_m, res_c = linear(root @ w["acc"])
+    # ... plus the pull of every swing's lift-off and touch-down positions toward the incentre.
+    centres, radii = incircle(triangles)
+    pull_m = np.zeros((n_steps, 2, 2, n))
+    k, which, d = np.meshgrid(np.arange(n_steps), np.arange(2), np.arange(2), indexing="ij")
+    pull_m[k, which, d, 4 * (2 * k + which) + d] = np.sqrt(config.centring)
+    pull_c = -np.sqrt(config.centring) * np.broadcast_to(centres[:, None], (n_steps, 2, 2))
+    G = np.vstack([res_m.reshape(-1, n), pull_m.reshape(-1, n)])
+    g = np.concatenate([res_c.ravel(), pull_c.ravel()])
+
+    # Constraints, M z + c >= 0: during each swing, the COG's and the ZMP's Bezier points inside
+    # the inset triangle; during each shift, the ZMP's inside the inset support polygon.
+    pinned = radii <= config.margin + _SAFETY
+    normals, offsets = _triangle_halfplanes(triangles, config.margin + _SAFETY)  # (K, 3, 2), (K, 3)
+    points_m, points_c = linear(np.concatenate([w["bezier"], w["zmp"]], axis=1))
+    points_m, points_c = points_m[1::2], points_c[1::2]  # the swings
+    rows_m = np.einsum("ked,kqdn->kqen", normals, points_m)[~pinned]
+    rows_c = (np.einsum("ked,kqd->kqe", normals, points_c) - offsets[:, None])[~pinned]
+    C, c = [rows_m.reshape(-1, n)], [rows_c.ravel()]
+    if shift_zmp:
+        zmp_m, zmp_c = linear(w["zmp"])
+        zmp_m, zmp_c = zmp_m[0::2], zmp_c[0::2]  # the shifts
+        for k in range(n_steps):  # the horizon's shifts: a handful of 4-point hulls
+            try:
+                hull = stances[k][ConvexHull(stances[k]).vertices]
+            except QhullError:  # feet in a line: no polygon to keep the ZMP in
+                continue
+            nrm, off = _halfplanes(hull, config.margin + _SAFETY)
+            C.append(np.einsum("ed,qdn->qen", nrm, zmp_m[k]).reshape(-1, n))
+            c.append((zmp_c[k] @ nrm.T - off).ravel())
+    C, c = np.vstack(C), np.concatenate(c)
+
+    # A pinned swing stands still at the incentre: its boundary states are constants.
+    fixed = np.zeros((n_phases, 4))
+    fixed[1::2, :2] = fixed[0::2, :2] = centres  # boundaries 2k + 1, 2k + 2: rows 2k, 2k + 1
+    free = np.ones((n_phases, 4), dtype=bool)
+    free[np.repeat(pinned, 2)] = False
+    fixed = np.where(free, 0.0, fixed).ravel()
+    free = free.ravel()
+    z = fixed.copy()
+    if free.any():
+        y = least_squares_inequality(G[:, free], G @ fixed + g, C[:, free], C @ fixed + c)
+        if y is None:
+            return None, centres, pinned
+        z[free] = y
+    if c.size and np.min(C @ z + c) < -_SAFETY / 2:
+        return None, centres, pinned
+    states = np.concatenate([np.stack([start, v0])[None], z.reshape(n_phases, 2, 2)])
+    return states, centres, pinned
+
+
+def least_squares_inequality(G: np.ndarray, g: np.ndarray, C: np.ndarray, c: np.ndarray
+                             ) -> np.ndarray | None:
+    """Minimise |G z + g|^2 subject to C z + c >= 0; None if the constraints are incompatible.
+
+    ``G`` (r, n) must have full column rank. Lawson & Hanson's reduction
+    (Solving Least Squares Problems, 1974, ch. 23), the one SLSQP runs at
+    every iteration: with G = QR and w = R z + Q^T g the problem becomes a
+    least-distance programme, min |w| subject to E w >= f, whose solution
+    comes from one non-negative least-squares solve (scipy.optimize.nnls)
+    of size (n + 1, m). A QP this small solves in well under a millisecond.
+    """
+    q, r = np.linalg.qr(G)
+    qg = q.T @ g
+    if C.shape[0] == 0:
+        return solve_triangular(r, -qg)
+    e = solve_triangular(r, C.T, trans="T").T  # C R^-1, (m, n)
+    f = e @ qg - c  # C z + c >= 0  <=>  E w >= f
+    n = G.shape[1]
+    lhs = np.vstack([e.T, f[None]])  # (n + 1, m)
+    rhs = np.zeros(n + 1)
+    rhs[n] = 1.0
+    u, _ = nnls(lhs, rhs)
+    res = lhs @ u - rhs
+    if not res[n] < -1e-12:  # zero residual: the constraints are incompatible
+        return None
+    w = res[:n] / -res[n]
+    return solve_triangular(r, w - qg)
+
+
+def _trajectory(states: np.ndarray, durations: np.ndarray) -> tuple[PPoly, np.ndarray]:
+    """Piecewise cubic through boundary states (m + 1, 2, 2), and the boundary times (m + 1,) [s]."""
+    p0, v0 = states[:-1, 0], states[:-1, 1]  # (m, 2)
+    p1, v1 = states[1:, 0], states[1:, 1]
+    T = durations[:, None]
+    coeffs = np.stack([(2 * (p0 - p1) / T + v0 + v1) / T**2,
+                       (3 * (p1 - p0) / T - 2 * v0 - v1) / T, v0, p0])  # (4, m, 2), highest first
+    breaks = np.concatenate([[0.0], np.cumsum(durations)])
+    return PPoly(coeffs, breaks), breaks
+
+
+def plan_cog(feet: np.ndarray, steps: Sequence[tuple[str, np.ndarray]], start_xy: np.ndarray,
+             start_velocity: np.ndarray, config: CogConfig | None = None,
+             robot: RobotDescription = LITTLEDOG) -> CogTrajectory:
+    """Plan the COG over the next steps of the crawl gait.
+
+    Parameters
+    ----------
+    feet : array of shape (4, 3)
+        World contact points [m] of the four feet now (all down), LEG_NAMES order.
+    steps : sequence of (leg name, foothold of shape (3,))
+        The next 1-5 steps, in the order they are taken (the gait order):
+        which leg swings and its foothold [m]. Only x, y matter: the
+        support polygons and the ZMP are horizontal.
+    start_xy : array of shape (2,)
+        COG (body origin) x, y [m] now.
+    start_velocity : array of shape (2,)
+        COG velocity [m/s] now.
+    config : CogConfig, optional
+    robot : RobotDescription
+        Supplies the default COG height for the ZMP.
+
+    Returns
+    -------
+    CogTrajectory
+    """
+    config = config or CogConfig()
+    feet = np.asarray(feet, dtype=np.float64)
+    start = np.asarray(start_xy, dtype=np.float64)
+    v0 = np.asarray(start_velocity, dtype=np.float64)
+    if feet.shape != (4, 3) or start.shape != (2,) or v0.shape != (2,):
+        raise FootfallError(f"plan_cog needs feet (4, 3), start_xy (2,) and start_velocity (2,), "
+                            f"got {feet.shape}, {start.shape} and {v0.shape}")
+    if len(steps) == 0:
+        raise FootfallError("plan_cog needs at least one step")
+    checked = []
+    for step in steps:
+        try:
+            name, foothold = step
+        except (TypeError, ValueError):
+            raise FootfallError("each step must be a (leg name, foothold) pair") from None
+        if name not in LEG_NAMES:
+            raise FootfallError(f"unknown leg {name!r}; legs are {', '.join(LEG_NAMES)}")
+        foothold = np.asarray(foothold, dtype=np.float64)
+        if foothold.shape != (3,):
+            raise FootfallError(f"a foothold must be (3,), got {foothold.shape}")
+        checked.append((name, foothold))
+    arrays = [feet, start, v0] + [f for _, f in checked]
+    if not all(np.isfinite(a).all() for a in arrays):
+        raise FootfallError("plan_cog: feet, footholds, start_xy and start_velocity must be finite")
+    height = robot.nominal_height if config.cog_height is None else config.cog_height
+
+    stances, triangles, legs = _stances(feet, checked)
+    n_steps = len(legs)
+    durations = np.tile([config.shift_duration, config.swing_duration], n_steps)
+    status = "optimal"
+    states, centres, pinned = _solve(start, v0, stances, triangles, durations, config, height, True)
+    if states is None and config.slowdown > 1:
+        durations[0::2] *= config.slowdown
+        status = "slowed"
+        states, centres, pinned = _solve(start, v0, stances, triangles, durations, config, height, True)
+    if states is None:
+        status = "relaxed"
+        states, centres, pinned = _solve(start, v0, stances, triangles, durations, config, height, False)
+    if states is None:  # cannot happen in exact arithmetic: standing at the incentres is feasible
+        status = "fallback"
+        states = np.zeros((2 * n_steps + 1, 2, 2))
+        states[0] = start, v0
+        states[1:, 0] = np.repeat(centres, 2, axis=0)
+    pos, breaks = _trajectory(states, durations)
+    return CogTrajectory(legs=legs, shift_start=breaks[0:-1:2], lift_off=breaks[1::2],
+                         touch_down=breaks[2::2], triangles=triangles,
+                         waypoints=states[1:, 0].reshape(n_steps, 2, 2), margin=config.margin,
+                         cog_height=height, status=status, pinned=pinned, _pos=pos)

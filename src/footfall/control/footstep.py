@@ -1,0 +1,354 @@
+"""The footstep planner (paper §IV-B.2): the next foothold, with a five-step look-ahead.
+
+Footholds are ranked by the reward function (terrain and templates from
+dense reward grids computed once per map, pose features for the predicted
+state) biased toward the body path: a candidate loses ``bias_weight`` reward
+per metre it lies from its *path-nominal* position, the leg's default stance
+position around the body as it will be in the middle of the foot's stance.
+The planner predicts the body pose at the touch-down of each of the next
+five steps of the crawl gait by advancing along the :class:`BodyPath`, and
+picks the first foothold of the five-step sequence with the largest summed
+reward (see :meth:`FootstepPlanner.plan` for the approximation).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from footfall.candidates import lattice, reachable_footholds
+from footfall.control.body_path import BodyPath, RewardFor, grid_spacing, grid_values, \
+    terrain_grids
+from footfall.errors import FootfallError
+from footfall.heightmap import HeightMap
+from footfall.kinematics import inverse_kinematics, world_to_body
+from footfall.patches import foothold_patches
+from footfall.pose_features import pose_features
+from footfall.robot import LEG_NAMES, LITTLEDOG, RobotDescription
+from footfall.scoring import ScoreGrid
+from footfall.state import RobotState
+from footfall.walker import DEFAULT_STRIDE
+
+GRID_YAW = 0.0  # [rad] heading the planner's dense reward grids are computed for (+x)
+
+
+class NoFootholdError(FootfallError):
+    """The swing leg has no candidate foothold: the robot is stuck."""
+
+
+@dataclass(frozen=True)
+class FootstepConfig:
+    """Every knob of the footstep planner."""
+
+    lookahead: int = 5  # [steps] steps planned ahead, the current one included (paper: five)
+    step_advance: float = DEFAULT_STRIDE / 4  # [m] body advance along the path per step (stride / 4)
+    foot_lead: float | None = None  # [m] path distance from touch-down to the body pose whose
+    # default stance is the path-nominal foothold; None: half a stride (2 * step_advance), the
+    # middle of the foot's stance, so that it stands as far ahead as behind its hip
+    bias_weight: float = 30.0  # [reward/m] reward lost per metre from the path-nominal position
+    spacing: float = 0.005  # [m] candidate lattice spacing (and of the reward grids)
+    beam_width: int = 2  # [-] best first steps compared by rolling out the look-ahead
+    root_separation: float = 0.02  # [m] the first steps compared lie at least this far apart (3-D:
+    # a foothold beside a hole and one in it lead to different futures)
+    pose_candidates: int | None = 128  # [-] first step: pose features of this many best by
+    # terrain + bias (None: of every candidate); pose features cost ~10 ms per 1000 candidates
+    lookahead_radius: float = 0.05  # [m] later steps consider footholds this close to their target
+    lookahead_candidates: int = 32  # [-] later steps: pose features of this many best by terrain + bias
+    heading_horizon: float = 0.3  # [m] the body faces the path point this far ahead (about a
+    # body length): a lateral jog of the path shifts the body rather than turning it
+    heading_tolerance: float = 0.25  # [rad] body headings within this of GRID_YAW score footholds
+    # from the grids (patches turned by up to this much); beyond it, exact patches (slow)
+
+    def __post_init__(self) -> None:
+        for name in ("step_advance", "spacing", "lookahead_radius", "heading_horizon",
+                     "heading_tolerance"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise FootfallError(f"footstep config: {name} must be > 0, got {value}")
+        if not (math.isfinite(self.bias_weight) and self.bias_weight >= 0):
+            raise FootfallError(f"footstep config: bias_weight must be >= 0, got {self.bias_weight}")
+        if not (math.isfinite(self.root_separation) and self.root_separation >= 0):
+            raise FootfallError(f"footstep config: root_separation must be >= 0, "
+                                f"got {self.root_separation}")
+        if self.pose_candidates is not None and (
+                isinstance(self.pose_candidates, bool) or not isinstance(self.pose_candidates, int)
+                or self.pose_candidates < 1):
+            raise FootfallError(f"footstep config: pose_candidates must be an integer >= 1 or "
+                                f"None, got {self.pose_candidates!r}")
+        if self.foot_lead is not None and not (math.isfinite(self.foot_lead) and self.foot_lead >= 0):
+            raise FootfallError(f"footstep config: foot_lead must be >= 0 or None, got {self.foot_lead}")
+        for name in ("lookahead", "beam_width", "lookahead_candidates"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise FootfallError(f"footstep config: {name} must be an integer >= 1, got {value!r}")
+
+    @property
+    def lead(self) -> float:
+        """The foot lead [m] in effect."""
+        return 2.0 * self.step_advance if self.foot_lead is None else self.foot_lead
+
+
+@dataclass(frozen=True, eq=False)
+class FootstepPlan:
+    """The planner's choice for the current swing leg, with its candidates and the steps after it."""
+
+    leg: str  # the swing leg
+    index: int  # index of the chosen foothold in candidates
+    foothold: np.ndarray  # (3,) [m] chosen contact point: x, y, terrain height
+    candidates: np.ndarray  # (n, 3) [m] the candidate set F of this step
+    reward: np.ndarray  # (n,) reward of each candidate as the reward function defines it;
+    # NaN where its pose part was not evaluated (outside the pose_candidates best)
+    total: np.ndarray  # (n,) reward plus path bias (NaN like reward)
+    value: np.ndarray  # (n,) total plus the totals of its look-ahead rollout; -inf: not rolled out
+    legs: tuple[str, ...]  # (m,) legs of the planned steps, this one first (m <= lookahead)
+    footholds: np.ndarray  # (m, 3) [m] planned footholds, footholds[0] == foothold
+    body_xy: np.ndarray  # (m, 2) [m] predicted body position at each planned touch-down
+    body_yaw: np.ndarray  # (m,) [rad] predicted body heading at each planned touch-down
+    targets: np.ndarray  # (m, 2) [m] path-nominal position of each planned foothold
+
+    @property
+    def steps(self) -> list[tuple[str, np.ndarray]]:
+        """The planned steps as (leg, foothold (3,)) pairs, this one first."""
+        return list(zip(self.legs, self.footholds))
+
+
+def _wrap(angle: float) -> float:
+    return (angle + math.pi) % (2 * math.pi) - math.pi
+
+
+def _diverse_best(score: np.ndarray, points: np.ndarray, count: int, separation: float) -> np.ndarray:
+    """Indices of up to ``count`` best finite scores whose points (n, d) [m] lie ``separation`` apart."""
+    ok = np.isfinite(score)
+    ranked = np.argsort(-np.where(ok, score, -np.inf), kind="stable")[:int(ok.sum())]
+    chosen: list[int] = []
+    free = np.ones(ranked.size, dtype=bool)
+    while len(chosen) < count and free.any():  # count (a few) picks, each vectorised
+        k = int(np.argmax(free))
+        chosen.append(int(ranked[k]))
+        free &= np.sum((points[ranked] - points[ranked[k]]) ** 2, axis=1) >= separation ** 2
+        free[k] = False
+    return np.array(chosen, dtype=np.int64)
+
+
+class FootstepPlanner:
+    """Plans footholds along a body path with a reward function.
+
+    Parameters
+    ----------
+    hmap : HeightMap
+        The terrain.
+    reward_for : callable
+        ``reward_for(leg_name) -> LinearReward``; called once per leg here.
+    path : BodyPath
+        The body path to follow.
+    robot : RobotDescription
+        Stance, gait order and kinematics.
+    config : FootstepConfig
+        The planner's knobs.
+    grids : dict, optional
+        :func:`~footfall.control.body_path.terrain_grids` of the map at
+        ``config.spacing`` and heading ``GRID_YAW`` (e.g. shared with the body
+        path planner); computed here if not given.
+    """
+
+    def __init__(self, hmap: HeightMap, reward_for: RewardFor, path: BodyPath,
+                 robot: RobotDescription = LITTLEDOG, config: FootstepConfig = FootstepConfig(),
+                 grids: dict[str, ScoreGrid] | None = None) -> None:
+        if not isinstance(hmap, HeightMap):
+            raise FootfallError(f"the footstep planner needs a HeightMap, got {type(hmap).__name__}")
+        if not isinstance(path, BodyPath):
+            raise FootfallError(f"the footstep planner needs a BodyPath, got {type(path).__name__}")
+        self.hmap = hmap
+        self.path = path
+        self.robot = robot
+        self.config = config
+        self.rewards_ = {name: reward_for(name) for name in LEG_NAMES}
+        if grids is None:
+            grids = terrain_grids(hmap, self.rewards_.__getitem__, robot, config.spacing, GRID_YAW)
+        for name in LEG_NAMES:
+            if name not in grids or abs(grid_spacing(grids[name]) - config.spacing) > 1e-9:
+                raise FootfallError(f"the reward grids must cover every leg at spacing "
+                                    f"{config.spacing} m")
+        self.grids_ = dict(grids)
+        self._posed = {name: bool(np.any(r.pose_weights != 0)) for name, r in self.rewards_.items()}
+
+    # -------------------------------------------------------------- pieces
+    def _terrain(self, leg: str, footholds: np.ndarray, yaw: float) -> np.ndarray:
+        """Terrain reward (n,) of footholds (n, 3) at body heading yaw [rad]; -inf: invalid."""
+        if abs(_wrap(yaw - GRID_YAW)) <= self.config.heading_tolerance:
+            return grid_values(self.grids_[leg], footholds[:, :2], self.config.spacing)
+        reward = self.rewards_[leg]
+        patches = foothold_patches(self.hmap, footholds, yaw, self.robot.leg(leg).mirrored,
+                                   reward.config)
+        return reward.terrain_reward(patches)
+
+    def _pose(self, state: RobotState, footholds: np.ndarray) -> np.ndarray:
+        """Pose part of the swing leg's reward (n,) for the state (0 if it has no pose weights)."""
+        if not self._posed[state.swing_leg] or footholds.shape[0] == 0:
+            return np.zeros(footholds.shape[0])
+        return pose_features(self.hmap, state, footholds, self.robot) \
+            @ self.rewards_[state.swing_leg].pose_weights
+
+    def _near(self, state: RobotState, target: np.ndarray) -> np.ndarray:
+        """Candidates (m, 3) of the swing leg within lookahead_radius of target (2,) [m].
+
+        The same rule as :func:`~footfall.candidates.reachable_footholds`
+        (lattice point with data, ball-foot centre reachable within the joint
+        limits), on a small window instead of the leg's whole reach.
+        """
+        r = self.config.lookahead_radius
+        pts = lattice(self.hmap, (target[0] - r, target[0] + r), (target[1] - r, target[1] + r),
+                      self.config.spacing)
+        pts = pts[np.sum((pts - target) ** 2, axis=1) <= r * r]
+        z = self.hmap.height_at(pts)
+        pts, z = pts[~np.isnan(z)], z[~np.isnan(z)]
+        centre = np.column_stack([pts, z + self.robot.foot_radius])
+        leg = self.robot.leg(state.swing_leg)
+        _, ok = inverse_kinematics(leg, world_to_body(centre, state.body_position, state.body_rpy),
+                                   self.robot)
+        return np.column_stack([pts, z])[ok]
+
+    def _state(self, feet: np.ndarray, xy: np.ndarray, yaw: float, leg: str,
+               goal: np.ndarray) -> RobotState:
+        """The predicted state: body on the path, nominal height above the mean foot height."""
+        body = np.array([xy[0], xy[1], feet[:, 2].mean() + self.robot.nominal_height])
+        return RobotState(feet, body, np.array([0.0, 0.0, yaw]), leg, goal)
+
+    def heading(self, s: np.ndarray) -> np.ndarray:
+        """Body heading [rad] at arc length s [m] (...): toward the path point heading_horizon ahead.
+
+        Within ``heading_horizon`` of the path's end, the heading of the last
+        chord that long (of the path's end segment if the path is shorter).
+        """
+        path = self.path
+        s = np.asarray(s, dtype=np.float64)
+        h = min(self.config.heading_horizon, path.length)
+        a = np.clip(s, 0.0, path.length - h)
+        d = path.point_at(a + h) - path.point_at(a)
+        return np.arctan2(d[..., 1], d[..., 0])
+
+    # ---------------------------------------------------------------- plan
+    def plan(self, state: RobotState) -> FootstepPlan:
+        """The foothold of ``state.swing_leg`` that maximises the reward over the next steps.
+
+        ``state`` is the robot as the swing leg lifts off: its feet, and its
+        body, whose nearest path point gives the arc length ``s0``. Step k
+        (k = 0 is this one; legs follow ``robot.gait_order``) touches down
+        with the body on the path at ``s0 + (k + 1) * step_advance`` (clamped
+        to the path's end), heading as :meth:`heading` says, ``nominal_height`` above
+        the mean height of the feet at that time. Its path-nominal foothold
+        is the leg's default stance position around the body pose
+        ``foot_lead`` further along the path.
+
+        Look-ahead (an approximation of the best five-step sequence): the
+        ``beam_width`` best first steps by reward plus bias, at least
+        ``root_separation`` apart, are each rolled out greedily over the
+        remaining steps, and the first step of the best rollout is chosen.
+        Step 0 scores the whole candidate set F (the pose part of the reward
+        for its ``pose_candidates`` best by terrain reward plus bias); later
+        steps consider the candidates within ``lookahead_radius`` of
+        their path-nominal position (computed for the body height of the
+        best rollout), and evaluate pose features only for the
+        ``lookahead_candidates`` best of them by terrain reward plus bias.
+        Headings more than ``heading_tolerance`` from ``GRID_YAW`` score
+        terrain from exact patches: step 0 all of F (about 0.5 ms per
+        candidate: slow), later steps the ``2 * lookahead_candidates``
+        candidates nearest their target.
+        For rewards without pose weights the steps do not interact, the
+        rollouts coincide and the choice is exactly the greedy one. The
+        rollouts stop early where a step has no candidates (e.g. at the end
+        of the map).
+
+        Raises
+        ------
+        NoFootholdError
+            If the swing leg has no candidate foothold.
+        """
+        if not isinstance(state, RobotState):
+            raise FootfallError(f"plan needs a RobotState, got {type(state).__name__}")
+        cfg, robot, path = self.config, self.robot, self.path
+        order = list(robot.gait_order)
+        first = order.index(state.swing_leg)
+        legs = [order[(first + k) % len(order)] for k in range(cfg.lookahead)]
+        s0 = float(path.closest(state.body_position[:2]))
+        s = np.minimum(s0 + cfg.step_advance * np.arange(1, cfg.lookahead + 1), path.length)
+        body_xy = path.point_at(s)
+        body_yaw = self.heading(s)
+        s_mid = np.minimum(s + cfg.lead, path.length)
+        mid_xy, mid_yaw = path.point_at(s_mid), self.heading(s_mid)
+        nominal = np.array([robot.nominal_foot(leg)[:2] for leg in legs])  # (K, 2)
+        c, sn = np.cos(mid_yaw), np.sin(mid_yaw)
+        targets = mid_xy + np.column_stack([c * nominal[:, 0] - sn * nominal[:, 1],
+                                            sn * nominal[:, 0] + c * nominal[:, 1]])
+
+        # Step 0: the whole candidate set F, scored as the reward defines it.
+        leg0 = legs[0]
+        yaw0 = float(body_yaw[0])
+        st0 = self._state(state.feet, body_xy[0], yaw0, leg0, state.goal)
+        exact = abs(_wrap(yaw0 - GRID_YAW)) > cfg.heading_tolerance
+        cand = reachable_footholds(self.hmap, st0, robot, cfg.spacing,
+                                   self.rewards_[leg0].config if exact else None)
+        terrain = self._terrain(leg0, cand, yaw0)
+        keep = np.isfinite(terrain)
+        cand, terrain = cand[keep], terrain[keep]
+        if cand.shape[0] == 0:
+            raise NoFootholdError(f"leg {leg0} has no candidate foothold at body "
+                                  f"({body_xy[0, 0]:.3f}, {body_xy[0, 1]:.3f}) m")
+        bias = cfg.bias_weight * np.linalg.norm(cand[:, :2] - targets[0], axis=1)
+        reward = terrain
+        if self._posed[leg0]:
+            short = np.arange(cand.shape[0])
+            if cfg.pose_candidates is not None and cand.shape[0] > cfg.pose_candidates:
+                short = np.sort(np.argsort(bias - terrain, kind="stable")[:cfg.pose_candidates])
+            reward = np.full(cand.shape[0], np.nan)
+            reward[short] = terrain[short] + self._pose(st0, cand[short])
+        total = reward - bias
+        roots = _diverse_best(total, cand, cfg.beam_width, cfg.root_separation)
+        if roots.size == 0:
+            raise NoFootholdError(f"leg {leg0} has no candidate foothold with a finite reward")
+
+        # Rollouts: feet (R, 4, 3), summed value (R,), chosen footholds per step.
+        n_roots = roots.size
+        feet = np.broadcast_to(state.feet, (n_roots, 4, 3)).copy()
+        feet[:, LEG_NAMES.index(leg0)] = cand[roots]
+        value = total[roots].copy()
+        chosen = [cand[roots]]
+        for k in range(1, cfg.lookahead):  # a handful of steps, not a loop over candidates
+            leg, yaw = legs[k], float(body_yaw[k])
+            best_so_far = self._state(feet[0], body_xy[k], yaw, leg, state.goal)
+            near = self._near(best_so_far, targets[k])
+            if abs(_wrap(yaw - GRID_YAW)) > cfg.heading_tolerance:  # exact patches: few of them
+                dist = np.linalg.norm(near[:, :2] - targets[k], axis=1)
+                near = near[np.argsort(dist, kind="stable")[:2 * cfg.lookahead_candidates]]
+            t = self._terrain(leg, near, yaw)
+            near, t = near[np.isfinite(t)], t[np.isfinite(t)]
+            if near.shape[0] == 0:
+                break
+            t = t - cfg.bias_weight * np.linalg.norm(near[:, :2] - targets[k], axis=1)
+            if self._posed[leg]:
+                top = np.argsort(-t, kind="stable")[:cfg.lookahead_candidates]
+                near, t = near[top], t[top]
+                scores = np.stack([t + self._pose(self._state(feet[r], body_xy[k], yaw, leg,
+                                                              state.goal), near)
+                                   for r in range(n_roots)])  # beam_width rollouts
+            else:
+                scores = np.broadcast_to(t, (n_roots, t.size))
+            # A candidate out of reach at a rollout's own body height has NaN pose features.
+            scores = np.where(np.isnan(scores), -np.inf, scores)
+            pick = np.argmax(scores, axis=1)
+            value += scores[np.arange(n_roots), pick]
+            feet[:, LEG_NAMES.index(leg)] = near[pick]
+            chosen.append(near[pick])
+
+        best = int(np.argmax(value))  # ties: the better first step (roots are ranked)
+        index = int(roots[best])
+        values = np.full(cand.shape[0], -np.inf)
+        values[roots] = value
+        m = len(chosen)
+        return FootstepPlan(
+            leg=leg0, index=index, foothold=cand[index].copy(), candidates=cand, reward=reward,
+            total=total, value=values, legs=tuple(legs[:m]),
+            footholds=np.array([c_[best] for c_ in chosen]), body_xy=body_xy[:m],
+            body_yaw=body_yaw[:m], targets=targets[:m])

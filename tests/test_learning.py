@@ -111,3 +111,15 @@ def test_estimator_api():
     assert fitted is not None and fitted.coef_.shape == (10,)
     with pytest.raises(FootfallError, match="expected 10 features"):
         fitted.decision_function(np.zeros((2, 3)))
+
+
+def test_min_error_selection_is_never_sparser_than_the_one_standard_error_rule():
+    X, y, groups, _ = _synthetic(seed=5)
+    se = FootholdRanker(learner="l1", Cs=8, cv=4, selection="1se").fit(X, y, groups)
+    best = FootholdRanker(learner="l1", Cs=8, cv=4, selection="min").fit(X, y, groups)
+    errors = [p.error for p in best.path_]
+    assert best.cv_error_ == pytest.approx(min(errors))
+    assert best.C_ >= se.C_  # the 1-SE rule picks the same or a stronger lambda
+    assert np.count_nonzero(best.coef_) >= np.count_nonzero(se.coef_)
+    with pytest.raises(FootfallError, match="selection rule"):
+        FootholdRanker(selection="median").fit(X, y, groups)

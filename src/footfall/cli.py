@@ -330,15 +330,16 @@ def demos_info(store_path: str, as_json: bool) -> None:
     _emit(as_json, data, "\n".join(lines))
 
 
-def _load_demos(store_path: str, ids: str | None = None):
-    """All demonstrations of a store (or those with the given ids) and a terrain lookup."""
+def _load_demos(store_path: str, ids: str | None = None, source: str | None = None):
+    """All demonstrations of a store (or those with the given ids / source prefix) and a terrain lookup."""
     from footfall.store import DemoStore
 
     with DemoStore(store_path) as store:
         wanted = None if ids is None else [int(i) for i in ids.split(",") if i.strip()]
-        demos = store.demonstrations(ids=wanted)
+        demos = store.demonstrations(ids=wanted, source_prefix=source)
         if not demos:
-            raise FootfallError(f"{store_path}: the store holds no demonstrations")
+            raise FootfallError(f"{store_path}: the store holds no demonstrations"
+                                + ("" if source is None else f" from source {source!r}"))
         maps = {h: store.terrain(h) for h in {d.terrain_hash for d in demos}}
     return demos, maps
 
@@ -357,22 +358,26 @@ def _load_demos(store_path: str, ids: str | None = None):
               help="Fix the RBF bandwidths as RMS height differences [m] per scale "
                    "(default: chosen by cross-validation).")
 @click.option("--cv", type=click.IntRange(2, 50), default=5, show_default=True)
+@click.option("--selection", type=click.Choice(["1se", "min"]), default="1se", show_default=True,
+              help="Lambda: one-standard-error rule (sparser) or the smallest CV error.")
+@click.option("--source", default=None,
+              help="Only demonstrations whose source starts with this (e.g. walker:train).")
 @click.option("--seed", type=int, default=0, show_default=True)
 @click.option("-o", "--output", required=True, help="Output model (.npz).")
 @json_option
 def learn(store_path: str, feature_set: str, learner: str, library_size: int,
-          training_candidates: int, bandwidth_rms, cv: int, seed: int, output: str,
-          as_json: bool) -> None:
+          training_candidates: int, bandwidth_rms, cv: int, selection: str, source: str | None,
+          seed: int, output: str, as_json: bool) -> None:
     """Learn front- and hind-leg foothold ranking functions from demonstrations."""
     from footfall.train import TrainingDemo, learn_model
 
     out = _out_path(output)
-    demos, maps = _load_demos(store_path)
+    demos, maps = _load_demos(store_path, source=source)
     training = [TrainingDemo(maps[d.terrain_hash], d.state, d.candidates, d.chosen) for d in demos]
     log = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
     model = learn_model(training, feature_set, learner, library_size=library_size,
                         training_candidates=training_candidates, bandwidth_rms=bandwidth_rms,
-                        cv=cv, seed=seed, log=log)
+                        cv=cv, seed=seed, selection=selection, log=log)
     model.save(out)
     summary = {"model": str(out), "feature_set": feature_set, "learner": learner,
                "demonstrations": len(demos), "seconds": model.info["seconds"], "groups": {}}
@@ -394,8 +399,11 @@ def learn(store_path: str, feature_set: str, learner: str, library_size: int,
 @click.argument("model_path", metavar="MODEL.npz")
 @click.argument("store_path", metavar="DEMOS.sqlite")
 @click.option("--no-expert", is_flag=True, help="Skip the reward loss (needs the expert).")
+@click.option("--source", default=None,
+              help="Only demonstrations whose source starts with this (e.g. walker:train).")
 @json_option
-def rank_eval(model_path: str, store_path: str, no_expert: bool, as_json: bool) -> None:
+def rank_eval(model_path: str, store_path: str, no_expert: bool, source: str | None,
+              as_json: bool) -> None:
     """Top-1 agreement, mean percentile rank and mean reward loss of a model on demonstrations."""
     from footfall.evaluation import rank_scores
     from footfall.model import FootholdModel
@@ -404,7 +412,7 @@ def rank_eval(model_path: str, store_path: str, no_expert: bool, as_json: bool) 
 
     model = FootholdModel.load(model_path)
     model.check_compatible(robot=LITTLEDOG)  # the robot whose states the store holds
-    demos, maps = _load_demos(store_path)
+    demos, maps = _load_demos(store_path, source=source)
     expert = None
     if not no_expert:
         from footfall.expert import SyntheticExpert

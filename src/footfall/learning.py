@@ -29,6 +29,7 @@ from sklearn.utils.validation import check_is_fitted
 from footfall.errors import FootfallError
 
 LEARNERS = ("l1", "l2", "svm")
+SELECTIONS = ("1se", "min")  # lambda: one-standard-error rule, or the smallest CV error
 L2_LOG_C = (-6.0, 0.0)  # log10 of the smallest and largest C on the L2 / SVM path
 
 
@@ -182,6 +183,10 @@ class FootholdRanker(BaseEstimator):
         over ``L2_LOG_C``).
     cv : int
         Number of folds, grouped by demonstration.
+    selection : {"1se", "min"}
+        How lambda is picked from the path: the strongest regularisation
+        within one standard error of the smallest CV error (sparser), or
+        the smallest CV error.
     tol, max_iter : solver tolerance and iteration limit.
 
     Attributes
@@ -198,8 +203,9 @@ class FootholdRanker(BaseEstimator):
     """
 
     def __init__(self, learner: str = "l1", Cs: int | np.ndarray = 10, cv: int = 5,
-                 tol: float = 1e-4, max_iter: int = 2000):
+                 tol: float = 1e-4, max_iter: int = 2000, selection: str = "1se"):
         self.learner = learner
+        self.selection = selection
         self.Cs = Cs
         self.cv = cv
         self.tol = tol
@@ -236,6 +242,9 @@ class FootholdRanker(BaseEstimator):
             raise FootfallError(f"unknown learner {self.learner!r}; use one of {', '.join(LEARNERS)}")
         if int(self.cv) < 2:
             raise FootfallError("cv needs at least 2 folds")
+        if self.selection not in SELECTIONS:
+            raise FootfallError(f"unknown selection rule {self.selection!r}; use one of "
+                                f"{', '.join(SELECTIONS)}")
         pairs, _, pair_groups = pairwise_transform(X, y, groups, mirrored=False)
         scale = np.sqrt(np.mean(pairs * pairs, axis=0))  # std over the mirrored set: mean is 0
         scale[scale < 1e-12] = 1.0  # a constant feature carries no preference
@@ -250,11 +259,12 @@ class FootholdRanker(BaseEstimator):
             point.C = float(C)  # report the C of the mirrored problem
         # One-standard-error rule: the strongest regularisation whose held-out
         # error is within one standard error of the smallest (sparser, and as
-        # good within the noise of the folds).
+        # good within the noise of the folds); or the smallest error itself.
         errors = np.array([p.error for p in self.path_])
         best = int(np.argmin(errors))
-        bound = errors[best] + self.path_[best].error_std / np.sqrt(len(folds))
-        best = int(np.flatnonzero(errors <= bound + 1e-12)[0])
+        if self.selection == "1se":
+            bound = errors[best] + self.path_[best].error_std / np.sqrt(len(folds))
+            best = int(np.flatnonzero(errors <= bound + 1e-12)[0])
         self.C_ = float(Cs[best])
         self.lambda_ = 1.0 / self.C_
         self.cv_error_ = self.path_[best].error

@@ -46,10 +46,11 @@ def _bandwidths(rms: Sequence[float], config: FeatureConfig) -> tuple[float, ...
 
 
 def _fit(examples: list[Example], feature_set: str, rms: Sequence[float] | None,
-         config: FeatureConfig, learner: str, Cs, cv: int) -> FootholdRanker:
+         config: FeatureConfig, learner: str, Cs, cv: int, selection: str = "1se"
+         ) -> FootholdRanker:
     bw = None if rms is None else _bandwidths(rms, config)
     X, y, groups = stack(examples, feature_set, bw)
-    return FootholdRanker(learner=learner, Cs=Cs, cv=cv).fit(X, y, groups)
+    return FootholdRanker(learner=learner, Cs=Cs, cv=cv, selection=selection).fit(X, y, groups)
 
 
 def select_bandwidths(examples: list[Example], feature_set: str, config: FeatureConfig,
@@ -81,11 +82,13 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
                 library_size: int = DEFAULT_LIBRARY_SIZE,
                 training_candidates: int = DEFAULT_TRAINING_CANDIDATES,
                 bandwidth_rms: Sequence[float] | None = None, Cs=10, cv: int = 5, seed: int = 0,
+                selection: str = "1se",
                 log: Callable[[str], None] = lambda s: None) -> FootholdModel:
     """Learn front- and hind-leg ranking functions from demonstrations.
 
     ``bandwidth_rms`` fixes the RBF bandwidths (as RMS height differences [m]
-    per scale) instead of choosing them by cross-validation.
+    per scale) instead of choosing them by cross-validation. ``selection``
+    picks lambda on the path (see :class:`footfall.learning.FootholdRanker`).
     """
     feature_set = check_feature_set(feature_set)
     if learner not in LEARNERS:
@@ -123,7 +126,7 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
                 rms = tuple(float(r) for r in bandwidth_rms)
             else:
                 rms, search = select_bandwidths(chosen, feature_set, config, learner, Cs, cv, log)
-        ranker = _fit(chosen, feature_set, rms, config, learner, Cs, cv)
+        ranker = _fit(chosen, feature_set, rms, config, learner, Cs, cv, selection)
         coef, scale = ranker.coef_, ranker.scale_
         keep = np.ones(len(names), dtype=bool)
         kept_library = None
@@ -158,4 +161,5 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
                          info={"n_demonstrations": len(demos), "seed": seed,
                                "library_size": library_size,
                                "training_candidates": training_candidates,
+                               "selection": selection,
                                "seconds": time.perf_counter() - started})

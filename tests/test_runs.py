@@ -1,0 +1,50 @@
+"""Table II's summary of many runs: success rate with its Wilson interval, slip of successful runs."""
+
+import math
+
+import numpy as np
+import pytest
+
+from footfall.errors import FootfallError
+from footfall.runlog import RunRecord, RunStep
+from footfall.runs import summarise
+from footfall.state import nominal_state
+from footfall.stats import wilson_interval
+
+from test_store import terrain
+
+
+def _record(hm, success, slips, speed=5.0):
+    steps = []
+    for k, slip in enumerate(slips):
+        state = nominal_state(hm, (0.2, 0.0), 0.0, ("LH", "LF", "RH", "RF")[k % 4])
+        steps.append(RunStep(k, state, np.zeros((2, 3)), np.zeros(2), 0, 0.1 * k, 0.1 * k + 0.05,
+                             np.zeros(3), slip))
+    result = {"success": success, "reason": "goal" if success else "fall: trunk tilted",
+              "speed_cm_s": speed, "speed_body_lengths_s": speed / 30.0}
+    return RunRecord(hm.content_hash(), 0, {}, result, tuple(steps))
+
+
+def test_summary_averages_slip_over_successful_runs_only():
+    hm = terrain()
+    records = [_record(hm, True, [0.010, 0.020, math.nan]),  # last foothold: never lifted again
+               _record(hm, True, [0.030], speed=7.0),
+               _record(hm, False, [0.500, 0.400])]  # a failed run's slip does not count
+    s = summarise(records)
+    assert (s.runs, s.successes) == (3, 2)
+    assert s.success_rate == pytest.approx(2 / 3)
+    assert s.success_ci == wilson_interval(2, 3)
+    assert s.slip_count == 3
+    assert s.slip_mean_mm == pytest.approx(20.0)
+    assert s.slip_std_mm == pytest.approx(np.std([10.0, 20.0, 30.0]))
+    assert s.speed_cm_s == pytest.approx(6.0)
+    assert s.reasons == {"goal": 2, "fall: trunk tilted": 1}
+
+
+def test_summary_without_a_success_has_no_slip():
+    hm = terrain()
+    s = summarise([_record(hm, False, [0.01])])
+    assert s.successes == 0 and s.slip_mean_mm is None and s.speed_cm_s is None
+    assert s.success_ci[0] == 0.0
+    with pytest.raises(FootfallError, match="no runs"):
+        summarise([])

@@ -51,6 +51,7 @@ class OfflineConfig:
     feature_sets: tuple[str, ...] = FEATURE_SETS
     learners: tuple[str, ...] = LEARNERS
     library_size: int = 1000
+    l1_min_ablation: bool = True  # also learn L1 with lambda at the smallest CV error ("l1-min")
     seed: int = 0
     extra_rocky_train: int = 2  # more rocky boards in training: the kind that matters most
 
@@ -101,22 +102,26 @@ def run_offline(out: Path, config: OfflineConfig = OfflineConfig(),
 
     results, table1 = [], {}
     models: dict[tuple[str, str], FootholdModel] = {}
+    runs = [(learner, "1se") for learner in config.learners]
+    if config.l1_min_ablation and "l1" in config.learners:
+        runs.append(("l1", "min"))
     for feature_set in config.feature_sets:
         rms = None
-        for learner in config.learners:
+        for learner, selection in runs:
+            label = learner if selection == "1se" else f"{learner}-{selection}"
             t0 = time.perf_counter()
-            log(f"learning {feature_set}/{learner}")
+            log(f"learning {feature_set}/{label}")
             model = learn_model(training, feature_set, learner, library_size=config.library_size,
-                                seed=config.seed, bandwidth_rms=rms,
+                                seed=config.seed, bandwidth_rms=rms, selection=selection,
                                 log=lambda s: log("  " + s))
             # The bandwidths are chosen once per feature set, by the L1 learner's
             # cross-validation, and reused by the comparison learners.
             if rms is None and feature_set != "terrain":
                 rms = tuple(np.mean([f.info["bandwidth_rms_m"] for f in model.functions.values()],
                                     axis=0))
-            models[(feature_set, learner)] = model
-            model.save(out / "models" / f"{feature_set}-{learner}.npz")
-            row = {"feature_set": feature_set, "learner": learner,
+            models[(feature_set, label)] = model
+            model.save(out / "models" / f"{feature_set}-{label}.npz")
+            row = {"feature_set": feature_set, "learner": label,
                    "learn_seconds": time.perf_counter() - t0,
                    "lambda": {g: f.info["lambda"] for g, f in model.functions.items()},
                    "cv_error": {g: f.info["cv_error"] for g, f in model.functions.items()}}
@@ -124,13 +129,14 @@ def run_offline(out: Path, config: OfflineConfig = OfflineConfig(),
                 row[split] = rank_scores(model, splits[split], terrain,
                                          values=values[split]).as_dict()
             results.append(row)
-            if learner == "l1" and feature_set != "terrain":
+            if label == "l1" and feature_set != "terrain":
                 table1[feature_set] = model.templates_kept()
             log(f"  unseen modules top-1 {row['test-modules']['top1']:.3f}, "
                 f"unseen kind top-1 {row['test-kind']['top1']:.3f}")
 
     summary = {"config": asdict(config), "results": results, "table1": table1,
-               "comparisons": compare_feature_sets(results),
+               "comparisons": compare_feature_sets(results)
+               + (compare_feature_sets(results, "l1-min") if config.l1_min_ablation else []),
                "demonstrations": {s: len(d) for s, d in splits.items()},
                "seconds": time.perf_counter() - started}
     _figures(out, models, maps, splits, config)
@@ -241,17 +247,20 @@ def _report(s: dict) -> str:
                          f"{a['reward_loss']:.2f} | {lo:.2f} to {hi:.2f} |")
         lines.append("")
     if s.get("comparisons"):
-        lines += ["## Feature sets compared on the same demonstrations (L1)", "",
+        lines += ["## Feature sets compared on the same demonstrations", "",
                   "Mean of loss(a) - loss(b) per demonstration (negative: a is better), its "
                   "95 % paired bootstrap interval, and the demonstrations each side wins "
                   "(the rest tie). An interval that contains 0 means this many "
-                  "demonstrations do not resolve the difference.", "",
-                  "| a | b | split | mean difference | 95 % CI | a better | b better |",
-                  "| --- | --- | --- | --- | --- | --- | --- |"]
+                  "demonstrations do not resolve the difference. `l1` picks lambda by the "
+                  "one-standard-error rule (the default: sparser), `l1-min` at the smallest "
+                  "cross-validation error, with the same bandwidths.", "",
+                  "| learner | a | b | split | mean difference | 95 % CI | a better | b better |",
+                  "| --- | --- | --- | --- | --- | --- | --- | --- |"]
         for c in s["comparisons"]:
             lo, hi = c["ci95"]
-            lines.append(f"| {c['a']} | {c['b']} | {c['split']} | {c['mean_difference']:+.2f} | "
-                         f"{lo:+.2f} to {hi:+.2f} | {c['a_better']} | {c['b_better']} |")
+            lines.append(f"| {c['learner']} | {c['a']} | {c['b']} | {c['split']} | "
+                         f"{c['mean_difference']:+.2f} | {lo:+.2f} to {hi:+.2f} | "
+                         f"{c['a_better']} | {c['b_better']} |")
     lines += ["", "## Table I: templates kept (L1), per scale, of the library", "",
               "| features | legs | small | medium | large |", "| --- | --- | --- | --- | --- |"]
     for fs, groups in s["table1"].items():

@@ -48,3 +48,18 @@ def test_summary_without_a_success_has_no_slip():
     assert s.success_ci[0] == 0.0
     with pytest.raises(FootfallError, match="no runs"):
         summarise([])
+
+
+def test_video_and_strip_are_written(tmp_path):
+    import imageio.v2 as imageio
+
+    from footfall.runs import save_strip, save_video
+
+    frames = [np.full((64, 96, 3), 10 * i, np.uint8) for i in range(12)]
+    save_video(frames, tmp_path / "run.mp4", fps=25.0)
+    reader = imageio.get_reader(tmp_path / "run.mp4")
+    assert reader.count_frames() == 12 and reader.get_meta_data()["fps"] == 25.0
+    reader.close()
+    save_strip([(0.5 * i, f) for i, f in enumerate(frames[:4])], tmp_path / "strip.png")
+    assert (tmp_path / "strip.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not list(tmp_path.glob(".*.tmp*"))  # written through a temporary file and renamed

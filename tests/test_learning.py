@@ -123,3 +123,12 @@ def test_min_error_selection_is_never_sparser_than_the_one_standard_error_rule()
     assert np.count_nonzero(best.coef_) >= np.count_nonzero(se.coef_)
     with pytest.raises(FootfallError, match="selection rule"):
         FootholdRanker(selection="median").fit(X, y, groups)
+
+
+def test_refitting_gives_bit_identical_paths_and_weights():
+    # liblinear's random generator is process-wide: fits racing in threads would differ.
+    X, y, groups, _ = _synthetic(seed=6)
+    a = FootholdRanker(learner="l1", Cs=6, cv=5).fit(X, y, groups)
+    b = FootholdRanker(learner="l1", Cs=6, cv=5).fit(X, y, groups)
+    assert [p.error for p in a.path_] == [p.error for p in b.path_]
+    assert a.coef_.tobytes() == b.coef_.tobytes()

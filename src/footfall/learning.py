@@ -13,9 +13,7 @@ cross-validation with folds grouped by demonstration.
 
 from __future__ import annotations
 
-import os
 import warnings
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -127,12 +125,19 @@ def _fit_coef(learner: str, C: float, X: np.ndarray, y: np.ndarray, tol: float,
 
 def _cross_validate(learner: str, Cs: np.ndarray, X: np.ndarray, y: np.ndarray, folds: list,
                     tol: float, max_iter: int) -> list["PathPoint"]:
-    """Held-out errors along the path, fits of one C in parallel over the folds.
+    """Held-out errors along the path, the folds of one C fitted one after another.
 
     The path runs from strong to weak regularisation and stops once the
     held-out error has risen for two values in a row past its minimum: the
     weakly regularised fits are the slow ones, and the selection never
     reaches them.
+
+    The folds are NOT fitted in parallel threads: scikit-learn's liblinear
+    (logistic regression and LinearSVC alike) draws its coordinate order
+    from one process-wide random generator (``set_seed`` in its
+    ``newrand.h``), so concurrent fits race for it and the cross-validation
+    errors -- and with them lambda and the bandwidths -- would change from
+    run to run. Sequential fits give the same model for the same seed.
     """
     def one(C: float, train: np.ndarray, test: np.ndarray) -> tuple[float, float, int]:
         w = _fit_coef(learner, C, X[train], y[train], tol, max_iter)
@@ -141,19 +146,16 @@ def _cross_validate(learner: str, Cs: np.ndarray, X: np.ndarray, y: np.ndarray, 
             int(np.count_nonzero(w))
 
     path: list[PathPoint] = []
-    workers = max(1, min(len(folds), len(os.sched_getaffinity(0))
-                         if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1))
-    with ThreadPoolExecutor(max_workers=workers) as pool:  # liblinear releases the GIL
-        for C in Cs:  # the regularisation path: a handful of values
-            res = list(pool.map(lambda f, C=C: one(C, *f), folds))
-            errors = np.array([r[0] for r in res])
-            path.append(PathPoint(float(C), float(errors.mean()), float(errors.std()),
-                                  float(np.mean([r[1] for r in res])) if learner != "svm"
-                                  else float("nan"), float(np.mean([r[2] for r in res]))))
-            errs = [p.error for p in path]
-            k = int(np.argmin(errs))
-            if len(errs) - k > 2 and errs[-1] > errs[-2] > errs[k]:
-                break
+    for C in Cs:  # the regularisation path: a handful of values
+        res = [one(C, *f) for f in folds]
+        errors = np.array([r[0] for r in res])
+        path.append(PathPoint(float(C), float(errors.mean()), float(errors.std()),
+                              float(np.mean([r[1] for r in res])) if learner != "svm"
+                              else float("nan"), float(np.mean([r[2] for r in res]))))
+        errs = [p.error for p in path]
+        k = int(np.argmin(errs))
+        if len(errs) - k > 2 and errs[-1] > errs[-2] > errs[k]:
+            break
     return path
 
 

@@ -165,3 +165,15 @@ def test_nan_features_are_refused():
     X[1, 0] = np.nan
     with pytest.raises(FootfallError, match="NaN"):
         FootholdRanker(cv=2).fit(X, np.array([1, 0, 1, 0]), np.array([0, 0, 1, 1]))
+
+
+def test_servo_gains_do_not_make_a_model_incompatible():
+    import dataclasses
+
+    from footfall.robot import LITTLEDOG, SERVO_FIELDS
+    model = FootholdModel("terrain", "l1", {}, FeatureConfig(), LITTLEDOG)
+    softer = dataclasses.replace(LITTLEDOG, joint_kp=LITTLEDOG.joint_kp / 2, joint_kd=0.3)
+    model.check_compatible(robot=softer)  # the servo only tracks set-points: same footholds
+    assert "joint_kp" in SERVO_FIELDS
+    with pytest.raises(FootfallError, match="lower_leg"):
+        model.check_compatible(robot=dataclasses.replace(LITTLEDOG, lower_leg=0.12))

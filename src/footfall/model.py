@@ -23,7 +23,7 @@ from footfall.errors import FootfallError
 from footfall.fileio import load_npz, save_npz
 from footfall.pose_features import POSE_FEATURE_NAMES
 from footfall.reward import LinearReward
-from footfall.robot import LITTLEDOG, RobotDescription
+from footfall.robot import SERVO_FIELDS, LITTLEDOG, RobotDescription
 from footfall.scales import FeatureConfig
 from footfall.templates import TemplateLibrary
 from footfall.terrain_features import feature_names
@@ -92,8 +92,10 @@ class FootholdModel:
                          config: FeatureConfig | None = None,
                          map_resolution: float | None = None) -> None:
         """Fail with a clear error if the model cannot be used in this setting."""
-        if robot is not None and robot != self.robot:
-            diff = sorted(k for k, v in robot.to_dict().items() if self.robot.to_dict().get(k) != v)
+        mine = {k: v for k, v in self.robot.to_dict().items() if k not in SERVO_FIELDS}
+        diff = [] if robot is None else sorted(
+            k for k, v in robot.to_dict().items() if k not in SERVO_FIELDS and mine.get(k) != v)
+        if diff:
             raise FootfallError(f"model was trained for robot {self.robot.name!r} with other "
                                 f"numbers ({', '.join(diff[:4])}{'...' if len(diff) > 4 else ''})")
         if config is not None and config != self.config:

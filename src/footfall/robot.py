@@ -46,6 +46,11 @@ class Leg:
         return self.side < 0
 
 
+SERVO_FIELDS = ("servo_rate", "joint_kp", "joint_kd", "joint_armature", "joint_damping")
+"""Fields of the low-level servo only: they change how the simulated robot tracks its
+set-points, not its geometry, so a learned foothold model stays valid when they change."""
+
+
 @dataclass(frozen=True)
 class RobotDescription:
     """Geometry, mass and limits of a quadruped with 3-joint legs and ball feet."""
@@ -81,8 +86,10 @@ class RobotDescription:
     knee_radius: float = 0.012  # [m] knee housing sphere, collides with the terrain
     foot_mass: float = 0.010  # [kg] ball foot, part of lower_leg_mass (carries the force sensor)
     servo_rate: float = 400.0  # [Hz] rate of the on-board PD joint servo (paper §IV-B)
-    joint_kp: float = 15.0  # [N m/rad] PD servo stiffness (the torque limit at 0.2 rad error)
-    joint_kd: float = 0.2  # [N m s/rad] PD servo damping (damping ratio 0.6-1 on the joints)
+    joint_kp: float = 40.0  # [N m/rad] PD servo stiffness (the torque limit at 0.075 rad error);
+    # at 15 the legs give so much under load that the robot tips within a few steps of a walk
+    joint_kd: float = 1.0  # [N m s/rad] PD servo damping: the body swaying on the stance legs is
+    # well damped (at 0.5 it rings and the ZMP swings by tens of mm; 1.5 and more fell more often)
     joint_armature: float = 5e-4  # [kg m^2] reflected rotor inertia of a geared joint motor
     joint_damping: float = 0.01  # [N m s/rad] viscous friction of a joint's gearbox
     legs: tuple[Leg, ...] = field(init=False, repr=False)

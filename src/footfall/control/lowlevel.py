@@ -4,25 +4,41 @@ Every control period (100 Hz) the desired body pose and the desired world
 positions of the four ball-foot centres become joint angle set-points by
 the closed-form inverse kinematics of each leg; the robot's PD servo
 (400 Hz, in the simulator) tracks them. The loop is closed at 100 Hz on the
-true body pose (motion capture on the real robot, the simulator here), in
-two ways:
+true body pose (motion capture on the real robot, the simulator here):
 
-* the swing foot's target is expressed in the *measured* body frame, so the
+* a swing foot's target is expressed in the *measured* body frame, so the
   foot goes where the world target is even when the body is off its plan;
-* the stance legs, which move the body, are commanded for a body pose that
-  is the desired one plus an integral of the pose error (``BodyCorrection``),
-  which removes the steady sag and lean of a compliant PD servo under load.
+* stance legs, which move the body, are solved in the *commanded* body frame:
+  the desired pose plus an integral of the pose error (:class:`BodyCorrection`),
+  which removes the steady sag, lean and offset of a compliant PD servo
+  under load;
+* a leg changing role moves between the two frames gradually (a *stance
+  weight* from 0, swing, to 1, stance; :func:`transfer_weight`). The frames
+  differ by the body's tracking error, a few millimetres; switched at once,
+  that difference is a step in the set-points that kicks a foot just set
+  down, and a kicked foot slips;
+* a stance foot's target is where it touched down, moved on as far as the
+  ball has rolled since (:func:`rolled`): the ball foot is fixed to the shin,
+  so it rolls a few millimetres forward as the body passes over it, and a
+  target that stayed put would make the leg drag it back.
+
+Poses here are (position (3,) [m], rotation matrix (3, 3)) pairs, the
+rotation as :func:`footfall.kinematics.rotation_matrix` makes it.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from functools import lru_cache
 
+import mujoco
 import numpy as np
 
 from footfall.errors import FootfallError
-from footfall.kinematics import inverse_kinematics, world_to_body
-from footfall.robot import RobotDescription
+from footfall.kinematics import inverse_kinematics
+from footfall.robot import Leg, RobotDescription
+
+Pose = tuple[np.ndarray, np.ndarray]  # (position (3,) [m], rotation matrix (3, 3)): body -> world
 
 
 @dataclass(frozen=True)
@@ -30,18 +46,25 @@ class LowLevelConfig:
     """Gains and limits of the 100 Hz closed loop."""
 
     period: float = 0.01  # [s] set-point period (paper: 100 Hz)
-    position_gain: float = 0.2  # [-] share of the body position error added to the correction per period
-    attitude_gain: float = 0.2  # [-] share of the roll / pitch error added per period
-    max_position_correction: float = 0.03  # [m] bound of the accumulated position correction
+    position_gain: float = 0.05  # [-] share of the body height error added to the correction
+    # per period
+    horizontal_gain: float = 0.05  # [-] share of the body x, y error added per period: without
+    # it the body settles millimetres off the COG plan (leg compliance, slipped feet), and every
+    # foot set down is dragged by that offset as it takes its load
+    attitude_gain: float = 0.05  # [-] share of the roll / pitch error added per period
+    max_position_correction: float = 0.03  # [m] bound of the accumulated correction, per axis
     max_attitude_correction: float = 0.2  # [rad] bound of the accumulated roll / pitch correction
+    transfer_time: float = 0.05  # [s] a leg moves from the measured to the commanded body frame
+    # over this long after touch-down (and back after lift-off): the load passes to it, or from
+    # it, without a step in its set-points
 
     def __post_init__(self) -> None:
         if not self.period > 0:
             raise FootfallError(f"low-level period must be > 0 s, got {self.period}")
-        for name in ("position_gain", "attitude_gain"):
+        for name in ("position_gain", "horizontal_gain", "attitude_gain"):
             if not 0 <= getattr(self, name) <= 1:
                 raise FootfallError(f"low-level {name} must be in [0, 1]")
-        for name in ("max_position_correction", "max_attitude_correction"):
+        for name in ("max_position_correction", "max_attitude_correction", "transfer_time"):
             if not getattr(self, name) >= 0:
                 raise FootfallError(f"low-level {name} must be >= 0")
 
@@ -50,13 +73,16 @@ class BodyCorrection:
     """Integral correction of the commanded body pose from the measured one (100 Hz).
 
     ``update(desired, measured)`` accumulates ``gain * (desired - measured)``
-    for the height, roll and pitch -- what a compliant servo loses under load
-    -- bounded, and returns the pose to command: desired + correction.
+    for the position and for the roll and pitch -- what a compliant servo
+    loses under load -- each bounded, and returns the pose to command:
+    desired + correction. The yaw follows the plan as it is.
     """
 
     def __init__(self, config: LowLevelConfig) -> None:
         self.config = config
-        self.position = np.zeros(3)  # [m]
+        c = config
+        self._gain = np.array([c.horizontal_gain, c.horizontal_gain, c.position_gain])
+        self.position = np.zeros(3)  # [m] x, y, z
         self.attitude = np.zeros(2)  # [rad] roll, pitch
 
     def update(self, desired_position: np.ndarray, desired_rpy: np.ndarray,
@@ -64,40 +90,161 @@ class BodyCorrection:
                ) -> tuple[np.ndarray, np.ndarray]:
         """Commanded body position (3,) [m] and roll, pitch, yaw (3,) [rad]."""
         c = self.config
-        error = np.asarray(desired_position) - measured_position
-        error[:2] = 0.0  # the horizontal position follows the COG plan open loop: an
-        # integral on a moving reference only adds overshoot; height is what the servo loses
-        self.position = np.clip(self.position + c.position_gain * error,
+        self.position = np.clip(self.position + self._gain * (desired_position - measured_position),
                                 -c.max_position_correction, c.max_position_correction)
         err = desired_rpy[:2] - measured_rpy[:2]
         err = (err + np.pi) % (2 * np.pi) - np.pi
         self.attitude = np.clip(self.attitude + c.attitude_gain * err,
                                 -c.max_attitude_correction, c.max_attitude_correction)
-        rpy = np.array([desired_rpy[0] + self.attitude[0], desired_rpy[1] + self.attitude[1],
-                        desired_rpy[2]])
+        rpy = np.array(desired_rpy, dtype=np.float64)
+        rpy[:2] += self.attitude
         return desired_position + self.position, rpy
 
 
-def joint_targets(robot: RobotDescription, feet_world: np.ndarray, stance_position: np.ndarray,
-                  stance_rpy: np.ndarray, swing: int | None, measured_position: np.ndarray,
-                  measured_rpy: np.ndarray, previous: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def shin_rotations(q: np.ndarray, body_rotation: np.ndarray) -> np.ndarray:
+    """World orientations (4, 3, 3) of the lower legs (ball feet) from joint angles (4, 3) [rad].
+
+    ``body_rotation`` (3, 3) turns the body frame into the world; then hip
+    roll about x, then hip pitch plus knee about the rolled y axis (see
+    :mod:`footfall.kinematics`): Rx(q1) Ry(q2 + q3).
+    """
+    q = np.asarray(q, dtype=np.float64)
+    c1, s1 = np.cos(q[:, 0]), np.sin(q[:, 0])
+    pitch = q[:, 1] + q[:, 2]
+    c2, s2 = np.cos(pitch), np.sin(pitch)
+    leg = np.empty((4, 3, 3))
+    leg[:, 0, 0], leg[:, 0, 1], leg[:, 0, 2] = c2, 0.0, s2
+    leg[:, 1, 0], leg[:, 1, 1], leg[:, 1, 2] = s1 * s2, c1, -s1 * c2
+    leg[:, 2, 0], leg[:, 2, 1], leg[:, 2, 2] = -c1 * s2, s1, c1 * c2
+    return np.asarray(body_rotation) @ leg
+
+
+def rolled(start: np.ndarray, now: np.ndarray, radius: float) -> np.ndarray:
+    """How far (..., 3) [m] ball feet of ``radius`` [m] have rolled on level ground.
+
+    A ball that turns by the rotation vector phi while rolling without
+    slipping on a surface with upward normal z moves its centre by
+    ``radius * phi x z`` = radius * (phi_y, -phi_x, 0).
+
+    Parameters
+    ----------
+    start, now : array of shape (..., 3, 3)
+        The feet's world orientations when they touched down and now.
+    radius : float
+        Ball radius [m].
+    """
+    delta = np.asarray(now) @ np.swapaxes(np.asarray(start), -1, -2)  # start -> now, world frame
+    cos = np.clip(0.5 * (delta[..., 0, 0] + delta[..., 1, 1] + delta[..., 2, 2] - 1.0), -1.0, 1.0)
+    angle = np.arccos(cos)
+    sin = np.sqrt(1.0 - cos * cos)
+    # phi = angle / (2 sin(angle)) * (skew part of delta); the factor tends to 1/2 at angle 0
+    scale = radius * np.where(sin > 1e-9, angle / np.maximum(2.0 * sin, 1e-18), 0.5)
+    out = np.zeros(delta.shape[:-1])
+    out[..., 0] = scale * (delta[..., 0, 2] - delta[..., 2, 0])  # radius * phi_y
+    out[..., 1] = scale * (delta[..., 1, 2] - delta[..., 2, 1])  # radius * -phi_x
+    return out
+
+
+def transfer_weight(elapsed: np.ndarray, duration: float) -> np.ndarray:
+    """Share [-] (...) of a load transfer done ``elapsed`` [s] (...) into it: 0 -> 1, smoothly.
+
+    The smoothstep 3u^2 - 2u^3 of u = elapsed / ``duration`` [s], clipped to
+    [0, 1]; 1 at once for a zero duration (and for an infinite ``elapsed``).
+    """
+    if duration <= 0:
+        return np.ones_like(np.asarray(elapsed, dtype=np.float64))
+    u = np.clip(np.asarray(elapsed, dtype=np.float64) / duration, 0.0, 1.0)
+    return u * u * (3.0 - 2.0 * u)
+
+
+@dataclass(frozen=True, eq=False)
+class _LegStack:
+    """All four legs as one stacked leg of the first leg's knee direction, for one IK solve."""
+
+    leg: Leg  # hip (4, 3) and side (4,) stacked; limits of the first leg
+    flip_point: np.ndarray  # (4, 3) factor on the body-frame target: x by -1 for a reflected leg
+    flip_angles: np.ndarray  # (4, 3) factor on the solved angles: pitch, knee by -1 if reflected
+    lower: np.ndarray  # (4, 3) [rad] joint limits of each leg
+    upper: np.ndarray  # (4, 3) [rad]
+
+
+@lru_cache(maxsize=8)
+def _leg_stack(robot: RobotDescription) -> _LegStack:
+    """The four legs as one leg of the first leg's knee direction, hip (4, 3) and side (4,) stacked.
+
+    A knee-backward leg is the knee-forward one reflected front to back (see
+    :class:`footfall.robot.RobotDescription`): its angles at the body-frame
+    point (x, y, z) are those of a knee-forward leg with the hip at (-hip_x,
+    hip_y, hip_z) reaching for (-x, y, z), with hip pitch and knee negated
+    (and the other way round). The closed form takes hip and side as arrays,
+    so one call solves all four legs.
+    """
+    reference = robot.legs[0]
+    mirror = np.array([leg.knee_forward != reference.knee_forward for leg in robot.legs])
+    flip = np.where(mirror[:, None], [-1.0, 1.0, 1.0], 1.0)
+    hips = np.array([leg.hip for leg in robot.legs]) * flip
+    stacked = replace(reference, name="+".join(leg.name for leg in robot.legs), hip=hips,
+                      side=np.array([leg.side for leg in robot.legs]))
+    lower, upper = (np.array([[lim[i] for lim in leg.limits] for leg in robot.legs])
+                    for i in (0, 1))
+    ref_lo, ref_hi = np.array(reference.limits).T
+    angle_flip = np.where(mirror[:, None], [1.0, -1.0, -1.0], 1.0)
+    mirrored_lo = np.minimum(ref_lo * angle_flip, ref_hi * angle_flip)
+    mirrored_hi = np.maximum(ref_lo * angle_flip, ref_hi * angle_flip)
+    if not (np.allclose(lower, mirrored_lo) and np.allclose(upper, mirrored_hi)):
+        raise FootfallError("knee-backward legs must be the knee-forward ones reflected")
+    return _LegStack(stacked, flip, angle_flip, lower, upper)
+
+
+def body_rotation(rpy: np.ndarray) -> np.ndarray:
+    """Rotation matrix (3, 3) of one body attitude: roll, pitch, yaw (3,) [rad], Z-Y-X.
+
+    The same matrix as :func:`footfall.kinematics.rotation_matrix`, by
+    MuJoCo's C routines: a single pose at control rate, where the
+    vectorised NumPy version's overhead would dominate.
+    """
+    quat = np.empty(4)
+    mujoco.mju_euler2Quat(quat, np.asarray(rpy, dtype=np.float64)[::-1].copy(), "zyx")
+    mat = np.empty(9)
+    mujoco.mju_quat2Mat(mat, quat)
+    return mat.reshape(3, 3)
+
+
+def joint_targets(robot: RobotDescription, feet_world: np.ndarray, commanded: Pose,
+                  measured: Pose, stance: np.ndarray, previous: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
     """Joint set-points (4, 3) [rad] that put the ball-foot centres at ``feet_world`` (4, 3) [m].
 
-    Stance legs are solved in the commanded body frame (``stance_position``,
-    ``stance_rpy``); the swing leg ``swing`` (index in LEG_NAMES, or None)
-    in the measured one. A foot out of reach keeps its ``previous``
-    set-points (4, 3). Returns the set-points and a (4,) bool of the legs
-    that were reachable.
+    Parameters
+    ----------
+    robot : RobotDescription
+    feet_world : array of shape (4, 3)
+        World targets [m] of the ball-foot centres, LEG_NAMES order.
+    commanded, measured : (position (3,) [m], rotation (3, 3))
+        The body pose the stance legs are solved for, and the true one.
+    stance : array of shape (4,)
+        Stance weight [-] of each leg: 1 solves it in the commanded frame, 0
+        in the measured one, in between a blend of the two body-frame
+        targets (a leg passing its load on or off).
+    previous : array of shape (4, 3)
+        Set-points [rad] kept by a leg whose target is out of its workspace;
+        a target in the workspace but past a joint limit gets the IK angles
+        clipped to the limits (a swing foot then passes a little off its
+        path instead of stopping dead).
+
+    Returns
+    -------
+    q : ndarray of shape (4, 3)
+        Set-points [rad].
+    ok : ndarray of shape (4,)
+        Which legs reach their targets within the joint limits.
     """
-    feet_world = np.asarray(feet_world, dtype=np.float64)
-    local = world_to_body(feet_world, stance_position, stance_rpy)
-    if swing is not None:
-        local[swing] = world_to_body(feet_world[swing], measured_position, measured_rpy)
-    q = np.array(previous, dtype=np.float64, copy=True)
-    ok = np.zeros(4, dtype=bool)
-    for k, leg in enumerate(robot.legs):  # four legs, each its own closed form
-        qk, okk = inverse_kinematics(leg, local[k], robot)
-        if okk:
-            q[k] = qk
-            ok[k] = True
-    return q, ok
+    feet = np.asarray(feet_world, dtype=np.float64)
+    in_commanded = (feet - commanded[0]) @ commanded[1]
+    in_measured = (feet - measured[0]) @ measured[1]
+    w = np.asarray(stance, dtype=np.float64)[:, None]
+    legs = _leg_stack(robot)
+    local = (in_measured + w * (in_commanded - in_measured)) * legs.flip_point
+    q, ok = inverse_kinematics(legs.leg, local, robot)
+    q = np.minimum(np.maximum(q * legs.flip_angles, legs.lower), legs.upper)  # NaN stays NaN
+    return np.where(np.isnan(q).any(axis=1, keepdims=True), previous, q), ok

@@ -31,6 +31,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from functools import lru_cache
 
+import footfall.sim  # noqa: F401  -- picks the offscreen OpenGL backend before mujoco loads
 import mujoco
 import numpy as np
 

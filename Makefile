@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: run demo test bench clean
+.PHONY: run demo test smoke bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -19,6 +19,12 @@ run: $(STAMP)
 # Pictures of a board scored densely with the hand-tuned reward.
 demo: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/footfall demo --out out/demo
+
+# The reproduction's small version (a few minutes), as CI's smoke test.
+smoke: $(STAMP)
+	rm -rf out/smoke
+	MPLBACKEND=Agg $(BIN)/footfall reproduce --quick --out out/smoke
+	test -s out/smoke/report.html
 
 test: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q

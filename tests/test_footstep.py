@@ -248,3 +248,20 @@ def test_bad_input_raises(flat):
                 {"heading_tolerance": np.nan}, {"root_separation": -0.1}):
         with pytest.raises(FootfallError, match="footstep config"):
             FootstepConfig(**bad)
+
+
+def test_path_bias_follows_the_rewards_scale():
+    """A reward in other units (a learned one: logits) trades terrain against the path alike."""
+    from footfall.control.footstep import reward_spread
+
+    doubled = dataclasses.replace(
+        REWARD, terrain_weights=2 * REWARD.terrain_weights,
+        template_weights=tuple(2 * w for w in REWARD.template_weights), name="doubled")
+    assert reward_spread(doubled) == pytest.approx(2 * reward_spread(REWARD), rel=1e-4)
+    hmap = flat_map()
+    path = BodyPath.straight((0.3, 0.0), (0.8, 0.0))
+    config = FootstepConfig(bias_weight=60.0)
+    default = FootstepPlanner(hmap, lambda leg: default_reward(), path, config=config)
+    assert default.bias_ == {leg: 60.0 for leg in LEG_NAMES}  # the default's own units, exactly
+    scaled = FootstepPlanner(hmap, lambda leg: doubled, path, config=config)
+    assert scaled.bias_ == pytest.approx({leg: 120.0 for leg in LEG_NAMES}, rel=1e-4)

@@ -447,6 +447,28 @@ def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
     _emit(as_json, summary, f"wrote {Path(out) / 'report.md'}")
 
 
+@cli.command()
+@click.option("--out", "out", default="out/reproduce", show_default=True, help="Report folder "
+              "(and the store of every run; run again with the same arguments to resume).")
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True)
+@click.option("--quick", is_flag=True, help="A small version (a few minutes) for a smoke test.")
+@click.option("--processes", type=click.IntRange(min=1), default=None,
+              help="Parallel runs [default: the available cores].")
+@json_option
+def reproduce(out: str, seed: int, quick: bool, processes: int | None, as_json: bool) -> None:
+    """The paper's walking experiment end to end: corrections, learning, Tables I and II."""
+    from footfall.reproduce import ReproduceConfig, run_reproduction
+
+    config = ReproduceConfig.quick(seed) if quick else ReproduceConfig(seed=seed)
+    log = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
+    results = run_reproduction(Path(out), config, processes=processes, log=log)
+    t2 = results["table2"]
+    _emit(as_json, results, "\n".join(
+        [f"{k}: {v['successes']} / {v['runs']} succeeded, slip "
+         + ("-" if v["slip_mean_mm"] is None else f"{v['slip_mean_mm']:.1f} +- {v['slip_std_mm']:.1f} mm")
+         for k, v in t2.items()] + [f"wrote {Path(out) / 'report.md'} and report.html"]))
+
+
 @bench.command("sim")
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True)
 @json_option

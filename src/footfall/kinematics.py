@@ -13,6 +13,8 @@ and the roll rotates the plane about the hip's x axis.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from footfall.robot import Leg, RobotDescription
@@ -80,30 +82,41 @@ def inverse_kinematics(leg: Leg, foot: np.ndarray, robot: RobotDescription
     (..., 3) (NaN where no solution exists) and ``ok`` (...) true where the
     point is in the workspace and every joint is within its limits.
     """
+    # The low-level controller calls this for 4 points at 100 Hz, where NumPy's per-call overhead
+    # is the whole cost: the angles are written into one preallocated array, and clipping and
+    # stacking wrappers are avoided (the arithmetic is the same, operation for operation).
     p = np.asarray(foot, dtype=np.float64) - np.asarray(leg.hip)
     px, py, pz = p[..., 0], p[..., 1], p[..., 2]
     l1, l2, d = robot.upper_leg, robot.lower_leg, robot.hip_offset
     rho2 = py * py + pz * pz - d * d
     in_plane = rho2 >= 0
     zp = -np.sqrt(np.where(in_plane, rho2, np.nan))
+    q = np.empty(p.shape)
     q1 = np.arctan2(pz, py) - np.arctan2(zp, leg.side * d)
-    q1 = (q1 + np.pi) % (2 * np.pi) - np.pi
+    q[..., 0] = (q1 + np.pi) % (2 * np.pi) - np.pi
     r2 = px * px + zp * zp
     c3 = (r2 - l1 * l1 - l2 * l2) / (2 * l1 * l2)
     reach = np.abs(c3) <= 1.0
     q3 = np.arccos(np.where(reach, c3, np.nan)) * (1.0 if leg.knee_forward else -1.0)
+    q[..., 2] = q3
     q2 = np.arctan2(-px, -zp) - np.arctan2(l2 * np.sin(q3), l1 + l2 * np.cos(q3))
-    q2 = (q2 + np.pi) % (2 * np.pi) - np.pi
-    q = np.stack([q1, q2, q3], axis=-1)
+    q[..., 1] = (q2 + np.pi) % (2 * np.pi) - np.pi
     ok = in_plane & reach & within_limits(leg, q)
     return q, ok
+
+
+@lru_cache(maxsize=64)
+def _limit_arrays(limits: tuple[tuple[float, float], ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper joint limits (3,) [rad] of a leg's limits, made once per distinct leg."""
+    lo, hi = np.array(limits, dtype=np.float64).T.copy()
+    lo.flags.writeable = hi.flags.writeable = False  # shared between callers
+    return lo, hi
 
 
 def within_limits(leg: Leg, q: np.ndarray) -> np.ndarray:
     """Whether joint angles [rad] (..., 3) are all within the leg's limits (NaN: false)."""
     q = np.asarray(q, dtype=np.float64)
-    lo = np.array([lim[0] for lim in leg.limits])
-    hi = np.array([lim[1] for lim in leg.limits])
+    lo, hi = _limit_arrays(leg.limits)
     with np.errstate(invalid="ignore"):
         return np.all((q >= lo) & (q <= hi), axis=-1)
 

@@ -28,7 +28,7 @@ from footfall.expert import SyntheticExpert
 from footfall.fileio import write_text_atomic
 from footfall.learning import LEARNERS
 from footfall.model import FootholdModel
-from footfall.plots.maps import save_score_maps, save_template_figure
+from footfall.plots.maps import save_kept_templates, save_score_maps
 from footfall.plots.relief import save_relief
 from footfall.scoring import score_grid
 from footfall.store import DemoStore
@@ -193,33 +193,8 @@ def _figures(out: Path, models: dict, maps: dict, splits: dict, config: OfflineC
         save_score_maps(grids, titles, ["reward"] * len(grids), out / "reward-maps.png")
     for fs in ("both", "templates"):
         model = models.get((fs, "l1"))
-        if model is None:
-            continue
-        f = model.functions["front"]
-        if f.library is None or max(f.library.counts) == 0:
-            continue
-        w = dict(zip(f.names, f.coef))
-        rows, titles = [], []
-        for rank in range(min(3, max(f.library.counts))):
-            row = []
-            for s, names in enumerate(_by_scale(f.library)):
-                if rank < len(names):
-                    order = np.argsort([-abs(w[n]) for n in names])
-                    row.append(f.library.templates[s][order[rank]])
-                else:  # fewer templates kept on this scale: an empty (NaN) panel
-                    row.append(np.full(model.config.grids[s].size, np.nan))
-            rows.append(row)
-            titles.append(f"#{rank + 1} by |weight|")
-        save_template_figure(rows, model.config.grids, titles, model.config.scale_names,
-                             out / f"templates-{fs}.png")
-
-
-def _by_scale(library) -> list[list[str]]:
-    names, out, start = list(library.names()), [], 0
-    for c in library.counts:
-        out.append(names[start:start + c])
-        start += c
-    return out
+        if model is not None:
+            save_kept_templates(model, out / f"templates-{fs}.png")
 
 
 def _report(s: dict) -> str:

@@ -699,8 +699,14 @@ class DemoStore:
                 "first_id": first, "last_id": last, "runs": n_runs}
 
     # ------------------------------------------------------------------- runs
-    def add_run(self, run: RunRecord, terrains: Iterable[HeightMap] = ()) -> int:
+    def add_run(self, run: RunRecord, terrains: Iterable[HeightMap] = (),
+                demonstrations: Iterable[Demonstration] = ()) -> int:
         """Store a whole run with all its steps in ONE transaction; return its id.
+
+        ``demonstrations`` made from the run (an expert's corrections of it)
+        go into the same transaction: a run is never stored without them,
+        so an interrupted experiment that finds the run stored knows its
+        corrections are too.
 
         Parameters
         ----------
@@ -709,6 +715,9 @@ class DemoStore:
             ``terrains`` (added in the same transaction).
         terrains : iterable of HeightMap
             Terrains to add first.
+        demonstrations : iterable of Demonstration
+            Demonstrations to add with the run (their terrains must be stored
+            or among ``terrains``).
 
         Raises
         ------
@@ -719,6 +728,10 @@ class DemoStore:
         if not isinstance(run, RunRecord):
             raise FootfallError(f"expected a RunRecord, got {type(run).__name__}")
         terrains = list(terrains)
+        demos = list(demonstrations)
+        for d in demos:
+            if not isinstance(d, Demonstration):
+                raise FootfallError(f"expected a Demonstration, got {type(d).__name__}")
         with self._errors(), self._write() as con:
             for hmap in terrains:
                 self._insert_terrain(con, hmap)
@@ -746,6 +759,8 @@ class DemoStore:
                   None if math.isnan(st.t_touchdown) else float(st.t_touchdown),
                   *_encode(st.touchdown), None if math.isnan(st.slip) else float(st.slip))
                  for st in run.steps])
+            for d in demos:
+                self._insert_demonstration(con, d)
         return run_id
 
     def runs(self, key_prefix: str | None = None) -> list[dict[str, Any]]:

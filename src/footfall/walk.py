@@ -63,6 +63,8 @@ from footfall.sim.simulation import PerturbationConfig, Simulation
 from footfall.state import RobotState, nominal_state
 
 RewardFor = Callable[[str], LinearReward]
+_OTHER_LEGS = np.array([[j for j in range(4) if j != k] for k in range(4)])  # stance legs while
+# leg k swings, in order (an index array: np.delete's overhead counts at 100 Hz)
 SNAPSHOT_PERIOD = 0.5  # [s] of simulated time between candidate snapshot frames
 WALL_CLOCK_FIELDS = ("planning_ms_per_step", "wall_seconds", "setup_seconds", "real_time_factor")
 # result fields that measure the computer, not the run (they differ between identical runs)
@@ -264,7 +266,7 @@ class Walk:
         self._pose = mpos, mrpy = sim.body_pose()
         if swing is not None:
             self._com.append(sim.centre_of_mass()[:2])
-            self._support.append(np.delete(sim.foot_positions()[:, :2], swing, axis=0))
+            self._support.append(sim.foot_positions()[_OTHER_LEGS[swing], :2])
         if abs(mrpy[0]) > cfg.fall_tilt or abs(mrpy[1]) > cfg.fall_tilt:
             raise _Failure("fall: trunk tilted")
         if sim.trunk_touches_terrain():
@@ -457,7 +459,9 @@ class Walk:
                 pick = np.unique(np.linspace(0, len(kept) - 1,
                                              self.frames.snapshot_count).round().astype(int))
                 self.frames.snapshots = [kept[i] for i in pick]
-        run_steps = tuple(RunStep(s["k"], s["state"], s["plan"].candidates,
+        # Each step is logged with the state its candidates were computed for (the body as
+        # predicted at touch-down), so that the expert and the learner judge F as the planner did.
+        run_steps = tuple(RunStep(s["k"], s["plan"].state, s["plan"].candidates,
                                   np.nan_to_num(s["plan"].reward, nan=-np.inf), s["plan"].index,
                                   s["t_liftoff"] if np.isfinite(s["t_liftoff"]) else sim_time,
                                   s["t_touchdown"], s["touchdown"], s["slip"])

@@ -15,23 +15,27 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
 from footfall.candidates import lattice, reachable_footholds
 from footfall.control.body_path import BodyPath, RewardFor, grid_spacing, grid_values, \
-    terrain_grids
+    reward_unit, terrain_grids
 from footfall.errors import FootfallError
 from footfall.heightmap import HeightMap
 from footfall.kinematics import inverse_kinematics, world_to_body
 from footfall.patches import foothold_patches
 from footfall.pose_features import pose_features
 from footfall.robot import LEG_NAMES, LITTLEDOG, RobotDescription
-from footfall.scoring import ScoreGrid
+from footfall.reward import LinearReward, default_reward
+from footfall.scoring import ScoreGrid, score_grid
 from footfall.state import RobotState
 from footfall.walker import DEFAULT_STRIDE
 
 GRID_YAW = 0.0  # [rad] heading the planner's dense reward grids are computed for (+x)
+REFERENCE_MODULE = ("rocky", 0.5, 0)  # kind, difficulty, seed of the terrain module on which a
+# reward's spread is measured (see reward_spread): rough enough that every feature varies
 
 
 class NoFootholdError(FootfallError):
@@ -47,7 +51,10 @@ class FootstepConfig:
     foot_lead: float | None = None  # [m] path distance from touch-down to the body pose whose
     # default stance is the path-nominal foothold; None: half a stride (2 * step_advance), the
     # middle of the foot's stance, so that it stands as far ahead as behind its hip
-    bias_weight: float = 30.0  # [reward/m] reward lost per metre from the path-nominal position
+    bias_weight: float = 30.0  # [reward/m] reward lost per metre from the path-nominal position,
+    # in units of the hand-tuned default reward; any other reward's bias is scaled by its spread
+    # relative to the default's (see reward_spread), so a learned reward, whose units are
+    # arbitrary (logits of preference), trades terrain against the path as the default does
     spacing: float = 0.005  # [m] candidate lattice spacing (and of the reward grids)
     beam_width: int = 2  # [-] best first steps compared by rolling out the look-ahead
     root_separation: float = 0.02  # [m] the first steps compared lie at least this far apart (3-D:
@@ -107,11 +114,29 @@ class FootstepPlan:
     body_xy: np.ndarray  # (m, 2) [m] predicted body position at each planned touch-down
     body_yaw: np.ndarray  # (m,) [rad] predicted body heading at each planned touch-down
     targets: np.ndarray  # (m, 2) [m] path-nominal position of each planned foothold
+    state: RobotState | None = None  # the state F was computed for: the feet as they stand, the
+    # body as predicted at this step's touch-down (every candidate is reachable from it)
 
     @property
     def steps(self) -> list[tuple[str, np.ndarray]]:
         """The planned steps as (leg, foothold (3,)) pairs, this one first."""
         return list(zip(self.legs, self.footholds))
+
+
+def _same_reward(a: LinearReward, b: LinearReward) -> bool:
+    """Whether two rewards have the same weights and templates (the default is rebuilt per call)."""
+    if a is b:
+        return True
+    if a.name != b.name or a.config != b.config or (a.library is None) != (b.library is None):
+        return False
+    same = (np.array_equal(a.terrain_weights, b.terrain_weights)
+            and np.array_equal(a.pose_weights, b.pose_weights)
+            and len(a.template_weights) == len(b.template_weights)
+            and all(np.array_equal(x, y) for x, y in zip(a.template_weights, b.template_weights))
+            and a.bandwidths == b.bandwidths)
+    if same and a.library is not None:
+        same = all(np.array_equal(x, y) for x, y in zip(a.library.templates, b.library.templates))
+    return same
 
 
 def _wrap(angle: float) -> float:
@@ -130,6 +155,24 @@ def _diverse_best(score: np.ndarray, points: np.ndarray, count: int, separation:
         free &= np.sum((points[ranked] - points[ranked[k]]) ** 2, axis=1) >= separation ** 2
         free[k] = False
     return np.array(chosen, dtype=np.int64)
+
+
+@lru_cache(maxsize=1)
+def _reference_module() -> HeightMap:
+    from footfall.terrain import make_module
+
+    return make_module(*REFERENCE_MODULE)
+
+
+def reward_spread(reward: LinearReward) -> float:
+    """The spread of a reward's terrain part: its standard deviation over the reference module.
+
+    Scored densely (5 mm lattice, heading +x) over :data:`REFERENCE_MODULE`;
+    the unit in which a reward's differences are comparable to another's
+    (see :func:`footfall.control.body_path.reward_unit`).
+    """
+    grid = score_grid(_reference_module(), reward, spacing=0.005, yaw=GRID_YAW)
+    return reward_unit([np.asarray(grid.reward)[np.asarray(grid.valid)]])
 
 
 class FootstepPlanner:
@@ -173,6 +216,20 @@ class FootstepPlanner:
                                     f"{config.spacing} m")
         self.grids_ = dict(grids)
         self._posed = {name: bool(np.any(r.pose_weights != 0)) for name, r in self.rewards_.items()}
+        self.bias_ = self._bias_weights()
+
+    def _bias_weights(self) -> dict[str, float]:
+        """Path bias [reward/m] per leg: ``bias_weight`` scaled to each reward's spread."""
+        default = default_reward(self.rewards_[LEG_NAMES[0]].config)
+        if all(_same_reward(r, default) for r in self.rewards_.values()):
+            return {name: self.config.bias_weight for name in LEG_NAMES}
+        spread: dict[int, float] = {}
+        for r in self.rewards_.values():  # two functions for a model (front, hind), one otherwise
+            if id(r) not in spread:
+                spread[id(r)] = reward_spread(r)
+        ref = reward_spread(default)
+        return {name: self.config.bias_weight * spread[id(r)] / ref
+                for name, r in self.rewards_.items()}
 
     # -------------------------------------------------------------- pieces
     def _terrain(self, leg: str, footholds: np.ndarray, yaw: float) -> np.ndarray:
@@ -296,7 +353,7 @@ class FootstepPlanner:
         if cand.shape[0] == 0:
             raise NoFootholdError(f"leg {leg0} has no candidate foothold at body "
                                   f"({body_xy[0, 0]:.3f}, {body_xy[0, 1]:.3f}) m")
-        bias = cfg.bias_weight * np.linalg.norm(cand[:, :2] - targets[0], axis=1)
+        bias = self.bias_[leg0] * np.linalg.norm(cand[:, :2] - targets[0], axis=1)
         reward = terrain
         if self._posed[leg0]:
             short = np.arange(cand.shape[0])
@@ -326,7 +383,7 @@ class FootstepPlanner:
             near, t = near[np.isfinite(t)], t[np.isfinite(t)]
             if near.shape[0] == 0:
                 break
-            t = t - cfg.bias_weight * np.linalg.norm(near[:, :2] - targets[k], axis=1)
+            t = t - self.bias_[leg] * np.linalg.norm(near[:, :2] - targets[k], axis=1)
             if self._posed[leg]:
                 top = np.argsort(-t, kind="stable")[:cfg.lookahead_candidates]
                 near, t = near[top], t[top]
@@ -351,4 +408,4 @@ class FootstepPlanner:
             leg=leg0, index=index, foothold=cand[index].copy(), candidates=cand, reward=reward,
             total=total, value=values, legs=tuple(legs[:m]),
             footholds=np.array([c_[best] for c_ in chosen]), body_xy=body_xy[:m],
-            body_yaw=body_yaw[:m], targets=targets[:m])
+            body_yaw=body_yaw[:m], targets=targets[:m], state=st0)

@@ -99,3 +99,33 @@ def save_template_figure(patches: Sequence[Sequence[np.ndarray]], grids: Sequenc
         fig.colorbar(image, ax=axes, label="height relative to foothold [mm]", shrink=0.8)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=DPI)
+
+
+def save_kept_templates(model, path: str | os.PathLike, group: str = "front", rows: int = 3) -> bool:
+    """Draw a model's kept templates with the largest weights, on each of the three scales.
+
+    Row r shows, per scale, the template of rank r by |weight| among the kept
+    ones of the ``group`` legs' ranking function (an empty panel where a scale
+    kept fewer). Returns False (and writes nothing) if no template was kept.
+    """
+    f = model.functions[group]
+    if f.library is None or max(f.library.counts, default=0) == 0:
+        return False
+    w = dict(zip(f.names, f.coef))
+    names, by_scale, start = list(f.library.names()), [], 0
+    for c in f.library.counts:
+        by_scale.append(names[start:start + c])
+        start += c
+    patches, titles = [], []
+    for rank in range(min(rows, max(f.library.counts))):
+        row = []
+        for s, scale_names in enumerate(by_scale):
+            if rank < len(scale_names):
+                order = np.argsort([-abs(w[n]) for n in scale_names], kind="stable")
+                row.append(f.library.templates[s][order[rank]])
+            else:  # fewer templates kept on this scale: an empty (NaN) panel
+                row.append(np.full(model.config.grids[s].size, np.nan))
+        patches.append(row)
+        titles.append(f"#{rank + 1} by |weight|")
+    save_template_figure(patches, model.config.grids, titles, model.config.scale_names, path)
+    return True

@@ -419,7 +419,8 @@ class Simulation:
 
     def trunk_touches_terrain(self) -> bool:
         """Whether the trunk box touches the terrain (a fall, in a walking run)."""
-        return bool(self._touching()[self._trunk_geom])
+        # (checked every control period: no per-geom table as in _touching)
+        return bool((self.data.contact.geom[:self.data.ncon] == self._trunk_geom).any())
 
     # --------------------------------------------------------------- rendering
     def render(self, camera: str = "track", width: int = 640, height: int = 480) -> np.ndarray:

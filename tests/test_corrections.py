@@ -1,0 +1,83 @@
+"""Expert corrections of run logs: exactly the steps that fall short by the margin become demonstrations."""
+
+import numpy as np
+import pytest
+
+from footfall.corrections import corrections_to_demonstrations, inspect_run, source_of
+from footfall.errors import FootfallError
+from footfall.reproduce import _worst
+from footfall.runlog import RunRecord, RunStep
+from footfall.state import nominal_state
+from footfall.store import DemoStore
+
+from test_store import terrain
+
+
+class TableExpert:
+    """An expert whose values are a table: candidate x coordinate [m] * 100 (1 unit per cm)."""
+
+    config = None
+
+    def values(self, hmap, state, candidates):
+        return 100.0 * np.asarray(candidates)[:, 0]
+
+    def choose(self, hmap, state, candidates, rng):
+        return int(np.argmax(self.values(hmap, state, candidates)))
+
+
+def _run(hm, chosen_x):
+    """A run whose step k chose the candidate at x = chosen_x[k] of five at x = 0.30 ... 0.34 m."""
+    xs = np.linspace(0.30, 0.34, 5)
+    cand = np.column_stack([xs, np.zeros(5), np.zeros(5)])
+    steps = []
+    for k, x in enumerate(chosen_x):
+        state = nominal_state(hm, (0.2, 0.0), 0.0, ("LH", "LF", "RH", "RF")[k % 4])
+        steps.append(RunStep(k, state, cand, np.zeros(5), int(np.argmin(abs(xs - x))), 0.1 * k))
+    return RunRecord(hm.content_hash(), 0, {}, {"success": True}, tuple(steps))
+
+
+def test_corrects_exactly_the_steps_short_of_the_experts_best_by_more_than_the_margin():
+    hm = terrain()
+    # shortfalls in expert units (1 cm each step of x): 4, 0, 1, 3, 2
+    run = _run(hm, [0.30, 0.34, 0.33, 0.31, 0.32])
+    verdicts = inspect_run(run, hm, TableExpert(), margin=1.5)
+    assert [v.shortfall for v in verdicts] == pytest.approx([4, 0, 1, 3, 2])
+    assert [v.k for v in verdicts if v.label is not None] == [0, 3, 4]
+    assert all(v.label == 4 for v in verdicts if v.label is not None)  # the expert's best
+    # A shortfall equal to the margin is not a mistake.
+    assert [v.k for v in inspect_run(run, hm, TableExpert(), margin=2.0)
+            if v.label is not None] == [0, 3]
+    demos = corrections_to_demonstrations(run, "correct/r0/train00", verdicts, TableExpert())
+    assert [d.source for d in demos] == [source_of("correct/r0/train00", k) for k in (0, 3, 4)]
+    assert [d.chosen for d in demos] == [4, 4, 4]
+    assert all(np.array_equal(d.candidates, run.steps[0].candidates) for d in demos)
+
+
+def test_a_capped_expert_labels_the_worst_mistakes_of_a_run():
+    hm = terrain()
+    run = _run(hm, [0.30, 0.34, 0.33, 0.31, 0.32])
+    verdicts = _worst(inspect_run(run, hm, TableExpert(), margin=1.5), 1.5, cap=2)
+    assert [v.k for v in verdicts if v.label is not None] == [0, 3]  # shortfalls 4 and 3
+
+
+def test_run_and_its_corrections_are_stored_in_one_transaction(tmp_path):
+    hm = terrain()
+    run = _run(hm, [0.30, 0.34])
+    demos = corrections_to_demonstrations(run, "k", inspect_run(run, hm, TableExpert(), 0.5),
+                                          TableExpert())
+    with DemoStore(tmp_path / "s.sqlite", create=True) as store:
+        store.add_run(RunRecord(run.terrain_hash, 0, {}, run.result, run.steps, key="k"),
+                      terrains=[hm], demonstrations=demos)
+        with pytest.raises(FootfallError, match="already in the store"):
+            store.add_run(RunRecord(run.terrain_hash, 0, {}, run.result, run.steps, key="k"),
+                          demonstrations=demos)
+        assert [d.source for d in store.demonstrations()] == ["run:k:step:0"]  # nothing doubled
+
+
+def test_bad_margin_and_another_terrain_are_refused():
+    hm = terrain()
+    run = _run(hm, [0.30])
+    with pytest.raises(FootfallError, match="margin"):
+        inspect_run(run, hm, TableExpert(), margin=-1.0)
+    with pytest.raises(FootfallError, match="another terrain"):
+        inspect_run(run, terrain(seed=1), TableExpert())

@@ -1,0 +1,80 @@
+"""The reproduction resumes after an interruption without repeating or losing anything."""
+
+import json
+
+import pytest
+
+from footfall.errors import FootfallError
+from footfall.reproduce import ReproduceConfig, run_reproduction
+from footfall.store import DemoStore
+from footfall.walk import WALL_CLOCK_FIELDS, WalkConfig
+
+TINY = ReproduceConfig(
+    train_boards=((("rocky", 0.5),),), test_board=(("rocky", 0.6),), sweep_difficulties=(),
+    rounds=2, target_demos=1000, corrections_per_run=None, margin=2.0, library_size=30,
+    training_candidates=20, cv=2, final_bandwidth_rms=0.004, eval_runs=2, offline_demos=4,
+    walk=WalkConfig(max_steps=8))  # eight steps a run: small, but every stage runs
+
+
+def _stored(out):
+    with DemoStore(out / "reproduce.sqlite") as store:
+        runs = {r["key"]: {k: v for k, v in r["result"].items() if k not in WALL_CLOCK_FIELDS}
+                for r in store.runs()}  # what the runs did, not how fast this computer was
+        demos = sorted((d.source, d.chosen) for d in store.demonstrations())
+    return runs, demos
+
+
+def _results(out):
+    r = json.loads((out / "results.json").read_text())
+    r.pop("seconds_this_session")
+    return r
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    out = tmp_path_factory.mktemp("whole")
+    run_reproduction(out, TINY, processes=1, log=lambda s: None)
+    return out
+
+
+def test_resuming_after_an_interruption_repeats_nothing_and_loses_nothing(uninterrupted, tmp_path):
+    first: list[str] = []
+
+    def stop_after_three(key: str) -> None:
+        first.append(key)
+        if len(first) == 3:  # mid-way: after the corrections, before the evaluation is done
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_reproduction(tmp_path, TINY, processes=1, log=lambda s: None, on_run=stop_after_three)
+    assert not (tmp_path / "report.md").exists()
+    kept, _ = _stored(tmp_path)
+    assert sorted(kept) == sorted(first)  # every finished run was kept
+
+    second: list[str] = []
+    run_reproduction(tmp_path, TINY, processes=1, log=lambda s: None, on_run=second.append)
+    assert not set(first) & set(second)  # nothing repeated
+    assert _stored(tmp_path) == _stored(uninterrupted)  # nothing lost, the same runs and labels
+    assert _results(tmp_path) == _results(uninterrupted)
+    for name in ("report.md", "report.html", "crossing.png", "models/both.npz"):
+        assert (tmp_path / name).exists()
+    html = (tmp_path / "report.html").read_text()
+    assert "<table>" in html and "data:image/png;base64," in html and 'src="' not in html.replace(
+        'src="data:', "")  # self-contained: every picture embedded
+
+
+def test_the_reproduction_has_every_table(uninterrupted):
+    r = _results(uninterrupted)
+    assert set(r["table2"]) == {"terrain", "templates", "both", "flat"}
+    assert all(t["runs"] == TINY.eval_runs for t in r["table2"].values())
+    assert set(r["table1"]) == {"templates", "both"}
+    assert r["demonstrations"]["n"] > 0
+    assert set(r["ranking"]) == {"terrain", "templates", "both"}
+    md = (uninterrupted / "report.md").read_text()
+    assert "Table I" in md and "Table II" in md and "Wilson" in md
+
+
+def test_another_configuration_in_the_same_folder_is_refused(uninterrupted):
+    with pytest.raises(FootfallError, match="other settings"):
+        run_reproduction(uninterrupted, ReproduceConfig.quick(seed=1), processes=1,
+                         log=lambda s: None)

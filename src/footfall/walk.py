@@ -291,7 +291,7 @@ class Walk:
         tp = time.perf_counter()
         feet = sim.foot_positions() - self._lift  # where the feet stand now: contact points
         state = RobotState(feet, *self._pose, leg, self.goal)
-        record = {"k": k, "state": state, "plan": None, "t_liftoff": math.nan,
+        record = {"k": k, "plan": None, "t_liftoff": math.nan,
                   "t_touchdown": math.nan, "touchdown": np.full(3, np.nan), "slip": math.nan}
         try:
             plan = self.planner.plan(state)

@@ -42,14 +42,13 @@ from multiprocessing import get_context
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
 
 from footfall.dataset import FEATURE_SETS
 from footfall.errors import FootfallError
 from footfall.heightmap import HeightMap
 from footfall.model import FootholdModel
 from footfall.runlog import RunRecord
-from footfall.runs import RunSummary, summarise, workers
+from footfall.runs import summarise, workers
 from footfall.store import DemoStore
 from footfall.terrain import make_board
 from footfall.walk import WalkConfig
@@ -152,7 +151,6 @@ class _Job:
     correct: bool = False  # the expert inspects the run
     margin: float = 0.0
     cap: int | None = None
-    with_snapshots: bool = False
 
 
 def _execute(job: _Job) -> tuple[RunRecord, list]:
@@ -329,7 +327,7 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = Reproduce
                 f"{len(demos)} corrections so far")
             if len(demos) >= config.target_demos or r == config.rounds - 1:
                 break
-            model = _learn(out / "models" / f"round{r + 1}.npz", demos, by_hash,
+            _learn(out / "models" / f"round{r + 1}.npz", demos, by_hash,
                            ROBOT_FEATURE_SET, config, config.round_bandwidth_rms, log)
             model_path = str(out / "models" / f"round{r + 1}.npz")
         results["rounds"] = rounds
@@ -421,10 +419,3 @@ def _ranking(store: DemoStore, test: HeightMap, models: dict, config: ReproduceC
     terrain = {test.content_hash(): test}.__getitem__
     values = expert_values(demos, terrain, expert)
     return {fs: rank_scores(m, demos, terrain, values=values).as_dict() for fs, m in models.items()}
-
-
-def summary_rows(results: dict) -> list[tuple[str, RunSummary | dict]]:
-    """Table II's rows in the paper's order."""
-    names = {"terrain": "Features only", "templates": "Templates only",
-             "both": "Templates + Features", "flat": "Baseline (flat terrain)"}
-    return [(names[k], results["table2"][k]) for k in ("terrain", "templates", "both", "flat")]

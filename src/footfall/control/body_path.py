@@ -78,7 +78,7 @@ class BodyPathConfig:
 
 
 # ------------------------------------------------------------ reward grids
-def _reward_key(reward: LinearReward) -> str:
+def reward_key(reward: LinearReward) -> str:
     """Digest of everything that sets a reward's terrain part (pose weights excluded)."""
     digest = hashlib.sha256(repr(reward.config.to_dict()).encode())
     digest.update(np.ascontiguousarray(reward.terrain_weights).tobytes())
@@ -119,7 +119,7 @@ def terrain_grids(hmap: HeightMap, reward_for: RewardFor, robot: RobotDescriptio
             raise FootfallError(f"reward_for({name!r}) must return a LinearReward, "
                                 f"got {type(reward).__name__}")
         mirror = robot.leg(name).mirrored
-        key = (_reward_key(reward), mirror)
+        key = (reward_key(reward), mirror)
         if key not in cache:
             cache[key] = score_grid(hmap, reward, spacing=spacing, yaw=yaw, mirror=mirror)
         out[name] = cache[key]

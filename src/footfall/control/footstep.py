@@ -21,7 +21,7 @@ import numpy as np
 
 from footfall.candidates import lattice, reachable_footholds
 from footfall.control.body_path import BodyPath, RewardFor, grid_spacing, grid_values, \
-    reward_unit, terrain_grids
+    reward_key, reward_unit, terrain_grids
 from footfall.errors import FootfallError
 from footfall.heightmap import HeightMap
 from footfall.kinematics import inverse_kinematics, world_to_body
@@ -123,22 +123,6 @@ class FootstepPlan:
         return list(zip(self.legs, self.footholds))
 
 
-def _same_reward(a: LinearReward, b: LinearReward) -> bool:
-    """Whether two rewards have the same weights and templates (the default is rebuilt per call)."""
-    if a is b:
-        return True
-    if a.name != b.name or a.config != b.config or (a.library is None) != (b.library is None):
-        return False
-    same = (np.array_equal(a.terrain_weights, b.terrain_weights)
-            and np.array_equal(a.pose_weights, b.pose_weights)
-            and len(a.template_weights) == len(b.template_weights)
-            and all(np.array_equal(x, y) for x, y in zip(a.template_weights, b.template_weights))
-            and a.bandwidths == b.bandwidths)
-    if same and a.library is not None:
-        same = all(np.array_equal(x, y) for x, y in zip(a.library.templates, b.library.templates))
-    return same
-
-
 def _wrap(angle: float) -> float:
     return (angle + math.pi) % (2 * math.pi) - math.pi
 
@@ -169,10 +153,17 @@ def reward_spread(reward: LinearReward) -> float:
 
     Scored densely (5 mm lattice, heading +x) over :data:`REFERENCE_MODULE`;
     the unit in which a reward's differences are comparable to another's
-    (see :func:`footfall.control.body_path.reward_unit`).
+    (see :func:`footfall.control.body_path.reward_unit`). Cached by the
+    reward's content, so equal rewards get the very same number.
     """
-    grid = score_grid(_reference_module(), reward, spacing=0.005, yaw=GRID_YAW)
-    return reward_unit([np.asarray(grid.reward)[np.asarray(grid.valid)]])
+    key = reward_key(reward)
+    if key not in _SPREADS:
+        grid = score_grid(_reference_module(), reward, spacing=0.005, yaw=GRID_YAW)
+        _SPREADS[key] = reward_unit([np.asarray(grid.reward)[np.asarray(grid.valid)]])
+    return _SPREADS[key]
+
+
+_SPREADS: dict[str, float] = {}  # reward content digest -> spread (a few rewards per process)
 
 
 class FootstepPlanner:
@@ -219,16 +210,13 @@ class FootstepPlanner:
         self.bias_ = self._bias_weights()
 
     def _bias_weights(self) -> dict[str, float]:
-        """Path bias [reward/m] per leg: ``bias_weight`` scaled to each reward's spread."""
-        default = default_reward(self.rewards_[LEG_NAMES[0]].config)
-        if all(_same_reward(r, default) for r in self.rewards_.values()):
-            return {name: self.config.bias_weight for name in LEG_NAMES}
-        spread: dict[int, float] = {}
-        for r in self.rewards_.values():  # two functions for a model (front, hind), one otherwise
-            if id(r) not in spread:
-                spread[id(r)] = reward_spread(r)
-        ref = reward_spread(default)
-        return {name: self.config.bias_weight * spread[id(r)] / ref
+        """Path bias [reward/m] per leg: ``bias_weight`` scaled to each reward's spread.
+
+        The default reward's own ratio is exactly 1 (the same cached spread), so
+        its bias is ``bias_weight`` to the last bit.
+        """
+        ref = reward_spread(default_reward(self.rewards_[LEG_NAMES[0]].config))
+        return {name: self.config.bias_weight * (reward_spread(r) / ref)
                 for name, r in self.rewards_.items()}
 
     # -------------------------------------------------------------- pieces

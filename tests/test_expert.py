@@ -8,7 +8,7 @@ import pytest
 from footfall.candidates import reachable_footholds
 from footfall.errors import FootfallError
 from footfall.expert import EXPERT_TERM_NAMES, EXPERT_TERMS, ExpertConfig, SyntheticExpert, \
-    _sphere_surface
+    _sphere_surface, walking_expert
 from footfall.heightmap import HeightMap
 from footfall.kinematics import body_to_world, inverse_kinematics, knee_position, world_to_body
 from footfall.robot import LITTLEDOG
@@ -273,3 +273,25 @@ def test_on_rocky_terrain_the_terrain_changes_the_choice():
         assert terrain[i] > terrain[i_pose] or i == i_pose
     assert differs_from_progress == len(cases)
     assert differs_from_pose >= len(cases) // 2
+
+
+def test_walking_expert_wants_the_foot_at_the_gait_nominal_position_on_flat_ground():
+    """With w_stance the expert's best on flat ground is the leg's default stance, stance_lead ahead."""
+    lead = 0.05
+    walking = SyntheticExpert(walking_expert(lead))
+    assert walking.config.w_stance == 100.0 and walking.config.w_progress == 0.0
+    cand = reachable_footholds(FLAT, STATE)
+    terms = walking.terms(FLAT, STATE, cand)
+    c, s = math.cos(STATE.yaw), math.sin(STATE.yaw)
+    nominal = np.asarray(LITTLEDOG.nominal_foot(STATE.swing_leg)[:2]) + (lead, 0.0)
+    target = STATE.body_position[:2] + np.array([c * nominal[0] - s * nominal[1],
+                                                 s * nominal[0] + c * nominal[1]])
+    np.testing.assert_allclose(terms["stance_offset"],
+                               np.linalg.norm(cand[:, :2] - target, axis=1), atol=1e-12)
+    parts = walking.contributions(FLAT, STATE, cand)
+    np.testing.assert_allclose(parts["stance_offset"], -100.0 * terms["stance_offset"])
+    np.testing.assert_allclose(parts["progress"], 0.0)
+    best = cand[np.argmax(walking.values(FLAT, STATE, cand))]
+    assert np.linalg.norm(best[:2] - target) < 0.011  # within two lattice steps of the target
+    # The default expert (w_stance 0) is unchanged by the term: it still reaches forward.
+    assert np.all(EXPERT.contributions(FLAT, STATE, cand)["stance_offset"] == 0.0)

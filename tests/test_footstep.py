@@ -265,3 +265,28 @@ def test_path_bias_follows_the_rewards_scale():
     assert default.bias_ == {leg: 60.0 for leg in LEG_NAMES}  # the default's own units, exactly
     scaled = FootstepPlanner(hmap, lambda leg: doubled, path, config=config)
     assert scaled.bias_ == pytest.approx({leg: 120.0 for leg in LEG_NAMES}, rel=1e-4)
+
+
+def test_search_radius_keeps_f_near_the_gait_nominal_position_or_falls_back(flat):
+    hmap, grids = flat
+    path = BodyPath.straight((0.2, 0.0), (0.8, 0.0))
+    radius = 0.02
+    near = FootstepPlanner(hmap, lambda leg: REWARD, path, grids=grids,
+                           config=FootstepConfig(search_radius=radius))
+    every = FootstepPlanner(hmap, lambda leg: REWARD, path, grids=grids)
+    (a,), (b,) = walk(near, 0.1, 1), walk(every, 0.1, 1)
+    dist = np.linalg.norm(a.candidates[:, :2] - a.targets[0], axis=1)
+    assert np.all(dist <= radius + 1e-9)
+    assert a.candidates.shape[0] >= 0.9 * np.pi * (radius / 0.005) ** 2  # the whole disc is there
+    assert b.candidates.shape[0] > 3 * a.candidates.shape[0]
+    # No data within the radius of the target: F is every reachable foothold again.
+    h = hmap.heights.copy()
+    tx, ty = a.targets[0]
+    h[np.ix_(np.abs(hmap.x - tx) < 0.03, np.abs(hmap.y - ty) < 0.03)] = np.nan
+    holed = HeightMap(h, hmap.resolution, hmap.origin)
+    (c,) = walk(FootstepPlanner(holed, lambda leg: REWARD, path,
+                                config=FootstepConfig(search_radius=radius)), 0.1, 1)
+    assert np.min(np.linalg.norm(c.candidates[:, :2] - a.targets[0], axis=1)) > radius
+    assert c.candidates.shape[0] > a.candidates.shape[0]
+    with pytest.raises(FootfallError, match="search_radius"):
+        FootstepConfig(search_radius=0.0)

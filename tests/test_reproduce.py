@@ -5,6 +5,7 @@ import json
 import pytest
 
 from footfall.errors import FootfallError
+from footfall.expert import ExpertConfig
 from footfall.reproduce import ReproduceConfig, run_reproduction
 from footfall.store import DemoStore
 from footfall.walk import WALL_CLOCK_FIELDS, WalkConfig
@@ -13,7 +14,9 @@ TINY = ReproduceConfig(
     train_boards=((("rocky", 0.5),),), test_board=(("rocky", 0.6),), sweep_difficulties=(),
     rounds=2, target_demos=1000, corrections_per_run=None, margin=2.0, library_size=30,
     training_candidates=20, cv=2, final_bandwidth_rms=0.004, eval_runs=2, offline_demos=4,
-    walk=WalkConfig(max_steps=8))  # eight steps a run: small, but every stage runs
+    walk=WalkConfig(max_steps=8),  # eight steps a run: small, but every stage runs
+    expert=ExpertConfig())  # the expert who values progress corrects most of eight steps (the
+# walking expert, who wants the foot where this gait puts it, too few of them to learn from)
 
 
 def _stored(out):
@@ -78,3 +81,27 @@ def test_another_configuration_in_the_same_folder_is_refused(uninterrupted):
     with pytest.raises(FootfallError, match="other settings"):
         run_reproduction(uninterrupted, ReproduceConfig.quick(seed=1), processes=1,
                          log=lambda s: None)
+
+
+def test_a_round_learns_only_when_both_leg_groups_have_enough_corrections():
+    from types import SimpleNamespace
+
+    from footfall.reproduce import _short_groups
+
+    demos = [SimpleNamespace(state=SimpleNamespace(swing_leg=leg))
+             for leg in ("LF", "RH", "LH", "RH")]
+    assert _short_groups(demos, 2) == ["front"]
+    assert _short_groups(demos, 1) == []
+    assert _short_groups([], 1) == ["front", "hind"]
+
+
+def test_the_default_reproduction_walks_with_the_walking_expert_and_a_local_f():
+    from footfall.expert import walking_expert
+    from footfall.reproduce import REPRODUCTION_SEARCH_RADIUS
+
+    config = ReproduceConfig()
+    assert config.expert == walking_expert(config.walk.footstep.lead)
+    assert config.expert.w_progress == 0.0 and config.expert.w_stance > 0.0
+    assert config.expert.stance_lead == config.walk.footstep.lead
+    assert config.walk.footstep.search_radius == REPRODUCTION_SEARCH_RADIUS
+    assert WalkConfig().footstep.search_radius is None  # plain walks: every reachable foothold

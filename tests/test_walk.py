@@ -214,3 +214,30 @@ def test_cli_walk_refuses_a_model_for_another_robot(tmp_path, capsys):
     code, _, err = run(capsys, "walk", "--terrain", board, "--model", tmp_path / "model.npz",
                        "--seed", "0")
     assert_user_error(code, err, "trained for robot")
+
+
+def test_the_expert_can_choose_every_foothold_itself():
+    """A judge in place of the reward: every logged candidate value is the expert's own."""
+    from footfall.expert import SyntheticExpert, walking_expert
+
+    board = _short_flat_board()
+    config = WalkConfig(start_setback=0.2, max_steps=3)
+    expert = SyntheticExpert(walking_expert(config.footstep.lead))
+    rec = walk(board, lambda leg: default_reward(), 1, config, judge=expert.values)
+    assert rec.settings["judge"] == "SyntheticExpert.values"
+    assert len(rec.steps) == 3
+    for step in rec.steps:
+        np.testing.assert_allclose(step.rewards, expert.values(board, step.state, step.candidates))
+        # Flat ground: the expert wants the foot at its gait-nominal position (within 1 cm).
+        assert step.rewards[step.chosen] > np.max(step.rewards) - 1.0
+
+
+def test_cli_walk_expert_and_model_together_is_one_line_and_exit_2(tmp_path, capsys):
+    board = tmp_path / "board.npz"
+    _short_flat_board().save(board)
+    code, _, err = run(capsys, "walk", "--terrain", board, "--expert", "--model",
+                       tmp_path / "model.npz", "--seed", "0")
+    assert_user_error(code, err, "--expert chooses the footholds itself")
+    code, _, err = run(capsys, "walk-many", "--terrain", board, "--seed", "0", "--runs", "2",
+                       "--search-radius", "0")
+    assert_user_error(code, err, "search_radius must be > 0")

@@ -499,6 +499,31 @@ def _run_text(result: dict) -> str:
             f"{result['real_time_factor']:.1f}")
 
 
+def _chooser_options(f):
+    """--expert and --search-radius: who chooses the footholds, and among which."""
+    f = click.option("--search-radius", type=float, default=None,
+                     help="Candidate set F of a step: the footholds within this many metres of "
+                          "the gait-nominal position (the reproduction uses 0.03); "
+                          "default: every reachable one.")(f)
+    return click.option("--expert", is_flag=True,
+                        help="The synthetic walking expert chooses every foothold (no --model): "
+                             "what learning from its demonstrations can reach at best.")(f)
+
+
+def _walk_config(model_path: str | None, expert: bool, search_radius: float | None):
+    """The walk settings of the command line, checked."""
+    from dataclasses import replace
+
+    from footfall.walk import WalkConfig
+
+    if expert and model_path is not None:
+        raise FootfallError("--expert chooses the footholds itself: give no --model with it")
+    base = WalkConfig()
+    if search_radius is None:
+        return base
+    return replace(base, footstep=replace(base.footstep, search_radius=search_radius))
+
+
 @cli.command("walk")
 @click.option("--terrain", "terrain_path", required=True, help="Board height map (.npz).")
 @click.option("--model", "model_path", default=None,
@@ -510,16 +535,19 @@ def _run_text(result: dict) -> str:
               help="Frames in the snapshot strip.")
 @click.option("--video", default=None, help="Write a video (.mp4).")
 @click.option("--log", "log_path", default=None, help="Append the run log to this store (.sqlite).")
+@_chooser_options
 @json_option
 def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: str | None,
-             frames: int, video: str | None, log_path: str | None, as_json: bool) -> None:
+             frames: int, video: str | None, log_path: str | None, expert: bool,
+             search_radius: float | None, as_json: bool) -> None:
     """One run of the simulated robot across a board (success, slip, speed)."""
     import os
 
     os.environ.setdefault("MUJOCO_GL", "egl")
-    from footfall.runs import reward_source, save_strip, save_video
+    from footfall.runs import expert_judge, reward_source, save_strip, save_video
     from footfall.walk import Frames, walk
 
+    config = _walk_config(model_path, expert, search_radius)
     hmap = _load_terrain(terrain_path)
     reward_for = reward_source(model_path, hmap)
     for p in (snapshots, video):
@@ -534,8 +562,10 @@ def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: st
     if snapshots or video:
         pictures = Frames(snapshot_count=frames if snapshots else 0,
                           video_fps=25.0 if video else 0.0)
-    record = walk(hmap, reward_for, seed, frames=pictures)
-    data = {"terrain": terrain_path, "model": model_path, "seed": seed, **record.result}
+    record = walk(hmap, reward_for, seed, config, frames=pictures,
+                  judge=expert_judge(config) if expert else None)
+    data = {"terrain": terrain_path, "model": model_path, "expert": expert, "seed": seed,
+            **record.result}
     if snapshots:
         save_strip(pictures.snapshots, snapshots)
     if video:
@@ -554,14 +584,17 @@ def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: st
 @click.option("--seed", type=click.IntRange(min=0), required=True,
               help="Run i has seed SEED + i.")
 @click.option("--log", "log_path", default=None, help="Append every run log to this store.")
+@_chooser_options
 @json_option
 def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: int,
-                  log_path: str | None, as_json: bool) -> None:
+                  log_path: str | None, expert: bool, search_radius: float | None,
+                  as_json: bool) -> None:
     """N runs in parallel processes: success rate (Wilson 95 % CI), slip, speed."""
     from tqdm import tqdm
 
     from footfall.runs import summarise, walk_many
 
+    config = _walk_config(model_path, expert, search_radius)
     hmap = _load_terrain(terrain_path)
     store = None
     if log_path is not None:
@@ -573,12 +606,13 @@ def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: in
             bar.update(1)
             if store is not None:  # each finished run is kept at once
                 store.add_run(record, terrains=[hmap])
-        records = walk_many(terrain_path, model_path, runs, seed, progress=progress)
+        records = walk_many(terrain_path, model_path, runs, seed, config, progress=progress,
+                            expert=expert)
     if store is not None:
         store.close()
     summary = summarise(records)
     d = summary.as_dict()
-    data = {"terrain": terrain_path, "model": model_path, "seed": seed, **d,
+    data = {"terrain": terrain_path, "model": model_path, "expert": expert, "seed": seed, **d,
             "runs_detail": [{"seed": seed + i, **r.result} for i, r in enumerate(records)]}
     slip = ("no successful run" if summary.slip_mean_mm is None else
             f"slip {summary.slip_mean_mm:.1f} +- {summary.slip_std_mm:.1f} mm over "

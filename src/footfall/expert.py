@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import ndimage
@@ -63,6 +63,9 @@ EXPERT_TERMS: dict[str, str] = {
     "unknown": "[-] fraction of map samples without data (NaN or off the map) within "
                "unknown_radius of the foothold, the foothold's own cell included",
     "progress": "[m] advance of the swing foot toward the goal: (f - current foot) . goal direction",
+    "stance_offset": "[m] horizontal distance of the foothold from the leg's gait-nominal "
+                     "position: its default stance position around the body (heading frame), "
+                     "moved stance_lead ahead along the heading",
     "stability": "[m] stability margin: the smaller inradius of the support triangles of the next "
                  "two swings of the crawl gait, with the swing foot at f",
     "reach_margin": "[m] distance of the seated ball centre inside the leg's maximal reach from "
@@ -118,6 +121,11 @@ class ExpertConfig:
     w_unknown: float = 10.0  # [value] penalty for a foothold surrounded by missing data
     # --- utilities of the pose terms
     w_progress: float = 100.0  # [value/m] reward per metre of progress toward the goal
+    w_stance: float = 0.0  # [value/m] penalty per metre of stance offset (0: the expert places
+    # the foot wherever reach, stability and progress allow; a walking gait's expert, see
+    # walking_expert, wants it where the gait will carry the body over it)
+    stance_lead: float = 0.0  # [m] how far ahead of its default stance position (body frame)
+    # the gait-nominal foothold lies: the body advances over a foot during its stance
     w_stability: float = 100.0  # [value/m] reward per metre of stability margin, up to stability_cap
     stability_cap: float = 0.05  # [m] stability margins above this earn nothing more
     w_reach: float = 200.0  # [value/m] penalty per metre of reach margin below reach_safe
@@ -351,8 +359,9 @@ def _leg_terms(hmap: HeightMap, state: RobotState, f: np.ndarray, seat: np.ndarr
             "joint_margin": joint_margin}
 
 
-def _pose_terms(state: RobotState, f: np.ndarray, robot: RobotDescription) -> dict[str, np.ndarray]:
-    """Progress toward the goal and the stability margin of the next two support triangles."""
+def _pose_terms(state: RobotState, f: np.ndarray, cfg: ExpertConfig, robot: RobotDescription
+                ) -> dict[str, np.ndarray]:
+    """Progress toward the goal, offset from the gait-nominal stance, and the stability margin."""
     n = f.shape[0]
     s = state.swing_index
     xy = f[:, :2]
@@ -361,6 +370,10 @@ def _pose_terms(state: RobotState, f: np.ndarray, robot: RobotDescription) -> di
     dist = np.linalg.norm(to_goal)
     goal_dir = to_goal / dist if dist > 1e-9 else np.array([np.cos(state.yaw), np.sin(state.yaw)])
     progress = (xy - state.feet[s, :2]) @ goal_dir
+    c, sn = math.cos(state.yaw), math.sin(state.yaw)
+    nominal = np.asarray(robot.nominal_foot(state.swing_leg)[:2]) + (cfg.stance_lead, 0.0)
+    target = body_xy + np.array([c * nominal[0] - sn * nominal[1], sn * nominal[0] + c * nominal[1]])
+    stance_offset = np.linalg.norm(xy - target, axis=1)
     after = np.broadcast_to(state.feet[:, :2], (n, 4, 2)).copy()
     after[:, s] = xy
     order = list(robot.gait_order)
@@ -369,7 +382,8 @@ def _pose_terms(state: RobotState, f: np.ndarray, robot: RobotDescription) -> di
         lifted = LEG_NAMES.index(order[(order.index(state.swing_leg) + ahead) % 4])
         inradius, _ = triangle_margins(after[:, [j for j in range(4) if j != lifted]], body_xy)
         margins.append(inradius)
-    return {"progress": progress, "stability": np.minimum(*margins)}
+    return {"progress": progress, "stance_offset": stance_offset,
+            "stability": np.minimum(*margins)}
 
 
 def _contributions(terms: dict[str, np.ndarray], cfg: ExpertConfig, robot: RobotDescription
@@ -390,10 +404,32 @@ def _contributions(terms: dict[str, np.ndarray], cfg: ExpertConfig, robot: Robot
                           - cfg.w_leg_collision * np.clip(-leg, 0.0, None)),
         "unknown": -cfg.w_unknown * terms["unknown"],
         "progress": cfg.w_progress * terms["progress"],
+        "stance_offset": -cfg.w_stance * terms["stance_offset"],
         "stability": cfg.w_stability * np.minimum(terms["stability"], cfg.stability_cap),
         "reach_margin": -cfg.w_reach * np.clip(cfg.reach_safe - terms["reach_margin"], 0.0, None),
         "joint_margin": -cfg.w_joint * np.clip(cfg.joint_safe - terms["joint_margin"], 0.0, None),
     }
+
+
+def walking_expert(lead: float) -> ExpertConfig:
+    """The synthetic expert as it judges a fixed-advance gait's steps: the foot where the gait needs it.
+
+    The default expert values every centimetre of progress toward the goal,
+    so among a step's candidate set (everything the leg can reach) it picks the
+    farthest good foothold, and reaches inward to find one. footfall's walking
+    controller advances the body a fixed distance per step whatever the
+    foothold, so a long step gains nothing: it leaves the foot far ahead of its
+    hip and the next support triangles long and thin. A human expert
+    correcting this robot would know its gait. This expert values no progress,
+    and instead loses one value unit per centimetre a foothold lies from the
+    leg's gait-nominal position (its default stance around the body, ``lead``
+    [m] ahead: where the footstep planner aims), traded against the terrain
+    terms, stability and reach as before.
+    """
+    if not (isinstance(lead, (int, float)) and math.isfinite(lead) and lead >= 0):
+        raise FootfallError(f"the stance lead must be a number >= 0 [m], got {lead!r}")
+    base = ExpertConfig()
+    return replace(base, w_progress=0.0, w_stance=base.w_progress, stance_lead=float(lead))
 
 
 class SyntheticExpert:
@@ -445,7 +481,7 @@ class SyntheticExpert:
             return {name: np.zeros(0) for name in EXPERT_TERM_NAMES}
         terrain, seat = _terrain_terms(hmap, f, cfg, robot)
         out = {**terrain, **_leg_terms(hmap, state, f, seat, cfg, robot),
-               **_pose_terms(state, f, robot)}
+               **_pose_terms(state, f, cfg, robot)}
         return {name: out[name] for name in EXPERT_TERM_NAMES}
 
     def utilities(self, terms: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -461,7 +497,7 @@ class SyntheticExpert:
           pinch counted up to ``pinch_cap``).
         * leg_clearance: ``-w_leg * max(leg_safe - c, 0) - w_leg_collision * max(-c, 0)``.
         * unknown: ``-w_unknown * fraction``.
-        * progress: ``w_progress * progress``; stability: ``w_stability * min(margin, cap)``.
+        * progress: ``w_progress * progress``; stance_offset: ``-w_stance * offset``; stability: ``w_stability * min(margin, cap)``.
         * reach_margin, joint_margin: ``-w * max(safe - margin, 0)``.
 
         The terrain utilities are 0 on flat, open, fully scanned ground.

@@ -45,15 +45,23 @@ def reward_source(model_path: str | os.PathLike | None, hmap: HeightMap):
     return model.reward_for
 
 
-def _one_run(terrain_path: str, model_path: str | None, seed: int, config: WalkConfig
-             ) -> RunRecord:
+def expert_judge(config: WalkConfig):
+    """The walking expert's value (:func:`footfall.expert.walking_expert`) as a foothold judge."""
+    from footfall.expert import SyntheticExpert, walking_expert
+
+    return SyntheticExpert(walking_expert(config.footstep.lead)).values
+
+
+def _one_run(terrain_path: str, model_path: str | None, seed: int, config: WalkConfig,
+             expert: bool = False) -> RunRecord:
     from threadpoolctl import threadpool_limits
 
     hmap = HeightMap.load(terrain_path)
     # One core per run: the stack's small matrix products only lose to BLAS threads
     # fighting over the cores the other runs use.
     with threadpool_limits(limits=1):
-        return walk(hmap, reward_source(model_path, hmap), seed, config)
+        return walk(hmap, reward_source(model_path, hmap), seed, config,
+                    judge=expert_judge(config) if expert else None)
 
 
 def workers() -> int:
@@ -63,12 +71,16 @@ def workers() -> int:
 
 def walk_many(terrain_path: str | os.PathLike, model_path: str | os.PathLike | None, runs: int,
               seed: int, config: WalkConfig = WalkConfig(), processes: int | None = None,
-              progress: Callable[[RunRecord], None] | None = None) -> list[RunRecord]:
+              progress: Callable[[RunRecord], None] | None = None,
+              expert: bool = False) -> list[RunRecord]:
     """``runs`` runs with seeds ``seed .. seed + runs - 1``, in parallel; returned in seed order.
 
     Each process loads the terrain and the model itself (nothing is
-    pickled but paths, seeds and the frozen config).
+    pickled but paths, seeds and the frozen config). ``expert``: the walking
+    expert chooses the footholds (:func:`expert_judge`), not a reward.
     """
+    if expert and model_path is not None:
+        raise FootfallError("the expert chooses the footholds itself: give no model with it")
     if isinstance(runs, bool) or not isinstance(runs, int) or runs < 1:
         raise FootfallError(f"runs must be an integer >= 1, got {runs!r}")
     hmap = HeightMap.load(terrain_path)
@@ -79,14 +91,15 @@ def walk_many(terrain_path: str | os.PathLike, model_path: str | os.PathLike | N
     if n == 1:
         for s in seeds:
             out[s] = _one_run(str(terrain_path), None if model_path is None else str(model_path),
-                              s, config)
+                              s, config, expert)
             if progress:
                 progress(out[s])
     else:
         # spawn: a fresh interpreter per worker (no forked BLAS or renderer state)
         with ProcessPoolExecutor(max_workers=n, mp_context=get_context("spawn")) as pool:
             futures = {pool.submit(_one_run, str(terrain_path),
-                                   None if model_path is None else str(model_path), s, config): s
+                                   None if model_path is None else str(model_path), s, config,
+                                   expert): s
                        for s in seeds}
             for f in as_completed(futures):
                 out[futures[f]] = f.result()

@@ -42,7 +42,8 @@ from threadpoolctl import threadpool_limits
 
 from footfall.control.body_path import BodyPath, BodyPathConfig, plan_body_path
 from footfall.control.cog import CogConfig, plan_cog, support_margin
-from footfall.control.footstep import FootstepConfig, FootstepPlanner, NoFootholdError
+from footfall.control.footstep import FootstepConfig, FootstepPlanner, Judge, \
+    JudgedFootstepPlanner, NoFootholdError
 from footfall.control.lowlevel import (
     BodyCorrection,
     LowLevelConfig,
@@ -199,7 +200,7 @@ class Walk:
 
     def __init__(self, hmap: HeightMap, reward_for: RewardFor, seed: int,
                  config: WalkConfig = WalkConfig(), robot: RobotDescription = LITTLEDOG,
-                 frames: Frames | None = None) -> None:
+                 frames: Frames | None = None, judge: Judge | None = None) -> None:
         if not isinstance(hmap, HeightMap):
             raise FootfallError(f"a walk needs a HeightMap, got {type(hmap).__name__}")
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
@@ -214,7 +215,10 @@ class Walk:
                                        config.path)
         else:
             self.path = BodyPath.straight(self.start_xy, goal_xy)
-        self.planner = FootstepPlanner(hmap, reward_for, self.path, robot, config.footstep)
+        self.judge_name = None if judge is None else getattr(judge, "__qualname__", "judge")
+        self.planner = (FootstepPlanner(hmap, reward_for, self.path, robot, config.footstep)
+                        if judge is None else
+                        JudgedFootstepPlanner(hmap, judge, self.path, robot, config.footstep))
         self.sim = Simulation.from_seed(robot, hmap, self.seed, config.perturbation)
         self.setup_seconds = time.perf_counter() - t0
         self.goal = goal_xy
@@ -468,6 +472,8 @@ class Walk:
                           for s in steps)
         settings = {"walk": _jsonable(self.config.to_dict()),
                     "perturbation": sim.perturbation.to_dict(), "robot": robot.name}
+        if self.judge_name is not None:  # the footholds were chosen by a judge, not a reward
+            settings["judge"] = self.judge_name
         self.sim.close()
         return RunRecord(self.hmap.content_hash(), self.seed, settings, _jsonable(outcome),
                          run_steps)
@@ -486,6 +492,12 @@ def _jsonable(value):
 
 
 def walk(hmap: HeightMap, reward_for: RewardFor, seed: int, config: WalkConfig = WalkConfig(),
-         robot: RobotDescription = LITTLEDOG, frames: Frames | None = None) -> RunRecord:
-    """One seeded run over ``hmap`` with the reward ``reward_for(leg)``; the same seed, the same run."""
-    return Walk(hmap, reward_for, seed, config, robot, frames).run()
+         robot: RobotDescription = LITTLEDOG, frames: Frames | None = None,
+         judge: Judge | None = None) -> RunRecord:
+    """One seeded run over ``hmap`` with the reward ``reward_for(leg)``; the same seed, the same run.
+
+    With ``judge`` (e.g. ``SyntheticExpert(...).values``), the judge chooses
+    the footholds instead of the reward (:class:`JudgedFootstepPlanner`);
+    ``reward_for`` then only plans the body path if ``config.plan_path``.
+    """
+    return Walk(hmap, reward_for, seed, config, robot, frames, judge).run()

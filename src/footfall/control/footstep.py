@@ -14,8 +14,9 @@ reward (see :meth:`FootstepPlanner.plan` for the approximation).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
+from typing import Callable
 
 import numpy as np
 
@@ -30,8 +31,11 @@ from footfall.pose_features import pose_features
 from footfall.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.reward import LinearReward, default_reward
 from footfall.scoring import ScoreGrid, score_grid
-from footfall.state import RobotState
+from footfall.state import RobotState, nominal_state
 from footfall.walker import DEFAULT_STRIDE
+
+Judge = Callable[[HeightMap, RobotState, np.ndarray], np.ndarray]  # (map, state, footholds
+# (n, 3) [m]) -> value (n,), higher is better: a foothold judge, e.g. SyntheticExpert.values
 
 GRID_YAW = 0.0  # [rad] heading the planner's dense reward grids are computed for (+x)
 REFERENCE_MODULE = ("rocky", 0.5, 0)  # kind, difficulty, seed of the terrain module on which a
@@ -59,6 +63,9 @@ class FootstepConfig:
     beam_width: int = 2  # [-] best first steps compared by rolling out the look-ahead
     root_separation: float = 0.02  # [m] the first steps compared lie at least this far apart (3-D:
     # a foothold beside a hole and one in it lead to different futures)
+    search_radius: float | None = None  # [m] the candidate set F of a step: the reachable
+    # footholds within this distance of the step's path-nominal position, or every reachable
+    # one where none of those has a finite reward (None: always every reachable one)
     pose_candidates: int | None = 128  # [-] first step: pose features of this many best by
     # terrain + bias (None: of every candidate); pose features cost ~10 ms per 1000 candidates
     lookahead_radius: float = 0.05  # [m] later steps consider footholds this close to their target
@@ -84,6 +91,10 @@ class FootstepConfig:
                 or self.pose_candidates < 1):
             raise FootfallError(f"footstep config: pose_candidates must be an integer >= 1 or "
                                 f"None, got {self.pose_candidates!r}")
+        if self.search_radius is not None and not (math.isfinite(self.search_radius)
+                                                   and self.search_radius > 0):
+            raise FootfallError(f"footstep config: search_radius must be > 0 or None, "
+                                f"got {self.search_radius}")
         if self.foot_lead is not None and not (math.isfinite(self.foot_lead) and self.foot_lead >= 0):
             raise FootfallError(f"footstep config: foot_lead must be >= 0 or None, got {self.foot_lead}")
         for name in ("lookahead", "beam_width", "lookahead_candidates"):
@@ -149,18 +160,39 @@ def _reference_module() -> HeightMap:
 
 
 def reward_spread(reward: LinearReward) -> float:
-    """The spread of a reward's terrain part: its standard deviation over the reference module.
+    """The spread of a reward: the unit in which its differences compare to another reward's.
 
-    Scored densely (5 mm lattice, heading +x) over :data:`REFERENCE_MODULE`;
-    the unit in which a reward's differences are comparable to another's
-    (see :func:`footfall.control.body_path.reward_unit`). Cached by the
-    reward's content, so equal rewards get the very same number.
+    The terrain part's standard deviation, scored densely (5 mm lattice,
+    heading +x) over :data:`REFERENCE_MODULE`, combined in quadrature with the
+    pose part's standard deviation over reference candidate sets (the robot in
+    its default stance at the module's centre, each leg swinging in turn, its
+    whole candidate set F); the pose part counts only for rewards that have
+    pose weights. A learned reward's pose part can vary over F far more than
+    its terrain part, and the path bias must hold against the whole of it.
+    See :func:`footfall.control.body_path.reward_unit`. Cached by the reward's
+    content, so equal rewards get the very same number.
     """
     key = reward_key(reward)
     if key not in _SPREADS:
-        grid = score_grid(_reference_module(), reward, spacing=0.005, yaw=GRID_YAW)
-        _SPREADS[key] = reward_unit([np.asarray(grid.reward)[np.asarray(grid.valid)]])
+        module = _reference_module()
+        grid = score_grid(module, reward, spacing=0.005, yaw=GRID_YAW)
+        spread = reward_unit([np.asarray(grid.reward)[np.asarray(grid.valid)]])
+        if np.any(reward.pose_weights != 0):
+            pose = np.concatenate([pose_features(module, state, reachable_footholds(
+                module, state, spacing=0.005)) @ reward.pose_weights
+                for state in _reference_states()])
+            spread = math.hypot(spread, float(np.nanstd(pose)))
+        _SPREADS[key] = spread
     return _SPREADS[key]
+
+
+@lru_cache(maxsize=1)
+def _reference_states() -> tuple[RobotState, ...]:
+    """The robot in its default stance at the reference module's centre, each leg swinging."""
+    module = _reference_module()
+    x0, x1, y0, y1 = module.bounds
+    centre = (0.5 * (x0 + x1), 0.5 * (y0 + y1))
+    return tuple(nominal_state(module, centre, GRID_YAW, leg) for leg in LEG_NAMES)
 
 
 _SPREADS: dict[str, float] = {}  # reward content digest -> spread (a few rewards per process)
@@ -337,6 +369,11 @@ class FootstepPlanner:
                                    self.rewards_[leg0].config if exact else None)
         terrain = self._terrain(leg0, cand, yaw0)
         keep = np.isfinite(terrain)
+        if cfg.search_radius is not None:  # F: the footholds near the gait-nominal position, or,
+            # where none near it is usable (a step edge, a gap), every reachable one
+            near = np.sum((cand[:, :2] - targets[0]) ** 2, axis=1) <= cfg.search_radius ** 2
+            if np.any(keep & near):
+                keep &= near
         cand, terrain = cand[keep], terrain[keep]
         if cand.shape[0] == 0:
             raise NoFootholdError(f"leg {leg0} has no candidate foothold at body "
@@ -397,3 +434,47 @@ class FootstepPlanner:
             total=total, value=values, legs=tuple(legs[:m]),
             footholds=np.array([c_[best] for c_ in chosen]), body_xy=body_xy[:m],
             body_yaw=body_yaw[:m], targets=targets[:m], state=st0)
+
+
+class JudgedFootstepPlanner(FootstepPlanner):
+    """The footstep planner with a judge in place of the reward function and the path bias.
+
+    The judge -- the synthetic expert, say -- values every candidate of every
+    step, the look-ahead included; it carries its own preference for the path
+    (the walking expert's stance term), so there is no separate bias. Walking
+    with the expert as its own footstep chooser bounds what a function learned
+    from its demonstrations can do. Which lattice points are usable (data,
+    inside the map, feature patches covered) is decided as for the hand-tuned
+    reward, so the candidate sets are the reward planner's. Every candidate
+    is judged (``pose_candidates`` and ``lookahead_candidates`` do not
+    apply): about 0.5 s per step with the synthetic expert, a hundred times
+    the reward planner's time.
+    """
+
+    def __init__(self, hmap: HeightMap, judge: Judge, path: BodyPath,
+                 robot: RobotDescription = LITTLEDOG, config: FootstepConfig = FootstepConfig(),
+                 grids: dict[str, ScoreGrid] | None = None) -> None:
+        if not callable(judge):
+            raise FootfallError(f"a judged footstep planner needs a callable judge, "
+                                f"got {type(judge).__name__}")
+        reward = default_reward()
+        config = replace(config, pose_candidates=None, lookahead_candidates=1 << 30)
+        super().__init__(hmap, lambda leg: reward, path, robot, config, grids)
+        self.judge = judge
+        self._posed = {name: True for name in LEG_NAMES}
+        self.bias_ = {name: 0.0 for name in LEG_NAMES}
+
+    def _terrain(self, leg: str, footholds: np.ndarray, yaw: float) -> np.ndarray:
+        """0 for a usable foothold, -inf for an unusable one: the judge values it whole."""
+        usable = super()._terrain(leg, footholds, yaw)
+        return np.where(np.isfinite(usable), 0.0, usable)
+
+    def _pose(self, state: RobotState, footholds: np.ndarray) -> np.ndarray:
+        """The judge's value of each foothold (n,) for the state."""
+        if footholds.shape[0] == 0:
+            return np.zeros(0)
+        value = np.asarray(self.judge(self.hmap, state, footholds), dtype=np.float64)
+        if value.shape != (footholds.shape[0],):
+            raise FootfallError(f"the judge returned shape {value.shape} for "
+                                f"{footholds.shape[0]} footholds")
+        return value

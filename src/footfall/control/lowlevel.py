@@ -28,6 +28,7 @@ rotation as :func:`footfall.kinematics.rotation_matrix` makes it.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
 
@@ -36,7 +37,6 @@ import mujoco
 import numpy as np
 
 from footfall.errors import FootfallError
-from footfall.kinematics import inverse_kinematics
 from footfall.robot import Leg, RobotDescription
 
 Pose = tuple[np.ndarray, np.ndarray]  # (position (3,) [m], rotation matrix (3, 3)): body -> world
@@ -173,6 +173,9 @@ class _LegStack:
     flip_angles: np.ndarray  # (4, 3) factor on the solved angles: pitch, knee by -1 if reflected
     lower: np.ndarray  # (4, 3) [rad] joint limits of each leg
     upper: np.ndarray  # (4, 3) [rad]
+    scalars: tuple  # per leg (hip x, y, z [m], side * hip_offset [m], angle flips (3,), lower (3,)
+    # [rad], upper (3,) [rad]) as Python floats, and the stacked leg's limits ((3,), (3,)) [rad]:
+    # what _solve_legs reads, without NumPy scalar indexing
 
 
 @lru_cache(maxsize=8)
@@ -200,7 +203,49 @@ def _leg_stack(robot: RobotDescription) -> _LegStack:
     mirrored_hi = np.maximum(ref_lo * angle_flip, ref_hi * angle_flip)
     if not (np.allclose(lower, mirrored_lo) and np.allclose(upper, mirrored_hi)):
         raise FootfallError("knee-backward legs must be the knee-forward ones reflected")
-    return _LegStack(stacked, flip, angle_flip, lower, upper)
+    per_leg = tuple((*hips[k].tolist(), float(stacked.side[k] * robot.hip_offset),
+                     tuple(angle_flip[k].tolist()), tuple(lower[k].tolist()),
+                     tuple(upper[k].tolist())) for k in range(len(robot.legs)))
+    scalars = (per_leg, (tuple(ref_lo.tolist()), tuple(ref_hi.tolist())))
+    return _LegStack(stacked, flip, angle_flip, lower, upper, scalars)
+
+
+def _solve_legs(local: list, legs: _LegStack, robot: RobotDescription, previous: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`footfall.kinematics.inverse_kinematics` of the stacked legs, one leg at a time.
+
+    ``local`` holds the four reflected body-frame targets [m] as lists of
+    three floats. The same closed form, operation for operation (so the same
+    angles to the last bit: NumPy's and Python's math functions are the same
+    C library calls here), on Python floats: for four points NumPy's
+    per-call overhead would be the whole cost of the 100 Hz tick. Returns the
+    set-points (4, 3) [rad] -- unflipped, clipped to each leg's limits, a
+    leg without a solution keeping ``previous`` -- and ``ok`` (4,).
+    """
+    l1, l2, d = robot.upper_leg, robot.lower_leg, robot.hip_offset
+    knee = 1.0 if legs.leg.knee_forward else -1.0
+    per_leg, (ref_lo, ref_hi) = legs.scalars
+    out = np.empty((4, 3))
+    ok = np.empty(4, dtype=bool)
+    for k, ((hx, hy, hz, side_d, flip, lo, hi), (x, y, z)) in enumerate(zip(per_leg, local)):
+        px, py, pz = x - hx, y - hy, z - hz
+        rho2 = py * py + pz * pz - d * d
+        if not rho2 >= 0:  # out of the roll plane's reach (or NaN)
+            out[k], ok[k] = previous[k], False
+            continue
+        zp = -math.sqrt(rho2)
+        q1 = (math.atan2(pz, py) - math.atan2(zp, side_d) + math.pi) % (2 * math.pi) - math.pi
+        c3 = (px * px + zp * zp - l1 * l1 - l2 * l2) / (2 * l1 * l2)
+        if not abs(c3) <= 1.0:  # out of the leg's length
+            out[k], ok[k] = previous[k], False
+            continue
+        q3 = math.acos(c3) * knee
+        q2 = math.atan2(-px, -zp) - math.atan2(l2 * math.sin(q3), l1 + l2 * math.cos(q3))
+        q2 = (q2 + math.pi) % (2 * math.pi) - math.pi
+        angles = (q1, q2, q3)
+        ok[k] = all(a <= v <= b for a, v, b in zip(ref_lo, angles, ref_hi))
+        out[k] = [min(max(v * f, a), b) for v, f, a, b in zip(angles, flip, lo, hi)]
+    return out, ok
 
 
 def body_rotation(rpy: np.ndarray) -> np.ndarray:
@@ -252,6 +297,4 @@ def joint_targets(robot: RobotDescription, feet_world: np.ndarray, commanded: Po
     w = np.asarray(stance, dtype=np.float64)[:, None]
     legs = _leg_stack(robot)
     local = (in_measured + w * (in_commanded - in_measured)) * legs.flip_point
-    q, ok = inverse_kinematics(legs.leg, local, robot)
-    q = np.minimum(np.maximum(q * legs.flip_angles, legs.lower), legs.upper)  # NaN stays NaN
-    return np.where(np.isnan(q).any(axis=1, keepdims=True), previous, q), ok
+    return _solve_legs(local.tolist(), legs, robot, np.asarray(previous, dtype=np.float64))

@@ -178,8 +178,19 @@ class _LegStack:
     # what _solve_legs reads, without NumPy scalar indexing
 
 
-@lru_cache(maxsize=8)
+_LAST_STACK: list = [None, None]  # (robot, its _LegStack): the one robot of a run, found by
+# identity at 100 Hz (lru_cache would hash the whole frozen description at every call)
+
+
 def _leg_stack(robot: RobotDescription) -> _LegStack:
+    """:func:`_stacked_legs` of ``robot``, the last robot's remembered."""
+    if _LAST_STACK[0] is not robot:
+        _LAST_STACK[:] = [robot, _stacked_legs(robot)]
+    return _LAST_STACK[1]
+
+
+@lru_cache(maxsize=8)
+def _stacked_legs(robot: RobotDescription) -> _LegStack:
     """The four legs as one leg of the first leg's knee direction, hip (4, 3) and side (4,) stacked.
 
     A knee-backward leg is the knee-forward one reflected front to back (see
@@ -224,28 +235,29 @@ def _solve_legs(local: list, legs: _LegStack, robot: RobotDescription, previous:
     """
     l1, l2, d = robot.upper_leg, robot.lower_leg, robot.hip_offset
     knee = 1.0 if legs.leg.knee_forward else -1.0
-    per_leg, (ref_lo, ref_hi) = legs.scalars
-    out = np.empty((4, 3))
-    ok = np.empty(4, dtype=bool)
-    for k, ((hx, hy, hz, side_d, flip, lo, hi), (x, y, z)) in enumerate(zip(per_leg, local)):
+    per_leg, (lo, hi) = legs.scalars
+    out = previous.tolist()
+    ok = [False] * 4
+    pi, tau = math.pi, 2 * math.pi
+    for k in range(4):  # four legs; the three joints written out (no per-joint loops at 100 Hz)
+        hx, hy, hz, side_d, flip, low, high = per_leg[k]
+        x, y, z = local[k]
         px, py, pz = x - hx, y - hy, z - hz
         rho2 = py * py + pz * pz - d * d
-        if not rho2 >= 0:  # out of the roll plane's reach (or NaN)
-            out[k], ok[k] = previous[k], False
+        if not rho2 >= 0:  # out of the roll plane's reach (or NaN): keep the previous set-points
             continue
         zp = -math.sqrt(rho2)
-        q1 = (math.atan2(pz, py) - math.atan2(zp, side_d) + math.pi) % (2 * math.pi) - math.pi
+        q1 = (math.atan2(pz, py) - math.atan2(zp, side_d) + pi) % tau - pi
         c3 = (px * px + zp * zp - l1 * l1 - l2 * l2) / (2 * l1 * l2)
         if not abs(c3) <= 1.0:  # out of the leg's length
-            out[k], ok[k] = previous[k], False
             continue
         q3 = math.acos(c3) * knee
-        q2 = math.atan2(-px, -zp) - math.atan2(l2 * math.sin(q3), l1 + l2 * math.cos(q3))
-        q2 = (q2 + math.pi) % (2 * math.pi) - math.pi
-        angles = (q1, q2, q3)
-        ok[k] = all(a <= v <= b for a, v, b in zip(ref_lo, angles, ref_hi))
-        out[k] = [min(max(v * f, a), b) for v, f, a, b in zip(angles, flip, lo, hi)]
-    return out, ok
+        q2 = (math.atan2(-px, -zp) - math.atan2(l2 * math.sin(q3), l1 + l2 * math.cos(q3))
+              + pi) % tau - pi
+        ok[k] = (lo[0] <= q1 <= hi[0]) and (lo[1] <= q2 <= hi[1]) and (lo[2] <= q3 <= hi[2])
+        out[k] = [min(max(q1 * flip[0], low[0]), high[0]), min(max(q2 * flip[1], low[1]), high[1]),
+                  min(max(q3 * flip[2], low[2]), high[2])]
+    return np.array(out), np.array(ok)
 
 
 def body_rotation(rpy: np.ndarray) -> np.ndarray:

@@ -22,8 +22,12 @@ import numpy as np
 
 from footfall.errors import FootfallError
 from footfall.heightmap import HeightMap
-from footfall.kinematics import inverse_kinematics, joint_limit_margin, knee_position, \
-    rotation_matrix
+from footfall.kinematics import (
+    legs_inverse_kinematics,
+    legs_joint_limit_margin,
+    legs_knee_position,
+    rotation_matrix,
+)
 from footfall.robot import LITTLEDOG, RobotDescription
 
 TERMS = ("joint", "reach", "leg_clearance", "trunk_clearance", "height", "attitude", "yaw")
@@ -203,19 +207,15 @@ def _measures(problem: _Problem, poses: np.ndarray, exact: bool = False) -> dict
     rot = rotation_matrix(poses[:, 1:])  # (n, 3, 3)
     local = (problem.centres[None] - body[:, None]) @ rot  # (n, 4, 3) body-frame foot centres
 
-    joint = np.empty((n, 4))
-    reach = np.empty((n, 4))
-    ok_all = np.ones(n, dtype=bool)
     frac = np.linspace(0.0, cfg.shin_fraction, cfg.shin_samples)
-    leg_points = np.empty((n, 4, cfg.shin_samples, 3))
-    for k, leg in enumerate(robot.legs):  # the four legs, each vectorised over all poses
-        q, ok = inverse_kinematics(leg, local[:, k], robot)
-        ok_all &= ok
-        margin = joint_limit_margin(leg, q)
-        joint[:, k] = np.where(np.isnan(margin), _NO_SOLUTION_MARGIN, margin)
-        reach[:, k] = robot.max_reach - np.linalg.norm(local[:, k] - np.asarray(leg.hip), axis=1)
-        knee = knee_position(leg, q, robot)
-        leg_points[:, k] = knee[:, None] + frac[None, :, None] * (local[:, k] - knee)[:, None]
+    q, ok = legs_inverse_kinematics(robot, local)  # the four legs and all poses at once
+    ok_all = ok.all(axis=1)
+    margin = legs_joint_limit_margin(robot, q)
+    joint = np.where(np.isnan(margin), _NO_SOLUTION_MARGIN, margin)  # (n, 4)
+    hips = np.array([leg.hip for leg in robot.legs])
+    reach = robot.max_reach - np.linalg.norm(local - hips, axis=2)  # (n, 4)
+    knee = legs_knee_position(robot, q)
+    leg_points = knee[:, :, None] + frac[None, None, :, None] * (local - knee)[:, :, None]
     world = (leg_points.reshape(n, -1, 3) @ rot.transpose(0, 2, 1)).reshape(leg_points.shape)
     world += body[:, None, None]
     ground = problem.hmap.height_at(world[..., :2])

@@ -112,15 +112,13 @@ def shin_rotations(q: np.ndarray, body_rotation: np.ndarray) -> np.ndarray:
     roll about x, then hip pitch plus knee about the rolled y axis (see
     :mod:`footfall.kinematics`): Rx(q1) Ry(q2 + q3).
     """
-    q = np.asarray(q, dtype=np.float64)
-    c1, s1 = np.cos(q[:, 0]), np.sin(q[:, 0])
-    pitch = q[:, 1] + q[:, 2]
-    c2, s2 = np.cos(pitch), np.sin(pitch)
-    leg = np.empty((4, 3, 3))
-    leg[:, 0, 0], leg[:, 0, 1], leg[:, 0, 2] = c2, 0.0, s2
-    leg[:, 1, 0], leg[:, 1, 1], leg[:, 1, 2] = s1 * s2, c1, -s1 * c2
-    leg[:, 2, 0], leg[:, 2, 1], leg[:, 2, 2] = -c1 * s2, s1, c1 * c2
-    return np.asarray(body_rotation) @ leg
+    legs = []
+    for roll, hip_pitch, knee in np.asarray(q, dtype=np.float64).tolist():  # Python floats: four
+        c1, s1 = math.cos(roll), math.sin(roll)  # legs at 100 Hz, where NumPy's overhead dominates
+        pitch = hip_pitch + knee
+        c2, s2 = math.cos(pitch), math.sin(pitch)
+        legs.append(((c2, 0.0, s2), (s1 * s2, c1, -s1 * c2), (-c1 * s2, s1, c1 * c2)))
+    return np.asarray(body_rotation) @ np.array(legs)
 
 
 def rolled(start: np.ndarray, now: np.ndarray, radius: float) -> np.ndarray:
@@ -138,6 +136,8 @@ def rolled(start: np.ndarray, now: np.ndarray, radius: float) -> np.ndarray:
         Ball radius [m].
     """
     delta = np.asarray(now) @ np.swapaxes(np.asarray(start), -1, -2)  # start -> now, world frame
+    if delta.ndim == 3 and delta.shape[0] <= 4:  # the stance feet at 100 Hz: Python floats
+        return _rolled_few(delta.tolist(), radius)
     cos = np.minimum(np.maximum(0.5 * (delta[..., 0, 0] + delta[..., 1, 1] + delta[..., 2, 2]
                                        - 1.0), -1.0), 1.0)
     angle = np.arccos(cos)
@@ -149,6 +149,23 @@ def rolled(start: np.ndarray, now: np.ndarray, radius: float) -> np.ndarray:
     out = np.zeros(delta.shape[:-1])
     out[..., 0] = scale * (delta[..., 0, 2] - delta[..., 2, 0])  # radius * phi_y
     out[..., 1] = scale * (delta[..., 1, 2] - delta[..., 2, 1])  # radius * -phi_x
+    return out
+
+
+def _rolled_few(delta: list, radius: float) -> np.ndarray:
+    """:func:`rolled` from the rotations start -> now (k, 3, 3) as nested lists, k a few.
+
+    The same operations on Python floats (the same numbers to the last bit),
+    without NumPy's per-call overhead on a handful of values.
+    """
+    out = np.zeros((len(delta), 3))
+    for k, ((d00, _, d02), (_, d11, d12), (d20, d21, d22)) in enumerate(delta):
+        cos = min(max(0.5 * (d00 + d11 + d22 - 1.0), -1.0), 1.0)
+        sin = math.sqrt(1.0 - cos * cos)
+        factor = 0.5 if sin <= 1e-9 else math.acos(cos) / max(2.0 * sin, 1e-18)
+        scale = radius * factor
+        out[k, 0] = scale * (d02 - d20)
+        out[k, 1] = scale * (d12 - d21)
     return out
 
 

@@ -249,19 +249,23 @@ def _trunk_clearance(problem: _Problem, poses: np.ndarray, body: np.ndarray, rot
     normal = r[:, :, 2]  # body z axis in the world
     centre = b - lz * normal  # a point of the underside plane
     gx, gy = -normal[:, 0] / normal[:, 2], -normal[:, 1] / normal[:, 2]
-    # Underside height above each cell centre: (m, 3) @ (3, p), one matrix product.
-    coef = np.column_stack([centre[:, 2] - gx * centre[:, 0] - gy * centre[:, 1], gx, gy])
-    xy, h = problem.cells_xy, problem.cells_h
-    plane = coef @ np.vstack([np.ones(h.size), xy.T])
     # Which cells are under the trunk depends on x, y and yaw only: one mask per distinct yaw
     # (a search round has a handful). A cell counts if its centre lies within the footprint
     # grown by half a cell diagonal; the tilt's few-mm shift of the footprint is neglected.
     pad = cfg.trunk_cell / np.sqrt(2.0)
     yaws, group = np.unique(poses[todo, 3], return_inverse=True)
+    xy, h = problem.cells_xy, problem.cells_h
     d = xy - problem.body_xy
     u = np.cos(yaws)[:, None] * d[:, 0] + np.sin(yaws)[:, None] * d[:, 1]
     v = -np.sin(yaws)[:, None] * d[:, 0] + np.cos(yaws)[:, None] * d[:, 1]
     under = (np.abs(u) <= lx + pad) & (np.abs(v) <= ly + pad)
+    cells = under.any(axis=0)  # under the trunk at one of these yaws: the only cells that count
+    if not cells.any():
+        return out  # no cell with data under the trunk: nothing to clear
+    xy, h, under = xy[cells], h[cells], under[:, cells]
+    # Underside height above each cell centre: (m, 3) @ (3, p), one matrix product.
+    coef = np.column_stack([centre[:, 2] - gx * centre[:, 0] - gy * centre[:, 1], gx, gy])
+    plane = coef @ np.vstack([np.ones(h.size), xy.T])
     offset = np.where(under, -h, np.inf)  # (distinct yaws, p)
     out[todo] = (plane + offset[group]).min(axis=1)
     return out

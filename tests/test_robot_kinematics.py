@@ -5,7 +5,9 @@ import pytest
 
 from footfall.errors import FootfallError
 from footfall.kinematics import (body_to_world, forward_kinematics, inverse_kinematics,
-                                 joint_limit_margin, knee_position, rotation_matrix, world_to_body)
+                                 joint_limit_margin, knee_position, legs_inverse_kinematics,
+                                 legs_joint_limit_margin, legs_knee_position, rotation_matrix,
+                                 world_to_body)
 from footfall.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 
 
@@ -90,3 +92,20 @@ def test_rotation_and_frames():
     p = np.random.default_rng(2).normal(size=(5, 3))
     body = np.array([0.3, -0.1, 0.2])
     np.testing.assert_allclose(world_to_body(body_to_world(p, body, rpy), body, rpy), p, atol=1e-12)
+
+
+def test_all_legs_at_once_give_each_legs_own_numbers_exactly():
+    rng = np.random.default_rng(5)
+    r = LITTLEDOG
+    # (n, 4, 3) body-frame targets around each hip: reachable, past a limit, out of reach
+    local = np.array([leg.hip for leg in r.legs]) + rng.uniform(
+        [-0.12, -0.08, -0.22], [0.12, 0.08, 0.02], size=(300, 4, 3))
+    q, ok = legs_inverse_kinematics(r, local)
+    margin, knee = legs_joint_limit_margin(r, q), legs_knee_position(r, q)
+    assert ok.any() and not ok.all() and np.isnan(q).any()
+    for k, leg in enumerate(r.legs):
+        qk, okk = inverse_kinematics(leg, local[:, k], r)
+        np.testing.assert_array_equal(q[:, k], qk)  # bit for bit, NaN where no solution
+        np.testing.assert_array_equal(ok[:, k], okk)
+        np.testing.assert_array_equal(margin[:, k], joint_limit_margin(leg, qk))
+        np.testing.assert_array_equal(knee[:, k], knee_position(leg, qk, r))

@@ -106,6 +106,7 @@ def test_joint_limits_actuators_and_friction_come_from_the_description():
         foot = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"{leg.name}_foot")
         assert model.geom_size[foot, 0] == R.foot_radius and model.geom_friction[foot, 0] == 0.6
     assert model.opt.timestep == pytest.approx(1.0 / R.servo_rate)
+    assert model.opt.jacobian == mujoco.mjtJacobian.mjJAC_SPARSE  # faster while walking
     assert compile_model(R, None).geom_friction[foot, 0] == R.foot_friction
 
 

@@ -130,3 +130,65 @@ def joint_limit_margin(leg: Leg, q: np.ndarray) -> np.ndarray:
     lo = np.array([lim[0] for lim in leg.limits])
     hi = np.array([lim[1] for lim in leg.limits])
     return np.min(np.minimum(q - lo, hi - q), axis=-1)
+
+
+# ------------------------------------------------------- all four legs at once
+@lru_cache(maxsize=8)
+def _leg_arrays(robot: RobotDescription) -> tuple[np.ndarray, ...]:
+    """The legs' hips (4, 3) [m], ``side * hip_offset`` (4,) [m], knee signs (4,) [-] and
+    joint limits lower, upper (4, 3) [rad], in ``robot.legs`` order (made once per robot)."""
+    hips = np.array([leg.hip for leg in robot.legs], dtype=np.float64)
+    side = np.array([leg.side * robot.hip_offset for leg in robot.legs], dtype=np.float64)
+    knee = np.array([1.0 if leg.knee_forward else -1.0 for leg in robot.legs])
+    lo, hi = (np.array([[lim[i] for lim in leg.limits] for leg in robot.legs], dtype=np.float64)
+              for i in (0, 1))
+    for a in (hips, side, knee, lo, hi):
+        a.flags.writeable = False  # shared between callers
+    return hips, side, knee, lo, hi
+
+
+def legs_inverse_kinematics(robot: RobotDescription, foot: np.ndarray
+                            ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`inverse_kinematics` of every leg at once: foot centres (..., 4, 3) [m] (body frame,
+    ``robot.legs`` order) -> angles (..., 4, 3) [rad] (NaN: no solution) and ``ok`` (..., 4).
+
+    The same element-wise operations as the one-leg function with each leg's
+    hip, side, knee branch and limits broadcast over the leg axis, so the
+    very same numbers, in a quarter of the NumPy calls.
+    """
+    hips, side, knee, lo, hi = _leg_arrays(robot)
+    p = np.asarray(foot, dtype=np.float64) - hips
+    px, py, pz = p[..., 0], p[..., 1], p[..., 2]
+    l1, l2, d = robot.upper_leg, robot.lower_leg, robot.hip_offset
+    rho2 = py * py + pz * pz - d * d
+    in_plane = rho2 >= 0
+    zp = -np.sqrt(np.where(in_plane, rho2, np.nan))
+    q = np.empty(p.shape)
+    q1 = np.arctan2(pz, py) - np.arctan2(zp, side)
+    q[..., 0] = (q1 + np.pi) % (2 * np.pi) - np.pi
+    r2 = px * px + zp * zp
+    c3 = (r2 - l1 * l1 - l2 * l2) / (2 * l1 * l2)
+    reach = np.abs(c3) <= 1.0
+    q3 = np.arccos(np.where(reach, c3, np.nan)) * knee
+    q[..., 2] = q3
+    q2 = np.arctan2(-px, -zp) - np.arctan2(l2 * np.sin(q3), l1 + l2 * np.cos(q3))
+    q[..., 1] = (q2 + np.pi) % (2 * np.pi) - np.pi
+    with np.errstate(invalid="ignore"):
+        ok = in_plane & reach & np.all((q >= lo) & (q <= hi), axis=-1)
+    return q, ok
+
+
+def legs_knee_position(robot: RobotDescription, q: np.ndarray) -> np.ndarray:
+    """:func:`knee_position` of every leg at once: angles (..., 4, 3) [rad] -> (..., 4, 3) [m]."""
+    hips, side, _, _, _ = _leg_arrays(robot)
+    q = np.asarray(q, dtype=np.float64)
+    kx, kz, _, _ = _planar(q[..., 1], q[..., 2], robot)
+    return _roll(q[..., 0], kx, np.broadcast_to(side, kx.shape), kz,
+                 (hips[:, 0], hips[:, 1], hips[:, 2]))
+
+
+def legs_joint_limit_margin(robot: RobotDescription, q: np.ndarray) -> np.ndarray:
+    """:func:`joint_limit_margin` of every leg at once: (..., 4, 3) [rad] -> (..., 4) [rad]."""
+    _, _, _, lo, hi = _leg_arrays(robot)
+    q = np.asarray(q, dtype=np.float64)
+    return np.min(np.minimum(q - lo, hi - q), axis=-1)

@@ -244,11 +244,16 @@ class FootstepPlanner:
     def _bias_weights(self) -> dict[str, float]:
         """Path bias [reward/m] per leg: ``bias_weight`` scaled to each reward's spread.
 
-        The default reward's own ratio is exactly 1 (the same cached spread), so
-        its bias is ``bias_weight`` to the last bit.
+        A reward with the default's terrain part (the same :func:`reward_key`)
+        has the ratio 1 exactly, so its bias is ``bias_weight`` to the last
+        bit without scoring the reference module at all (a module made and
+        scored: ~0.5 s of CPU, once per process, that would only be divided
+        by itself); other rewards are scaled by their cached spreads.
         """
-        ref = reward_spread(default_reward(self.rewards_[LEG_NAMES[0]].config))
-        return {name: self.config.bias_weight * (reward_spread(r) / ref)
+        default = default_reward(self.rewards_[LEG_NAMES[0]].config)
+        default_key = reward_key(default)
+        return {name: (self.config.bias_weight if reward_key(r) == default_key else
+                       self.config.bias_weight * (reward_spread(r) / reward_spread(default)))
                 for name, r in self.rewards_.items()}
 
     # -------------------------------------------------------------- pieces

@@ -28,6 +28,7 @@ rotation as :func:`footfall.kinematics.rotation_matrix` makes it.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
 
@@ -36,7 +37,6 @@ import mujoco
 import numpy as np
 
 from footfall.errors import FootfallError
-from footfall.kinematics import inverse_kinematics
 from footfall.robot import Leg, RobotDescription
 
 Pose = tuple[np.ndarray, np.ndarray]  # (position (3,) [m], rotation matrix (3, 3)): body -> world
@@ -112,15 +112,13 @@ def shin_rotations(q: np.ndarray, body_rotation: np.ndarray) -> np.ndarray:
     roll about x, then hip pitch plus knee about the rolled y axis (see
     :mod:`footfall.kinematics`): Rx(q1) Ry(q2 + q3).
     """
-    q = np.asarray(q, dtype=np.float64)
-    c1, s1 = np.cos(q[:, 0]), np.sin(q[:, 0])
-    pitch = q[:, 1] + q[:, 2]
-    c2, s2 = np.cos(pitch), np.sin(pitch)
-    leg = np.empty((4, 3, 3))
-    leg[:, 0, 0], leg[:, 0, 1], leg[:, 0, 2] = c2, 0.0, s2
-    leg[:, 1, 0], leg[:, 1, 1], leg[:, 1, 2] = s1 * s2, c1, -s1 * c2
-    leg[:, 2, 0], leg[:, 2, 1], leg[:, 2, 2] = -c1 * s2, s1, c1 * c2
-    return np.asarray(body_rotation) @ leg
+    legs = []
+    for roll, hip_pitch, knee in np.asarray(q, dtype=np.float64).tolist():  # Python floats: four
+        c1, s1 = math.cos(roll), math.sin(roll)  # legs at 100 Hz, where NumPy's overhead dominates
+        pitch = hip_pitch + knee
+        c2, s2 = math.cos(pitch), math.sin(pitch)
+        legs.append(((c2, 0.0, s2), (s1 * s2, c1, -s1 * c2), (-c1 * s2, s1, c1 * c2)))
+    return np.asarray(body_rotation) @ np.array(legs)
 
 
 def rolled(start: np.ndarray, now: np.ndarray, radius: float) -> np.ndarray:
@@ -138,6 +136,8 @@ def rolled(start: np.ndarray, now: np.ndarray, radius: float) -> np.ndarray:
         Ball radius [m].
     """
     delta = np.asarray(now) @ np.swapaxes(np.asarray(start), -1, -2)  # start -> now, world frame
+    if delta.ndim == 3 and delta.shape[0] <= 4:  # the stance feet at 100 Hz: Python floats
+        return _rolled_few(delta.tolist(), radius)
     cos = np.minimum(np.maximum(0.5 * (delta[..., 0, 0] + delta[..., 1, 1] + delta[..., 2, 2]
                                        - 1.0), -1.0), 1.0)
     angle = np.arccos(cos)
@@ -149,6 +149,23 @@ def rolled(start: np.ndarray, now: np.ndarray, radius: float) -> np.ndarray:
     out = np.zeros(delta.shape[:-1])
     out[..., 0] = scale * (delta[..., 0, 2] - delta[..., 2, 0])  # radius * phi_y
     out[..., 1] = scale * (delta[..., 1, 2] - delta[..., 2, 1])  # radius * -phi_x
+    return out
+
+
+def _rolled_few(delta: list, radius: float) -> np.ndarray:
+    """:func:`rolled` from the rotations start -> now (k, 3, 3) as nested lists, k a few.
+
+    The same operations on Python floats (the same numbers to the last bit),
+    without NumPy's per-call overhead on a handful of values.
+    """
+    out = np.zeros((len(delta), 3))
+    for k, ((d00, _, d02), (_, d11, d12), (d20, d21, d22)) in enumerate(delta):
+        cos = min(max(0.5 * (d00 + d11 + d22 - 1.0), -1.0), 1.0)
+        sin = math.sqrt(1.0 - cos * cos)
+        factor = 0.5 if sin <= 1e-9 else math.acos(cos) / max(2.0 * sin, 1e-18)
+        scale = radius * factor
+        out[k, 0] = scale * (d02 - d20)
+        out[k, 1] = scale * (d12 - d21)
     return out
 
 
@@ -173,10 +190,24 @@ class _LegStack:
     flip_angles: np.ndarray  # (4, 3) factor on the solved angles: pitch, knee by -1 if reflected
     lower: np.ndarray  # (4, 3) [rad] joint limits of each leg
     upper: np.ndarray  # (4, 3) [rad]
+    scalars: tuple  # per leg (hip x, y, z [m], side * hip_offset [m], angle flips (3,), lower (3,)
+    # [rad], upper (3,) [rad]) as Python floats, and the stacked leg's limits ((3,), (3,)) [rad]:
+    # what _solve_legs reads, without NumPy scalar indexing
+
+
+_LAST_STACK: list = [None, None]  # (robot, its _LegStack): the one robot of a run, found by
+# identity at 100 Hz (lru_cache would hash the whole frozen description at every call)
+
+
+def _leg_stack(robot: RobotDescription) -> _LegStack:
+    """:func:`_stacked_legs` of ``robot``, the last robot's remembered."""
+    if _LAST_STACK[0] is not robot:
+        _LAST_STACK[:] = [robot, _stacked_legs(robot)]
+    return _LAST_STACK[1]
 
 
 @lru_cache(maxsize=8)
-def _leg_stack(robot: RobotDescription) -> _LegStack:
+def _stacked_legs(robot: RobotDescription) -> _LegStack:
     """The four legs as one leg of the first leg's knee direction, hip (4, 3) and side (4,) stacked.
 
     A knee-backward leg is the knee-forward one reflected front to back (see
@@ -200,7 +231,50 @@ def _leg_stack(robot: RobotDescription) -> _LegStack:
     mirrored_hi = np.maximum(ref_lo * angle_flip, ref_hi * angle_flip)
     if not (np.allclose(lower, mirrored_lo) and np.allclose(upper, mirrored_hi)):
         raise FootfallError("knee-backward legs must be the knee-forward ones reflected")
-    return _LegStack(stacked, flip, angle_flip, lower, upper)
+    per_leg = tuple((*hips[k].tolist(), float(stacked.side[k] * robot.hip_offset),
+                     tuple(angle_flip[k].tolist()), tuple(lower[k].tolist()),
+                     tuple(upper[k].tolist())) for k in range(len(robot.legs)))
+    scalars = (per_leg, (tuple(ref_lo.tolist()), tuple(ref_hi.tolist())))
+    return _LegStack(stacked, flip, angle_flip, lower, upper, scalars)
+
+
+def _solve_legs(local: list, legs: _LegStack, robot: RobotDescription, previous: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`footfall.kinematics.inverse_kinematics` of the stacked legs, one leg at a time.
+
+    ``local`` holds the four reflected body-frame targets [m] as lists of
+    three floats. The same closed form, operation for operation (so the same
+    angles to the last bit: NumPy's and Python's math functions are the same
+    C library calls here), on Python floats: for four points NumPy's
+    per-call overhead would be the whole cost of the 100 Hz tick. Returns the
+    set-points (4, 3) [rad] -- unflipped, clipped to each leg's limits, a
+    leg without a solution keeping ``previous`` -- and ``ok`` (4,).
+    """
+    l1, l2, d = robot.upper_leg, robot.lower_leg, robot.hip_offset
+    knee = 1.0 if legs.leg.knee_forward else -1.0
+    per_leg, (lo, hi) = legs.scalars
+    out = previous.tolist()
+    ok = [False] * 4
+    pi, tau = math.pi, 2 * math.pi
+    for k in range(4):  # four legs; the three joints written out (no per-joint loops at 100 Hz)
+        hx, hy, hz, side_d, flip, low, high = per_leg[k]
+        x, y, z = local[k]
+        px, py, pz = x - hx, y - hy, z - hz
+        rho2 = py * py + pz * pz - d * d
+        if not rho2 >= 0:  # out of the roll plane's reach (or NaN): keep the previous set-points
+            continue
+        zp = -math.sqrt(rho2)
+        q1 = (math.atan2(pz, py) - math.atan2(zp, side_d) + pi) % tau - pi
+        c3 = (px * px + zp * zp - l1 * l1 - l2 * l2) / (2 * l1 * l2)
+        if not abs(c3) <= 1.0:  # out of the leg's length
+            continue
+        q3 = math.acos(c3) * knee
+        q2 = (math.atan2(-px, -zp) - math.atan2(l2 * math.sin(q3), l1 + l2 * math.cos(q3))
+              + pi) % tau - pi
+        ok[k] = (lo[0] <= q1 <= hi[0]) and (lo[1] <= q2 <= hi[1]) and (lo[2] <= q3 <= hi[2])
+        out[k] = [min(max(q1 * flip[0], low[0]), high[0]), min(max(q2 * flip[1], low[1]), high[1]),
+                  min(max(q3 * flip[2], low[2]), high[2])]
+    return np.array(out), np.array(ok)
 
 
 def body_rotation(rpy: np.ndarray) -> np.ndarray:
@@ -252,6 +326,4 @@ def joint_targets(robot: RobotDescription, feet_world: np.ndarray, commanded: Po
     w = np.asarray(stance, dtype=np.float64)[:, None]
     legs = _leg_stack(robot)
     local = (in_measured + w * (in_commanded - in_measured)) * legs.flip_point
-    q, ok = inverse_kinematics(legs.leg, local, robot)
-    q = np.minimum(np.maximum(q * legs.flip_angles, legs.lower), legs.upper)  # NaN stays NaN
-    return np.where(np.isnan(q).any(axis=1, keepdims=True), previous, q), ok
+    return _solve_legs(local.tolist(), legs, robot, np.asarray(previous, dtype=np.float64))

@@ -22,8 +22,12 @@ import numpy as np
 
 from footfall.errors import FootfallError
 from footfall.heightmap import HeightMap
-from footfall.kinematics import inverse_kinematics, joint_limit_margin, knee_position, \
-    rotation_matrix
+from footfall.kinematics import (
+    legs_inverse_kinematics,
+    legs_joint_limit_margin,
+    legs_knee_position,
+    rotation_matrix,
+)
 from footfall.robot import LITTLEDOG, RobotDescription
 
 TERMS = ("joint", "reach", "leg_clearance", "trunk_clearance", "height", "attitude", "yaw")
@@ -203,19 +207,15 @@ def _measures(problem: _Problem, poses: np.ndarray, exact: bool = False) -> dict
     rot = rotation_matrix(poses[:, 1:])  # (n, 3, 3)
     local = (problem.centres[None] - body[:, None]) @ rot  # (n, 4, 3) body-frame foot centres
 
-    joint = np.empty((n, 4))
-    reach = np.empty((n, 4))
-    ok_all = np.ones(n, dtype=bool)
     frac = np.linspace(0.0, cfg.shin_fraction, cfg.shin_samples)
-    leg_points = np.empty((n, 4, cfg.shin_samples, 3))
-    for k, leg in enumerate(robot.legs):  # the four legs, each vectorised over all poses
-        q, ok = inverse_kinematics(leg, local[:, k], robot)
-        ok_all &= ok
-        margin = joint_limit_margin(leg, q)
-        joint[:, k] = np.where(np.isnan(margin), _NO_SOLUTION_MARGIN, margin)
-        reach[:, k] = robot.max_reach - np.linalg.norm(local[:, k] - np.asarray(leg.hip), axis=1)
-        knee = knee_position(leg, q, robot)
-        leg_points[:, k] = knee[:, None] + frac[None, :, None] * (local[:, k] - knee)[:, None]
+    q, ok = legs_inverse_kinematics(robot, local)  # the four legs and all poses at once
+    ok_all = ok.all(axis=1)
+    margin = legs_joint_limit_margin(robot, q)
+    joint = np.where(np.isnan(margin), _NO_SOLUTION_MARGIN, margin)  # (n, 4)
+    hips = np.array([leg.hip for leg in robot.legs])
+    reach = robot.max_reach - np.linalg.norm(local - hips, axis=2)  # (n, 4)
+    knee = legs_knee_position(robot, q)
+    leg_points = knee[:, :, None] + frac[None, None, :, None] * (local - knee)[:, :, None]
     world = (leg_points.reshape(n, -1, 3) @ rot.transpose(0, 2, 1)).reshape(leg_points.shape)
     world += body[:, None, None]
     ground = problem.hmap.height_at(world[..., :2])
@@ -249,19 +249,23 @@ def _trunk_clearance(problem: _Problem, poses: np.ndarray, body: np.ndarray, rot
     normal = r[:, :, 2]  # body z axis in the world
     centre = b - lz * normal  # a point of the underside plane
     gx, gy = -normal[:, 0] / normal[:, 2], -normal[:, 1] / normal[:, 2]
-    # Underside height above each cell centre: (m, 3) @ (3, p), one matrix product.
-    coef = np.column_stack([centre[:, 2] - gx * centre[:, 0] - gy * centre[:, 1], gx, gy])
-    xy, h = problem.cells_xy, problem.cells_h
-    plane = coef @ np.vstack([np.ones(h.size), xy.T])
     # Which cells are under the trunk depends on x, y and yaw only: one mask per distinct yaw
     # (a search round has a handful). A cell counts if its centre lies within the footprint
     # grown by half a cell diagonal; the tilt's few-mm shift of the footprint is neglected.
     pad = cfg.trunk_cell / np.sqrt(2.0)
     yaws, group = np.unique(poses[todo, 3], return_inverse=True)
+    xy, h = problem.cells_xy, problem.cells_h
     d = xy - problem.body_xy
     u = np.cos(yaws)[:, None] * d[:, 0] + np.sin(yaws)[:, None] * d[:, 1]
     v = -np.sin(yaws)[:, None] * d[:, 0] + np.cos(yaws)[:, None] * d[:, 1]
     under = (np.abs(u) <= lx + pad) & (np.abs(v) <= ly + pad)
+    cells = under.any(axis=0)  # under the trunk at one of these yaws: the only cells that count
+    if not cells.any():
+        return out  # no cell with data under the trunk: nothing to clear
+    xy, h, under = xy[cells], h[cells], under[:, cells]
+    # Underside height above each cell centre: (m, 3) @ (3, p), one matrix product.
+    coef = np.column_stack([centre[:, 2] - gx * centre[:, 0] - gy * centre[:, 1], gx, gy])
+    plane = coef @ np.vstack([np.ones(h.size), xy.T])
     offset = np.where(under, -h, np.inf)  # (distinct yaws, p)
     out[todo] = (plane + offset[group]).min(axis=1)
     return out

@@ -34,7 +34,8 @@ joint damping and armature implicitly, which keeps the light legs stable at
 this step; a finer step would only slow the simulation down. Contacts use
 elliptic friction cones with a high impedance ratio, so that a foot inside
 its friction cone stays put instead of creeping as MuJoCo's soft contacts
-otherwise do.
+otherwise do; the constraint solver works on sparse Jacobians (faster with
+elliptic cones, see JACOBIAN).
 """
 
 from __future__ import annotations
@@ -62,6 +63,11 @@ CONTACT_TIMECONST_STEPS = 2.0  # [steps] contact time constant in physics steps:
 IMPRATIO = 100.0  # [-] friction-to-normal impedance ratio of MuJoCo's elliptic friction cones:
 # makes static friction hold (a standing foot creeps < 0.2 mm in 4 s on a 0.3 slope, against
 # 14 mm with MuJoCo's defaults)
+JACOBIAN = "sparse"  # MuJoCo's constraint Jacobian storage. Its "auto" picks dense for so few
+# degrees of freedom (18), but with elliptic cones the sparse Newton solver is faster while
+# walking: 240 instead of 360 us per step over rocks (~14 contacts, ~8 iterations per step; the
+# same iterations, the same solution up to rounding). A robot standing still, where the warm-
+# started solver stops almost at once, steps ~5-10 % faster with dense
 TILE_CELLS = 32  # [cells] side of a terrain tile (64 mm at 2 mm): small enough that flat
 # stretches become boxes and a geom's bounding box meets few tiles' elevation ranges
 SHIN_PIECES = 3  # [-] the shin collides as this many collinear capsules: the same shape, but
@@ -379,7 +385,7 @@ def _mjcf(robot: RobotDescription, tiles: list[dict] | None, terrain_offset,
     return f"""<mujoco model="{robot.name}">
   <compiler angle="radian" autolimits="true" inertiafromgeom="true"/>
   <option timestep="{_f(timestep)}" integrator="implicitfast" cone="elliptic"
-          impratio="{_f(IMPRATIO)}"/>
+          impratio="{_f(IMPRATIO)}" jacobian="{JACOBIAN}"/>
   <visual><global offwidth="1920" offheight="1080"/><quality shadowsize="1024"/></visual>
   <default>
     <joint armature="{_f(robot.joint_armature)}" damping="{_f(robot.joint_damping)}"/>

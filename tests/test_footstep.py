@@ -290,3 +290,17 @@ def test_search_radius_keeps_f_near_the_gait_nominal_position_or_falls_back(flat
     assert c.candidates.shape[0] > a.candidates.shape[0]
     with pytest.raises(FootfallError, match="search_radius"):
         FootstepConfig(search_radius=0.0)
+
+
+def test_the_path_bias_holds_against_a_rewards_pose_part_too():
+    from footfall.control.footstep import reward_spread
+
+    strong = dataclasses.replace(POSED, pose_weights=10 * POSED.pose_weights, name="strong")
+    assert reward_spread(strong) > reward_spread(POSED) > reward_spread(
+        dataclasses.replace(POSED, pose_weights=0 * POSED.pose_weights, name="no pose"))
+    hmap = flat_map()
+    path = BodyPath.straight((0.3, 0.0), (0.8, 0.0))
+    config = FootstepConfig(bias_weight=60.0)
+    a = FootstepPlanner(hmap, lambda leg: POSED, path, config=config).bias_
+    b = FootstepPlanner(hmap, lambda leg: strong, path, config=config).bias_
+    assert all(b[leg] > a[leg] for leg in LEG_NAMES)

@@ -68,13 +68,19 @@ def test_resuming_after_an_interruption_repeats_nothing_and_loses_nothing(uninte
 
 def test_the_reproduction_has_every_table(uninterrupted):
     r = _results(uninterrupted)
-    assert set(r["table2"]) == {"terrain", "templates", "both", "flat"}
+    assert set(r["table2"]) == {"terrain", "templates", "both", "flat", "expert", "default"}
     assert all(t["runs"] == TINY.eval_runs for t in r["table2"].values())
+    with DemoStore(uninterrupted / "reproduce.sqlite") as store:  # the expert chose its own
+        judged = [store.run(x["id"]) for x in store.runs(key_prefix="eval/expert/")]
+        plain = [store.run(x["id"]) for x in store.runs(key_prefix="eval/default/")]
+    assert judged and all(run.settings["judge"] == "SyntheticExpert.values" for run in judged)
+    assert plain and all("judge" not in run.settings for run in plain)
     assert set(r["table1"]) == {"templates", "both"}
     assert r["demonstrations"]["n"] > 0
     assert set(r["ranking"]) == {"terrain", "templates", "both"}
     md = (uninterrupted / "report.md").read_text()
     assert "Table I" in md and "Table II" in md and "Wilson" in md
+    assert "Expert choosing (reference)" in md and "Hand-tuned reward (reference)" in md
 
 
 def test_another_configuration_in_the_same_folder_is_refused(uninterrupted):

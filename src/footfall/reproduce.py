@@ -56,6 +56,9 @@ from footfall.walk import WalkConfig
 
 STORE_NAME = "reproduce.sqlite"
 ROBOT_FEATURE_SET = "both"  # the function the robot walks with between correction rounds
+TABLE2_REFERENCES = ("flat", "expert", "default")  # Table II rows beside the three functions:
+# the "both" function on flat ground (the paper's slip baseline), and on the test board the
+# synthetic expert choosing every foothold itself and the hand-tuned default reward
 Spec = tuple[tuple[str, float], ...]  # a board: (kind, difficulty) of each module
 
 
@@ -172,6 +175,7 @@ class _Job:
     margin: float = 0.0
     cap: int | None = None
     expert: ExpertConfig = field(default_factory=ExpertConfig)
+    judge: bool = False  # the expert chooses every foothold itself (model unused)
 
 
 def _execute(job: _Job) -> tuple[RunRecord, list]:
@@ -185,7 +189,8 @@ def _execute(job: _Job) -> tuple[RunRecord, list]:
 
     hmap = HeightMap.load(job.terrain)
     with threadpool_limits(limits=1):
-        record = walk(hmap, reward_source(job.model, hmap), job.seed, job.walk)
+        judge = SyntheticExpert(job.expert).values if job.judge else None
+        record = walk(hmap, reward_source(job.model, hmap), job.seed, job.walk, judge=judge)
         record = replace(record, key=job.key)
         demos = []
         if job.correct:
@@ -386,8 +391,13 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = Reproduce
                 for fs in FEATURE_SETS for s in seeds]
         jobs += [_Job(f"eval/flat/s{s}", str(paths["flat"]), model_file[ROBOT_FEATURE_SET], s,
                       walk_cfg) for s in seeds]
+        # References on the same board and seeds: the expert choosing every foothold itself
+        # (the best a function learned from it can hope for) and the hand-tuned default.
+        jobs += [_Job(f"eval/expert/s{s}", str(paths["test"]), None, s, walk_cfg,
+                      expert=config.expert, judge=True) for s in seeds]
+        jobs += [_Job(f"eval/default/s{s}", str(paths["test"]), None, s, walk_cfg) for s in seeds]
         _run_jobs(jobs, store, by_hash, processes, "evaluation runs", on_run, log)
-        table2 = {fs: _summary(store, f"eval/{fs}/") for fs in (*FEATURE_SETS, "flat")}
+        table2 = {fs: _summary(store, f"eval/{fs}/") for fs in (*FEATURE_SETS, *TABLE2_REFERENCES)}
         results["table2"] = table2
         results["slips_mm"] = {fs: _slips(store, f"eval/{fs}/") for fs in table2}
         sweep = {}

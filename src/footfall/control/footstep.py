@@ -13,6 +13,7 @@ reward (see :meth:`FootstepPlanner.plan` for the approximation).
 
 from __future__ import annotations
 
+import hashlib
 import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
@@ -170,9 +171,9 @@ def reward_spread(reward: LinearReward) -> float:
     pose weights. A learned reward's pose part can vary over F far more than
     its terrain part, and the path bias must hold against the whole of it.
     See :func:`footfall.control.body_path.reward_unit`. Cached by the reward's
-    content, so equal rewards get the very same number.
+    content (terrain part and pose weights), so equal rewards get the very same number.
     """
-    key = reward_key(reward)
+    key = _spread_key(reward)
     if key not in _SPREADS:
         module = _reference_module()
         grid = score_grid(module, reward, spacing=0.005, yaw=GRID_YAW)
@@ -186,6 +187,12 @@ def reward_spread(reward: LinearReward) -> float:
     return _SPREADS[key]
 
 
+def _spread_key(reward: LinearReward) -> str:
+    """Digest of everything that sets a reward's spread: its terrain part and its pose weights."""
+    pose = np.ascontiguousarray(reward.pose_weights, dtype=np.float64).tobytes()
+    return reward_key(reward) + hashlib.sha256(pose).hexdigest()
+
+
 @lru_cache(maxsize=1)
 def _reference_states() -> tuple[RobotState, ...]:
     """The robot in its default stance at the reference module's centre, each leg swinging."""
@@ -195,7 +202,7 @@ def _reference_states() -> tuple[RobotState, ...]:
     return tuple(nominal_state(module, centre, GRID_YAW, leg) for leg in LEG_NAMES)
 
 
-_SPREADS: dict[str, float] = {}  # reward content digest -> spread (a few rewards per process)
+_SPREADS: dict[str, float] = {}  # _spread_key -> spread (a few rewards per process)
 
 
 class FootstepPlanner:
@@ -244,15 +251,14 @@ class FootstepPlanner:
     def _bias_weights(self) -> dict[str, float]:
         """Path bias [reward/m] per leg: ``bias_weight`` scaled to each reward's spread.
 
-        A reward with the default's terrain part (the same :func:`reward_key`)
-        has the ratio 1 exactly, so its bias is ``bias_weight`` to the last
+        A reward with the default's terrain and pose parts has the ratio 1 exactly, so its bias is ``bias_weight`` to the last
         bit without scoring the reference module at all (a module made and
         scored: ~0.5 s of CPU, once per process, that would only be divided
         by itself); other rewards are scaled by their cached spreads.
         """
         default = default_reward(self.rewards_[LEG_NAMES[0]].config)
-        default_key = reward_key(default)
-        return {name: (self.config.bias_weight if reward_key(r) == default_key else
+        default_key = _spread_key(default)
+        return {name: (self.config.bias_weight if _spread_key(r) == default_key else
                        self.config.bias_weight * (reward_spread(r) / reward_spread(default)))
                 for name, r in self.rewards_.items()}
 

@@ -1,10 +1,11 @@
-# footfall: `make run` sets everything up and runs the main job; `make test` runs the tests.
+# footfall: `make run` sets everything up and runs the main job (the walking experiment);
+# `make test` runs the tests.
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: run demo test smoke bench clean
+.PHONY: run offline demo test smoke bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -12,8 +13,13 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[test]'
 	touch $(STAMP)
 
-# The main job: the offline experiment (learn from demonstrations, rank unseen terrain).
+# The main job: the paper's walking experiment end to end (walk, correct, learn, walk unseen
+# terrain); resumes where it stopped. Report in out/reproduce/report.html.
 run: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/footfall reproduce --out out/reproduce
+
+# The offline experiment (learn from demonstrations, rank footholds on unseen terrain).
+offline: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/footfall offline --out out/offline
 
 # Pictures of a board scored densely with the hand-tuned reward.

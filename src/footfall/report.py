@@ -84,8 +84,8 @@ def _figures(out: Path, results: dict, maps: dict, models: dict, config, log) ->
     if not strip.exists():
         log("snapshot strip of a crossing (offscreen rendering)")
         _strip(maps["test"], out / "models" / "both.npz", config, strip)
-    figs.append(("crossing.png", "A crossing of the test board with templates + features "
-                                 "(as the paper's Fig. 4)."))
+    figs.append(("crossing.png", "A run of templates + features over the test board (as the "
+                                 "paper's Fig. 4; the title says how it ended)."))
     return figs
 
 
@@ -163,7 +163,8 @@ def _markdown(results: dict, figs: list[tuple[str, str]]) -> str:
         lines.append("")
     lines += ["## Offline ranking on expert demonstrations over the test board", "",
               "Loss: the expert's value of its best candidate minus its value of the function's "
-              "pick (1 unit = 1 cm of progress), 95 % bootstrap interval.", "",
+              "pick (1 unit = 1 cm off the gait-nominal foothold for the walking expert), 95 % "
+              "bootstrap interval.", "",
               "| features | top-1 | within 1 cm | percentile | loss | loss 95 % CI |",
               "| --- | --- | --- | --- | --- | --- |"]
     for fs, a in results["ranking"].items():

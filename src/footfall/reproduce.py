@@ -73,11 +73,13 @@ class ReproduceConfig:
     test_board: Spec = (("rocky", 0.7), ("steps", 0.7))  # modules with fresh seeds
     sweep_difficulties: tuple[float, ...] = (0.8, 0.9, 1.0)  # [-] harder test boards, walked
     # only if every function succeeds in every run on the test board
-    rounds: int = 3  # most correction rounds (walk, correct, learn)
+    rounds: int = 5  # most correction rounds (walk, correct, learn); with six runs a round and
+    # the worst six corrections a run, five rounds collect the paper's ~100 (three gave 58)
     target_demos: int = 100  # rounds stop once this many corrections are collected
     corrections_per_run: int | None = 6  # the expert labels the worst this many steps of a run
     # whose shortfall exceeds the margin (None: all of them)
-    margin: float = 2.0  # [expert value units, 1 unit = 1 cm of progress] shortfall that counts
+    margin: float = 2.0  # [expert value units; the walking expert's unit: 1 cm off the gait-
+    # nominal foothold] shortfall that counts
     library_size: int = 1000  # templates in the library before L1 selection
     training_candidates: int = 100  # candidates per demonstration in the pairwise training set
     selection: str = "min"  # lambda at the smallest cross-validation error (paper §V)

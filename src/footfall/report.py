@@ -83,22 +83,23 @@ def _figures(out: Path, results: dict, maps: dict, models: dict, config, log) ->
     strip = out / "crossing.png"
     if not strip.exists():
         log("snapshot strip of a crossing (offscreen rendering)")
-        _strip(maps["test"], out / "models" / "both.npz", config, strip)
-    figs.append(("crossing.png", "A run of templates + features over the test board (as the "
-                                 "paper's Fig. 4; the title says how it ended)."))
+        _strip(maps["test"], out / "models" / "both.npz", config, strip, results["strip_seed"])
+    figs.append(("crossing.png", "Templates + features on the test board: its first evaluation "
+                                 "run that crossed, if any (as the paper's Fig. 4; the title "
+                                 "says how it ended)."))
     return figs
 
 
-def _strip(board, model_path: Path, config, path: Path) -> None:
+def _strip(board, model_path: Path, config, path: Path, seed: int) -> None:
+    """Snapshots of the evaluation run of templates + features with ``seed`` (replayed: seeded)."""
     from footfall.runs import reward_source, save_strip
     from footfall.walk import Frames, walk
 
     frames = Frames(snapshot_count=6, width=360, height=270)
-    record = walk(board, reward_source(model_path, board), 1000 * config.seed + 5000,
-                  config.walk, frames=frames)
+    record = walk(board, reward_source(model_path, board), seed, config.walk, frames=frames)
     r = record.result
     save_strip(frames.snapshots, path, title=f"templates + features, seed "
-               f"{1000 * config.seed + 5000}: {'success' if r['success'] else r['reason']}")
+               f"{seed}: {'success' if r['success'] else r['reason']}")
 
 
 def _pct(x: float) -> str:

@@ -412,6 +412,10 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = Reproduce
                 sweep[f"{d:g}"] = {fs: _summary(store, f"sweep/{d:g}/{fs}/")
                                    for fs in FEATURE_SETS}
         results["sweep"] = sweep
+        crossed = [r["key"] for r in store.runs(key_prefix=f"eval/{ROBOT_FEATURE_SET}/")
+                   if r["result"]["success"]]
+        results["strip_seed"] = (min(int(k.rsplit("/s", 1)[1]) for k in crossed) if crossed
+                                 else seeds[0])  # the report's Fig. 4: a crossing, if any
         results["test_difficulty"] = max(d for _, d in config.test_board)
 
         # The offline ranking of the three functions on the expert's demonstrations.

@@ -111,3 +111,15 @@ def test_the_default_reproduction_walks_with_the_walking_expert_and_a_local_f():
     assert config.expert.stance_lead == config.walk.footstep.lead
     assert config.walk.footstep.search_radius == REPRODUCTION_SEARCH_RADIUS
     assert WalkConfig().footstep.search_radius is None  # plain walks: every reachable foothold
+
+
+def test_tables_do_not_depend_on_the_order_in_which_runs_finished():
+    from types import SimpleNamespace
+
+    from footfall.reproduce import _runs_by_key
+
+    rows = [{"key": "eval/both/s5002", "id": 1}, {"key": "eval/both/s5000", "id": 2},
+            {"key": "eval/both/s5001", "id": 3}]
+    store = SimpleNamespace(runs=lambda key_prefix: [r for r in rows
+                                                     if r["key"].startswith(key_prefix)])
+    assert [r["id"] for r in _runs_by_key(store, "eval/both/")] == [2, 3, 1]

@@ -425,14 +425,19 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = Reproduce
     return results
 
 
+def _runs_by_key(store: DemoStore, prefix: str) -> list[dict]:
+    """The stored runs under ``prefix`` in key order: not in the order parallel workers finished."""
+    return sorted(store.runs(key_prefix=prefix), key=lambda r: r["key"])
+
+
 def _summary(store: DemoStore, prefix: str) -> dict:
-    records = [store.run(r["id"]) for r in store.runs(key_prefix=prefix)]
+    records = [store.run(r["id"]) for r in _runs_by_key(store, prefix)]
     return summarise(records).as_dict()
 
 
 def _slips(store: DemoStore, prefix: str) -> list[float]:
     out: list[float] = []
-    for r in store.runs(key_prefix=prefix):
+    for r in _runs_by_key(store, prefix):
         if r["result"].get("success"):
             out += [1e3 * float(s) for s in store.run(r["id"]).slips()]
     return out

@@ -15,7 +15,7 @@ from footfall.pose_features import POSE_FEATURE_NAMES
 from footfall.reward import LinearReward, default_reward, weights_from_names
 from footfall.robot import LEG_NAMES, LITTLEDOG
 from footfall.scoring import score_footholds
-from footfall.state import RobotState, nominal_state
+from footfall.state import RobotState, feet_pitch, nominal_state
 from footfall.terrain.modules import make_module
 
 REWARD = default_reward()
@@ -120,7 +120,7 @@ def test_candidate_set_is_the_reachable_set_with_feature_coverage(rocky):
         plan = planner.plan(state)
         touchdown = RobotState(state.feet, np.array([*plan.body_xy[0], state.feet[:, 2].mean()
                                                      + LITTLEDOG.nominal_height]),
-                               np.zeros(3), leg)
+                               np.array([0.0, feet_pitch(state.feet), 0.0]), leg)
         expected = reachable_footholds(hmap, touchdown, LITTLEDOG, 0.005, REWARD.config)
         np.testing.assert_array_equal(plan.candidates, expected)
         # The look-ahead's small windows follow the same rule.
@@ -176,7 +176,8 @@ def test_pose_weighted_rewards_are_the_reward_function_s(rocky):
     state = nominal_state(hmap, (0.3, 0.0), 0.0, "RF")
     plan = planner.plan(state)
     touchdown = RobotState(state.feet, np.array([*plan.body_xy[0], state.feet[:, 2].mean()
-                                                 + LITTLEDOG.nominal_height]), np.zeros(3), "RF")
+                                                 + LITTLEDOG.nominal_height]),
+                           np.array([0.0, feet_pitch(state.feet), 0.0]), "RF")
     exact = score_footholds(hmap, touchdown, plan.candidates, POSED)
     np.testing.assert_allclose(plan.reward, exact, rtol=1e-4, atol=1e-4)
     assert np.isfinite(plan.value[plan.index])
@@ -304,3 +305,23 @@ def test_the_path_bias_holds_against_a_rewards_pose_part_too():
     a = FootstepPlanner(hmap, lambda leg: POSED, path, config=config).bias_
     b = FootstepPlanner(hmap, lambda leg: strong, path, config=config).bias_
     assert all(b[leg] > a[leg] for leg in LEG_NAMES)
+
+
+def test_the_predicted_body_pitches_with_the_feet_so_a_front_foot_reaches_down_a_step():
+    # Two steps down (60 -> 30 -> 0 mm): hind feet on top, front feet on the middle step.
+    x = np.arange(0, 901) * 0.001
+    heights = np.repeat(np.where(x < 0.40, 0.06, np.where(x < 0.47, 0.03, 0.0))[:, None], 601,
+                        axis=1)
+    hmap = grid_map(heights)
+    state = nominal_state(hmap, (0.34, 0.0), 0.0, "LF")
+    assert state.feet[0, 2] == pytest.approx(0.03) and state.feet[2, 2] == pytest.approx(0.06)
+    pitch = feet_pitch(state.feet)
+    assert pitch == pytest.approx(np.arctan2(0.03, 2 * LITTLEDOG.leg("LF").hip[0]))
+    assert feet_pitch(flat_map().heights[:4, :3] * 0) == 0.0  # level feet: no pitch
+    planner = FootstepPlanner(hmap, lambda leg: REWARD, BodyPath.straight((0.34, 0.0), (0.8, 0.0)))
+    plan = planner.plan(state)
+    assert plan.state.body_rpy[1] == pytest.approx(feet_pitch(state.feet))
+    level = RobotState(plan.state.feet, plan.state.body_position, np.zeros(3), "LF")
+    lower = [np.sum(f[:, 2] == 0.0) for f in (
+        reachable_footholds(hmap, level), reachable_footholds(hmap, plan.state))]
+    assert lower[1] > 2 * lower[0]  # the pitched body reaches much more of the lower level

@@ -88,3 +88,24 @@ def nominal_state(hmap, body_xy, yaw: float, swing_leg: str, goal=None, robot=No
     body = np.array([xy[0], xy[1], z.mean() + robot.nominal_height])
     goal = xy + 1e3 * np.array([c, s]) if goal is None else goal
     return RobotState(feet, body, np.array([0.0, 0.0, yaw]), swing_leg, goal)
+
+
+def feet_pitch(feet: np.ndarray, robot=None) -> float:
+    """Pitch [rad] of the line from the hind feet's mean to the front feet's mean.
+
+    ``feet`` (4, 3) [m] in ``LEG_NAMES`` order. Positive when the front feet
+    stand lower (nose down, the body-frame convention of
+    :mod:`footfall.kinematics`); 0 on level ground. The body a planner
+    predicts pitched so follows the terrain under its feet, as the pose finder
+    will pitch it: a level prediction puts the front hips too high to reach
+    down a step (and the hind hips too high on the way up).
+    """
+    from footfall.robot import LITTLEDOG
+
+    robot = robot or LITTLEDOG
+    feet = np.asarray(feet, dtype=np.float64)
+    front = np.array([robot.leg(n).hip[0] > 0 for n in LEG_NAMES])
+    f, h = feet[front].mean(axis=0), feet[~front].mean(axis=0)
+    run = max(float(np.hypot(f[0] - h[0], f[1] - h[1])), 1e-6)
+    return float(np.arctan2(h[2] - f[2], run))
+

@@ -32,7 +32,7 @@ from footfall.pose_features import pose_features
 from footfall.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.reward import LinearReward, default_reward
 from footfall.scoring import ScoreGrid, score_grid
-from footfall.state import RobotState, nominal_state
+from footfall.state import RobotState, feet_pitch, nominal_state
 from footfall.walker import DEFAULT_STRIDE
 
 Judge = Callable[[HeightMap, RobotState, np.ndarray], np.ndarray]  # (map, state, footholds
@@ -300,9 +300,11 @@ class FootstepPlanner:
 
     def _state(self, feet: np.ndarray, xy: np.ndarray, yaw: float, leg: str,
                goal: np.ndarray) -> RobotState:
-        """The predicted state: body on the path, nominal height above the mean foot height."""
+        """The predicted state: body on the path, nominal height above the mean foot height,
+        pitched along the feet (:func:`~footfall.state.feet_pitch`), no roll."""
         body = np.array([xy[0], xy[1], feet[:, 2].mean() + self.robot.nominal_height])
-        return RobotState(feet, body, np.array([0.0, 0.0, yaw]), leg, goal)
+        return RobotState(feet, body, np.array([0.0, feet_pitch(feet, self.robot), yaw]), leg,
+                          goal)
 
     def heading(self, s: np.ndarray) -> np.ndarray:
         """Body heading [rad] at arc length s [m] (...): toward the path point heading_horizon ahead.

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from footfall.errors import FootfallError
-from footfall.robot import LEG_NAMES
+from footfall.robot import LEG_NAMES, LITTLEDOG
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,12 +100,9 @@ def feet_pitch(feet: np.ndarray, robot=None) -> float:
     will pitch it: a level prediction puts the front hips too high to reach
     down a step (and the hind hips too high on the way up).
     """
-    from footfall.robot import LITTLEDOG
-
     robot = robot or LITTLEDOG
     feet = np.asarray(feet, dtype=np.float64)
     front = np.array([robot.leg(n).hip[0] > 0 for n in LEG_NAMES])
     f, h = feet[front].mean(axis=0), feet[~front].mean(axis=0)
     run = max(float(np.hypot(f[0] - h[0], f[1] - h[1])), 1e-6)
     return float(np.arctan2(h[2] - f[2], run))
-

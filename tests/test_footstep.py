@@ -320,8 +320,35 @@ def test_the_predicted_body_pitches_with_the_feet_so_a_front_foot_reaches_down_a
     assert feet_pitch(np.zeros((4, 3))) == 0.0  # level feet: no pitch
     planner = FootstepPlanner(hmap, lambda leg: REWARD, BodyPath.straight((0.34, 0.0), (0.8, 0.0)))
     plan = planner.plan(state)
+    # LF reaches its path-nominal foothold from there: the body is posed over the feet as they stand.
     assert plan.state.body_rpy[1] == pytest.approx(feet_pitch(state.feet))
     level = RobotState(plan.state.feet, plan.state.body_position, np.zeros(3), "LF")
     lower = [np.sum(f[:, 2] == 0.0) for f in (
         reachable_footholds(hmap, level), reachable_footholds(hmap, plan.state))]
     assert lower[1] > 2 * lower[0]  # the pitched body reaches much more of the lower level
+
+
+def test_the_body_is_predicted_for_the_stance_after_the_step_so_a_front_foot_reaches_down_a_riser():
+    # One 64 mm riser down at x = 0.40 m, every foot still on top: posed over the feet as they
+    # stand, the body would hold LF's hip so high that nothing below the edge is in reach, and the
+    # robot would shuffle at the edge for ever (it did, on steps modules with a single riser).
+    x = np.arange(0, 901) * 0.001
+    hmap = grid_map(np.repeat(np.where(x < 0.40, 0.064, 0.0)[:, None], 601, axis=1))
+    state = nominal_state(hmap, (0.28, 0.0), 0.0, "LF")
+    assert np.all(state.feet[:, 2] == pytest.approx(0.064))
+    config = FootstepConfig(search_radius=0.03)
+    plan = FootstepPlanner(hmap, lambda leg: REWARD, BodyPath.straight((0.28, 0.0), (0.8, 0.0)),
+                           config=config).plan(state)
+    assert hmap.height_at(plan.targets[:1])[0] == 0.0  # LF's path-nominal foothold is below
+    assert plan.foothold[2] == 0.0 and plan.foothold[0] > 0.40  # and it steps down
+    assert np.hypot(*(plan.foothold[:2] - plan.targets[0])) <= 0.03
+    after = state.feet.copy()  # posed for the stance after the step: LF at its nominal foothold
+    after[0] = (*plan.targets[0], 0.0)
+    assert plan.state.body_rpy[1] == pytest.approx(feet_pitch(after))
+    assert plan.state.body_position[2] == pytest.approx(after[:, 2].mean()
+                                                        + LITTLEDOG.nominal_height)
+    before = RobotState(state.feet, (*plan.state.body_position[:2],
+                                     state.feet[:, 2].mean() + LITTLEDOG.nominal_height),
+                        np.array([0.0, feet_pitch(state.feet), 0.0]), "LF")
+    assert not np.any(reachable_footholds(hmap, before)[:, 2] == 0.0)
+    assert np.sum(reachable_footholds(hmap, plan.state)[:, 2] == 0.0) > 100

@@ -33,6 +33,18 @@ def lattice(hmap: HeightMap, x_range: tuple[float, float], y_range: tuple[float,
     return np.column_stack([xx.ravel(), yy.ravel()])
 
 
+def reaches(state: RobotState, footholds: np.ndarray, robot: RobotDescription = LITTLEDOG
+            ) -> np.ndarray:
+    """Whether the swing leg of ``state`` reaches each contact point (n, 3) [m] -> (n,) bool:
+    inverse kinematics of the ball-foot centre (``foot_radius`` above the point) within the
+    joint limits, at the state's body pose."""
+    leg = robot.leg(state.swing_leg)
+    centre = np.asarray(footholds, dtype=np.float64) + (0.0, 0.0, robot.foot_radius)
+    _, ok = inverse_kinematics(leg, world_to_body(centre, state.body_position, state.body_rpy),
+                               robot)
+    return ok
+
+
 def reachable_footholds(hmap: HeightMap, state: RobotState, robot: RobotDescription = LITTLEDOG,
                         spacing: float = DEFAULT_SPACING, config: FeatureConfig | None = None
                         ) -> np.ndarray:
@@ -49,10 +61,8 @@ def reachable_footholds(hmap: HeightMap, state: RobotState, robot: RobotDescript
     pts = lattice(hmap, (hip[0] - reach, hip[0] + reach), (hip[1] - reach, hip[1] + reach), spacing)
     z = hmap.height_at(pts)
     has_data = ~np.isnan(z)
-    pts, z = pts[has_data], z[has_data]
-    centre = np.column_stack([pts, z + robot.foot_radius])
-    _, ok = inverse_kinematics(leg, world_to_body(centre, state.body_position, state.body_rpy), robot)
-    out = np.column_stack([pts, z])[ok]
+    out = np.column_stack([pts[has_data], z[has_data]])
+    out = out[reaches(state, out, robot)]
     if config is not None and out.shape[0]:
         cov = patch_coverage(hmap, out, state.yaw, leg.mirrored, config)
         out = out[np.all(cov >= config.min_coverage, axis=1)]

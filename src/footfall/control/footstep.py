@@ -21,12 +21,11 @@ from typing import Callable
 
 import numpy as np
 
-from footfall.candidates import lattice, reachable_footholds
+from footfall.candidates import lattice, reachable_footholds, reaches
 from footfall.control.body_path import BodyPath, RewardFor, grid_spacing, grid_values, \
     reward_key, reward_unit, terrain_grids
 from footfall.errors import FootfallError
 from footfall.heightmap import HeightMap
-from footfall.kinematics import inverse_kinematics, world_to_body
 from footfall.patches import foothold_patches
 from footfall.pose_features import pose_features
 from footfall.robot import LEG_NAMES, LITTLEDOG, RobotDescription
@@ -79,8 +78,8 @@ class FootstepConfig:
     # from the grids (patches turned by up to this much); beyond it, exact patches (slow)
 
     def __post_init__(self) -> None:
-        for name in ("step_advance", "spacing", "lookahead_radius", "target_radius", "heading_horizon",
-                     "heading_tolerance"):
+        for name in ("step_advance", "spacing", "lookahead_radius", "target_radius",
+                     "heading_horizon", "heading_tolerance"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise FootfallError(f"footstep config: {name} must be > 0, got {value}")
@@ -293,23 +292,20 @@ class FootstepPlanner:
                       self.config.spacing)
         pts = pts[np.sum((pts - target) ** 2, axis=1) <= r * r]
         z = self.hmap.height_at(pts)
-        pts, z = pts[~np.isnan(z)], z[~np.isnan(z)]
-        centre = np.column_stack([pts, z + self.robot.foot_radius])
-        leg = self.robot.leg(state.swing_leg)
-        _, ok = inverse_kinematics(leg, world_to_body(centre, state.body_position, state.body_rpy),
-                                   self.robot)
-        return np.column_stack([pts, z])[ok]
+        out = np.column_stack([pts, z])[~np.isnan(z)]
+        return out[reaches(state, out, self.robot)]
 
     def _state(self, feet: np.ndarray, xy: np.ndarray, yaw: float, leg: str,
-               goal: np.ndarray, target: np.ndarray) -> RobotState:
+               goal: np.ndarray, target: np.ndarray, ground: float) -> RobotState:
         """The predicted state at the touch-down of ``leg``: the feet as they stand, the body on
         the path at ``xy`` heading ``yaw``, no roll.
 
         The body stands ``nominal_height`` above the mean height of the feet,
         pitched along them (:func:`~footfall.state.feet_pitch`) -- unless from
         there the swing leg cannot reach its path-nominal foothold ``target``
-        (2,) [m] (on the terrain's median height within ``target_radius`` of it):
-        then it is posed so over the feet of the stance *after* the step, the
+        (2,) [m] on the ground at height ``ground`` [m] (:meth:`_ground`; NaN: no
+        data there, the mean height of the feet): then it is posed so over the
+        feet of the stance *after* the step, the
         swing foot at ``target``, as the pose finder will pose it. The first
         pose would hold a front hip a whole riser too high to reach down a step,
         every foothold below the edge out of reach, and the robot would shuffle
@@ -318,15 +314,12 @@ class FootstepPlanner:
         crossings against 121 / 126).
         """
         state = self._posed_over(feet, feet, xy, yaw, leg, goal)
-        ground = self._ground(target, feet[:, 2])
-        leg_ = self.robot.leg(leg)
-        centre = np.array([[target[0], target[1], ground + self.robot.foot_radius]])
-        _, ok = inverse_kinematics(leg_, world_to_body(centre, state.body_position,
-                                                       state.body_rpy), self.robot)
-        if ok[0]:
+        foothold = np.array([target[0], target[1],
+                             feet[:, 2].mean() if math.isnan(ground) else ground])
+        if reaches(state, foothold[None], self.robot)[0]:
             return state
         after = np.array(feet, dtype=np.float64, copy=True)
-        after[LEG_NAMES.index(leg)] = (target[0], target[1], ground)
+        after[LEG_NAMES.index(leg)] = foothold
         return self._posed_over(feet, after, xy, yaw, leg, goal)
 
     def _posed_over(self, feet: np.ndarray, support: np.ndarray, xy: np.ndarray, yaw: float,
@@ -337,15 +330,15 @@ class FootstepPlanner:
         return RobotState(feet, body, np.array([0.0, feet_pitch(support, self.robot), yaw]), leg,
                           goal)
 
-    def _ground(self, target: np.ndarray, feet_z: np.ndarray) -> float:
-        """Median terrain height [m] within target_radius of target (2,) [m]; where the map has
-        no data there, the mean height of the feet ``feet_z`` (4,) [m]."""
+    def _ground(self, target: np.ndarray) -> float:
+        """Median terrain height [m] within target_radius of target (2,) [m] (where the swing
+        foot will most likely land); NaN where the map has no data there."""
         r = self.config.target_radius
         pts = lattice(self.hmap, (target[0] - r, target[0] + r), (target[1] - r, target[1] + r),
                       self.config.spacing)
         z = self.hmap.height_at(pts[np.sum((pts - target) ** 2, axis=1) <= r * r])
         z = z[~np.isnan(z)]
-        return float(np.median(z)) if z.size else float(np.mean(feet_z))
+        return float(np.median(z)) if z.size else math.nan
 
     def heading(self, s: np.ndarray) -> np.ndarray:
         """Body heading [rad] at arc length s [m] (...): toward the path point heading_horizon ahead.
@@ -413,11 +406,13 @@ class FootstepPlanner:
         c, sn = np.cos(mid_yaw), np.sin(mid_yaw)
         targets = mid_xy + np.column_stack([c * nominal[:, 0] - sn * nominal[:, 1],
                                             sn * nominal[:, 0] + c * nominal[:, 1]])
+        grounds = [self._ground(t) for t in targets]  # lookahead (five) targets
 
         # Step 0: the whole candidate set F, scored as the reward defines it.
         leg0 = legs[0]
         yaw0 = float(body_yaw[0])
-        st0 = self._state(state.feet, body_xy[0], yaw0, leg0, state.goal, targets[0])
+        st0 = self._state(state.feet, body_xy[0], yaw0, leg0, state.goal, targets[0],
+                          grounds[0])
         exact = abs(_wrap(yaw0 - GRID_YAW)) > cfg.heading_tolerance
         cand = reachable_footholds(self.hmap, st0, robot, cfg.spacing,
                                    self.rewards_[leg0].config if exact else None)
@@ -453,7 +448,8 @@ class FootstepPlanner:
         chosen = [cand[roots]]
         for k in range(1, cfg.lookahead):  # a handful of steps, not a loop over candidates
             leg, yaw = legs[k], float(body_yaw[k])
-            best_so_far = self._state(feet[0], body_xy[k], yaw, leg, state.goal, targets[k])
+            best_so_far = self._state(feet[0], body_xy[k], yaw, leg, state.goal, targets[k],
+                                      grounds[k])
             near = self._near(best_so_far, targets[k])
             if abs(_wrap(yaw - GRID_YAW)) > cfg.heading_tolerance:  # exact patches: few of them
                 dist = np.linalg.norm(near[:, :2] - targets[k], axis=1)
@@ -467,7 +463,8 @@ class FootstepPlanner:
                 top = np.argsort(-t, kind="stable")[:cfg.lookahead_candidates]
                 near, t = near[top], t[top]
                 scores = np.stack([t + self._pose(self._state(feet[r], body_xy[k], yaw, leg,
-                                                              state.goal, targets[k]), near)
+                                                              state.goal, targets[k],
+                                                              grounds[k]), near)
                                    for r in range(n_roots)])  # beam_width rollouts
             else:
                 scores = np.broadcast_to(t, (n_roots, t.size))

@@ -38,6 +38,7 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/footfall bench scoring
 	$(BIN)/footfall bench learning
+	$(BIN)/footfall bench expert
 	$(BIN)/footfall bench sim
 
 clean:

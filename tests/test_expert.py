@@ -209,6 +209,10 @@ def test_bad_settings_and_candidates_are_refused():
         ExpertConfig(noise=-1.0)
     with pytest.raises(FootfallError, match="directions"):
         ExpertConfig(directions=7)
+    with pytest.raises(FootfallError, match="placement_error"):
+        ExpertConfig(placement_error=-0.001)
+    with pytest.raises(FootfallError, match="placement error"):
+        walking_expert(0.05, placement_error=float("nan"))
     with pytest.raises(FootfallError, match=r"\(n, 3\)"):
         EXPERT.values(FLAT, STATE, np.zeros((4, 2)))
     with pytest.raises(FootfallError, match="finite"):
@@ -248,6 +252,48 @@ def test_a_right_leg_is_judged_like_a_left_leg_on_the_mirrored_terrain():
                           state.goal * flip[:2])
     np.testing.assert_allclose(EXPERT.values(board.mirrored_y(), mirrored, cand * flip),
                                EXPERT.values(board, state, cand), rtol=1e-9, atol=1e-9)
+
+
+# --------------------------------------------------------- placement error
+def test_placement_error_reads_the_terrain_where_the_foot_fares_worst():
+    """Terrain terms from the worst of f, f + d and f - d along the heading; the rest from f."""
+    d = 0.007
+    board = make_board([("rocky", 0.7)], 3)
+    robust = SyntheticExpert(ExpertConfig(placement_error=d))
+    moved = 0
+    for bx, yaw, leg in [(0.85, 0.0, "LF"), (1.0, 0.4, "RH"), (0.95, -0.3, "RF")]:
+        state = nominal_state(board, (bx, 0.0), yaw, leg)
+        cand = reachable_footholds(board, state)
+        shift = d * np.array([math.cos(yaw), math.sin(yaw), 0.0])
+        at = [EXPERT.terms(board, state, cand + s) for s in (0 * shift, shift, -shift)]
+        score = np.stack([sum(p for k, p in EXPERT.utilities(t).items() if k in TERRAIN_TERMS
+                              and k != "leg_clearance") for t in at])
+        worst = np.argmin(score, axis=0)
+        moved += np.count_nonzero(worst)
+        got = robust.terms(board, state, cand)
+        for name in EXPERT_TERM_NAMES:
+            if name in TERRAIN_TERMS and name != "leg_clearance":
+                want = np.choose(worst, [t[name] for t in at])
+            else:  # the leg and the pose are judged at the foothold itself
+                want = at[0][name]
+            np.testing.assert_allclose(got[name], want, rtol=0, atol=1e-12, err_msg=name)
+        assert np.all(robust.values(board, state, cand) <= EXPERT.values(board, state, cand) + 1e-9)
+    assert moved > 0  # on rocky ground the shifted placements do matter
+
+
+def test_placement_error_is_along_the_heading():
+    """An edge across the heading 5 mm ahead counts more; one along the heading no more."""
+    x, y = grid()
+    robust = SyntheticExpert(ExpertConfig(placement_error=0.007))
+    ahead = hmap(np.where(x > P[0] + 0.005, -0.04, 0.0))  # the heading (yaw 0) is +x
+    beside = hmap(np.where(y > P[1] + 0.005, -0.04, 0.0))
+    cand = lambda m: np.array([[P[0], P[1], float(m.height_at(np.asarray(P)))]])  # noqa: E731
+    t_ahead, r_ahead = EXPERT.terms(ahead, STATE, cand(ahead)), robust.terms(ahead, STATE, cand(ahead))
+    assert r_ahead["drop_off"][0] > t_ahead["drop_off"][0] + 0.003
+    assert robust.values(ahead, STATE, cand(ahead))[0] < EXPERT.values(ahead, STATE, cand(ahead))[0] - 3
+    t_beside, r_beside = EXPERT.terms(beside, STATE, cand(beside)), robust.terms(beside, STATE, cand(beside))
+    for name in EXPERT_TERM_NAMES:
+        assert r_beside[name][0] == t_beside[name][0], name
 
 
 def test_on_rocky_terrain_the_terrain_changes_the_choice():

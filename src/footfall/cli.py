@@ -480,6 +480,17 @@ def bench_sim_cmd(seed: int, as_json: bool) -> None:
     _emit(as_json, result, format_sim(result))
 
 
+@bench.command("expert")
+@click.option("--states", type=click.IntRange(1, 1000), default=16, show_default=True)
+@json_option
+def bench_expert_cmd(states: int, as_json: bool) -> None:
+    """The walking expert's judgement with its placement error against without."""
+    from footfall.bench import bench_expert, format_expert
+
+    result = bench_expert(states=states)
+    _emit(as_json, result, format_expert(result))
+
+
 # --------------------------------------------------------------------- walking
 def _load_terrain(path: str):
     from footfall.heightmap import HeightMap

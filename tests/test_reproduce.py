@@ -123,3 +123,18 @@ def test_tables_do_not_depend_on_the_order_in_which_runs_finished():
     store = SimpleNamespace(runs=lambda key_prefix: [r for r in rows
                                                      if r["key"].startswith(key_prefix)])
     assert [r["id"] for r in _runs_by_key(store, "eval/both/")] == [2, 3, 1]
+
+
+def test_extra_rounds_are_walked_while_a_leg_group_is_short_then_a_clear_error(tmp_path):
+    """A leg group short of corrections gets extra rounds; if still short, one clear error."""
+    from dataclasses import replace
+
+    never_enough = replace(TINY, rounds=1, extra_rounds=1, cv=1000)  # no group ever reaches 1000
+    walked: list[str] = []
+    with pytest.raises(FootfallError, match=r"after 2 correction rounds the front and hind legs "
+                                            r"have fewer than 1000 corrections"):
+        run_reproduction(tmp_path, never_enough, processes=1, log=lambda s: None,
+                         on_run=walked.append)
+    assert sorted(walked) == ["correct/r0/train00", "correct/r1/train00"]
+    with pytest.raises(FootfallError, match="extra_rounds"):
+        replace(TINY, extra_rounds=-1)

@@ -9,7 +9,8 @@
    robot's choice fell short of its own best by more than a margin
    (:mod:`footfall.corrections`). footfall learns from all corrections so far
    and the robot walks again, for a few rounds, until about 100
-   demonstrations are collected.
+   demonstrations are collected (and, for a few extra rounds, while the
+   front or the hind legs have too few to learn from).
 3. Learning: the paper's three ranking functions -- terrain features,
    templates, templates + features, each with the pose features -- from the
    same corrections, L1-regularised with lambda at the smallest
@@ -76,6 +77,8 @@ class ReproduceConfig:
     rounds: int = 5  # most correction rounds (walk, correct, learn); with six runs a round and
     # the worst six corrections a run, five rounds collect the paper's ~100 (three gave 58)
     target_demos: int = 100  # rounds stop once this many corrections are collected
+    extra_rounds: int = 3  # further rounds, walked only while the front or the hind legs have
+    # fewer corrections than the cv folds need (nothing to learn them from)
     corrections_per_run: int | None = 6  # the expert labels the worst this many steps of a run
     # whose shortfall exceeds the margin (None: all of them)
     margin: float = 2.0  # [expert value units; the walking expert's unit: 1 cm off the gait-
@@ -102,6 +105,9 @@ class ReproduceConfig:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 raise FootfallError(f"reproduce config: {name} must be an integer >= 1")
+        v = self.extra_rounds
+        if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+            raise FootfallError("reproduce config: extra_rounds must be an integer >= 0")
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise FootfallError("reproduce config: seed must be an integer >= 0")
         if not self.train_boards or not self.test_board:
@@ -346,7 +352,8 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = Reproduce
         # 2. Corrections, round by round.
         model_path: str | None = None
         rounds = []
-        for r in range(config.rounds):
+        short: list[str] = []
+        for r in range(config.rounds + config.extra_rounds):
             jobs = [_Job(f"correct/r{r}/{name}", str(paths[name]), model_path,
                          1000 * config.seed + 100 * r + i, walk_cfg, True, config.margin,
                          config.corrections_per_run, config.expert)
@@ -360,16 +367,22 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = Reproduce
                            "demonstrations_total": len(demos)})
             log(f"round {r}: {rounds[-1]['successes']} / {len(runs)} crossings, "
                 f"{len(demos)} corrections so far")
-            if len(demos) >= config.target_demos or r == config.rounds - 1:
-                break
             short = _short_groups(demos, config.cv)
+            if (len(demos) >= config.target_demos or r >= config.rounds - 1) and not short:
+                break
             if short:  # too few to learn from: walk the next round with the same reward
                 log(f"  too few corrections of the {' and '.join(short)} legs to learn from "
-                    f"({config.cv}-fold CV); the next round walks with the same reward")
+                    f"({config.cv}-fold CV); the next round walks with the same reward"
+                    + (" (an extra round)" if r + 1 >= config.rounds else ""))
                 continue
             _learn(out / "models" / f"round{r + 1}.npz", demos, by_hash,
                    ROBOT_FEATURE_SET, config, config.round_bandwidth_rms, log)
             model_path = str(out / "models" / f"round{r + 1}.npz")
+        if short:
+            raise FootfallError(
+                f"after {len(rounds)} correction rounds the {' and '.join(short)} legs have fewer "
+                f"than {config.cv} corrections, too few to learn from: the robot's choices seldom "
+                f"fell short of the expert's by the margin ({config.margin:g} units)")
         results["rounds"] = rounds
         demos = _corrections(store, len(rounds))
         results["demonstrations"] = _demo_summary(demos, by_hash)

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from footfall.corrections import corrections_to_demonstrations, inspect_run, source_of
+from footfall.corrections import corrections_to_demonstrations, inspect_run, source_of, \
+    step_verdicts
 from footfall.errors import FootfallError
 from footfall.reproduce import _worst
 from footfall.runlog import RunRecord, RunStep
@@ -51,6 +52,16 @@ def test_corrects_exactly_the_steps_short_of_the_experts_best_by_more_than_the_m
     assert [d.source for d in demos] == [source_of("correct/r0/train00", k) for k in (0, 3, 4)]
     assert [d.chosen for d in demos] == [4, 4, 4]
     assert all(np.array_equal(d.candidates, run.steps[0].candidates) for d in demos)
+
+
+def test_step_verdicts_are_the_best_index_and_the_shortfall_of_every_step():
+    hm = terrain()
+    run = _run(hm, [0.30, 0.34, 0.33, 0.31, 0.32])
+    best, shortfall = step_verdicts(run, hm, TableExpert())
+    assert best.tolist() == [4] * 5
+    np.testing.assert_allclose(shortfall, [4, 0, 1, 3, 2], atol=1e-9)
+    with pytest.raises(FootfallError, match="another terrain"):
+        step_verdicts(run, terrain(seed=1), TableExpert())
 
 
 def test_a_capped_expert_labels_the_worst_mistakes_of_a_run():

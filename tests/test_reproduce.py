@@ -78,9 +78,18 @@ def test_the_reproduction_has_every_table(uninterrupted):
     assert set(r["table1"]) == {"templates", "both"}
     assert r["demonstrations"]["n"] > 0
     assert set(r["ranking"]) == {"terrain", "templates", "both"}
+    # The expert's verdict on every logged step of each test-board row.
+    assert set(r["choices"]) == {"terrain", "templates", "both", "expert", "default"}
+    with DemoStore(uninterrupted / "reproduce.sqlite") as store:
+        for k, v in r["choices"].items():
+            logged = sum(len(store.run(x["id"]).steps) for x in store.runs(key_prefix=f"eval/{k}/"))
+            assert v["steps"] == logged > 0
+            assert 0 <= v["median"] <= v["p90"] and v["mean"] >= 0
+            assert 0 <= v["severe"] <= v["above_margin"] <= 1
     md = (uninterrupted / "report.md").read_text()
     assert "Table I" in md and "Table II" in md and "Wilson" in md
     assert "Expert choosing (reference)" in md and "Hand-tuned reward (reference)" in md
+    assert "The expert's verdict on the robot's choices" in md
 
 
 def test_another_configuration_in_the_same_folder_is_refused(uninterrupted):

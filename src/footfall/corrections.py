@@ -43,6 +43,27 @@ def source_of(run_key: str, k: int) -> str:
     return f"run:{run_key}:step:{k}"
 
 
+def step_verdicts(run: RunRecord, hmap: HeightMap, expert: Expert) -> tuple[np.ndarray, np.ndarray]:
+    """The expert's noiseless best index in F and the robot's shortfall, for every step of ``run``.
+
+    Returns ``(best, shortfall)``, each of shape (n_steps,): ``best`` indexes the
+    step's candidates; ``shortfall`` [value units] is the expert's value of its
+    best minus its value of the robot's choice (>= 0). ``hmap`` must be the
+    map the run was logged on.
+    """
+    if not isinstance(run, RunRecord):
+        raise FootfallError(f"inspecting a run needs a RunRecord, got {type(run).__name__}")
+    if hmap.content_hash() != run.terrain_hash:
+        raise FootfallError("the run was logged on another terrain than the map given")
+    best = np.zeros(len(run.steps), dtype=np.intp)
+    shortfall = np.zeros(len(run.steps))
+    for i, step in enumerate(run.steps):  # steps of one run (dozens), each vectorised over F
+        values = np.asarray(expert.values(hmap, step.state, step.candidates), dtype=np.float64)
+        best[i] = int(np.argmax(values))
+        shortfall[i] = float(values[best[i]] - values[step.chosen])
+    return best, shortfall
+
+
 def inspect_run(run: RunRecord, hmap: HeightMap, expert: Expert, margin: float = DEFAULT_MARGIN,
                 rng: np.random.Generator | int = 0) -> list[Correction]:
     """The expert's verdict on every step of ``run`` (on the map ``hmap`` the planner saw).
@@ -53,22 +74,16 @@ def inspect_run(run: RunRecord, hmap: HeightMap, expert: Expert, margin: float =
     draws the imperfection, step by step in order, so the same run and seed
     give the same labels.
     """
-    if not isinstance(run, RunRecord):
-        raise FootfallError(f"inspect_run needs a RunRecord, got {type(run).__name__}")
-    if hmap.content_hash() != run.terrain_hash:
-        raise FootfallError("the run was logged on another terrain than the map given")
     if not (isinstance(margin, (int, float)) and math.isfinite(margin) and margin >= 0):
         raise FootfallError(f"the correction margin must be a number >= 0, got {margin!r}")
+    best, shortfall = step_verdicts(run, hmap, expert)
     rng = np.random.default_rng(rng)
     out = []
-    for step in run.steps:  # steps of one run (dozens), each vectorised over its candidates
-        values = np.asarray(expert.values(hmap, step.state, step.candidates), dtype=np.float64)
-        best = int(np.argmax(values))
-        shortfall = float(values[best] - values[step.chosen])
+    for step, b, sf in zip(run.steps, best, shortfall):  # labels: only the corrected steps
         label = None
-        if shortfall > margin and step.candidates.shape[0] >= 2:
+        if sf > margin and step.candidates.shape[0] >= 2:
             label = int(expert.choose(hmap, step.state, step.candidates, rng))
-        out.append(Correction(step.k, step.chosen, best, shortfall, label))
+        out.append(Correction(step.k, step.chosen, int(b), float(sf), label))
     return out
 
 

@@ -43,6 +43,8 @@ from multiprocessing import get_context
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
+
 from footfall.dataset import FEATURE_SETS
 from footfall.errors import FootfallError
 from footfall.expert import ExpertConfig, walking_expert
@@ -431,8 +433,10 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = Reproduce
                                  else seeds[0])  # the report's Fig. 4: a crossing, if any
         results["test_difficulty"] = max(d for _, d in config.test_board)
 
-        # The offline ranking of the three functions on the expert's demonstrations.
+        # The offline ranking of the three functions on the expert's demonstrations, and the
+        # expert's verdict on every choice the robot made in the test-board runs.
         results["ranking"] = _ranking(store, maps["test"], models, config, log)
+        results["choices"] = _choice_quality(store, by_hash, config, log)
         results["seconds_this_session"] = time.perf_counter() - started
     write_report(out, results, maps, models, config, log)
     return results
@@ -467,6 +471,40 @@ def _demo_summary(demos: list, maps: dict[str, HeightMap]) -> dict:
         kinds[kind] = kinds.get(kind, 0) + 1
         legs[d.swing_leg] = legs.get(d.swing_leg, 0) + 1
     return {"n": len(demos), "by_module": dict(sorted(kinds.items())), "by_leg": legs}
+
+
+SEVERE_SHORTFALL = 10.0  # [value units; 1 cm off the gait-nominal foothold] a choice this much
+# worse than the expert's best: a foothold on a slanted face, a pit's rim or a riser's edge
+
+
+def _choice_quality(store: DemoStore, maps: dict[str, HeightMap], config: ReproduceConfig,
+                    log: Callable[[str], None]) -> dict:
+    """The expert's verdict on every step of the test-board runs, per Table II row.
+
+    For the three functions and the two references: the steps judged, and the
+    mean, median and 90th percentile of the shortfall [value units] of the
+    robot's choice against the expert's best in the same F, with the fractions
+    of steps above the correction margin and above :data:`SEVERE_SHORTFALL`.
+    """
+    from footfall.corrections import step_verdicts
+    from footfall.expert import SyntheticExpert
+
+    expert = SyntheticExpert(config.expert)
+    log("the expert's verdict on the choices of the test-board runs")
+    out = {}
+    for k in (*FEATURE_SETS, "expert", "default"):
+        parts = []
+        for row in _runs_by_key(store, f"eval/{k}/"):
+            run = store.run(row["id"])
+            parts.append(step_verdicts(run, maps[run.terrain_hash], expert)[1])
+        sf = np.concatenate(parts) if parts else np.zeros(0)
+        out[k] = {"steps": int(sf.size),
+                  "mean": float(sf.mean()) if sf.size else None,
+                  "median": float(np.median(sf)) if sf.size else None,
+                  "p90": float(np.percentile(sf, 90)) if sf.size else None,
+                  "above_margin": float(np.mean(sf > config.margin)) if sf.size else None,
+                  "severe": float(np.mean(sf > SEVERE_SHORTFALL)) if sf.size else None}
+    return out
 
 
 def _ranking(store: DemoStore, test: HeightMap, models: dict, config: ReproduceConfig,

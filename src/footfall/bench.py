@@ -338,7 +338,7 @@ def bench_expert(states: int = 16, repeats: int = 3, seed: int = 0) -> dict:
                 times[name][j].append(best[j] * 1000)
     out: dict = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version()},
                  "states": states}
-    for name in sets:
+    for name in ("F", "all"):
         med = {j: float(np.median(times[name][j])) for j in judges}
         out[name] = {"candidates_median": float(np.median(sizes[name])),
                      "baseline_ms": med["baseline"], "placement_ms": med["placement"],

@@ -389,11 +389,6 @@ def _pose_terms(state: RobotState, f: np.ndarray, cfg: ExpertConfig, robot: Robo
             "stability": np.minimum(*margins)}
 
 
-TERRAIN_TERM_NAMES: tuple[str, ...] = ("slip_margin", "pinch", "trap_depth", "drop_off",
-                                        "unknown")
-"""The terms read from the terrain around the foothold (moved with a placement error)."""
-
-
 def _terrain_utilities(terms: dict[str, np.ndarray], cfg: ExpertConfig, robot: RobotDescription
                        ) -> dict[str, np.ndarray]:
     """The terrain terms' shares of the value [value units]; 0 on flat, open, scanned ground."""

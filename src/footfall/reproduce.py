@@ -498,12 +498,12 @@ def _choice_quality(store: DemoStore, maps: dict[str, HeightMap], config: Reprod
             run = store.run(row["id"])
             parts.append(step_verdicts(run, maps[run.terrain_hash], expert)[1])
         sf = np.concatenate(parts) if parts else np.zeros(0)
-        out[k] = {"steps": int(sf.size),
-                  "mean": float(sf.mean()) if sf.size else None,
-                  "median": float(np.median(sf)) if sf.size else None,
-                  "p90": float(np.percentile(sf, 90)) if sf.size else None,
-                  "above_margin": float(np.mean(sf > config.margin)) if sf.size else None,
-                  "severe": float(np.mean(sf > SEVERE_SHORTFALL)) if sf.size else None}
+        out[k] = {"steps": int(sf.size), "severe_above": SEVERE_SHORTFALL}
+        if sf.size:
+            out[k].update(mean=float(sf.mean()), median=float(np.median(sf)),
+                          p90=float(np.percentile(sf, 90)),
+                          above_margin=float(np.mean(sf > config.margin)),
+                          severe=float(np.mean(sf > SEVERE_SHORTFALL)))
     return out
 
 

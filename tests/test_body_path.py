@@ -6,15 +6,15 @@ import math
 import numpy as np
 import pytest
 
-from footfall.candidates import lattice
+from footfall.features.candidates import lattice
 from footfall.control.body_path import (BodyPath, BodyPathConfig, cell_rewards, evaluate_cells,
                                         nominal_knees, plan_body_path, terrain_grids)
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.reward import default_reward
-from footfall.robot import LEG_NAMES, LITTLEDOG
-from footfall.scoring import score_footholds
-from footfall.state import RobotState
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.features.reward import default_reward
+from footfall.core.robot import LEG_NAMES, LITTLEDOG
+from footfall.features.scoring import score_footholds
+from footfall.core.state import RobotState
 from footfall.terrain.modules import make_module
 
 REWARD = default_reward()

@@ -9,7 +9,7 @@ import pytest
 
 from cli_helpers import assert_user_error, run
 from footfall.cli import main
-from footfall.heightmap import HeightMap
+from footfall.core.heightmap import HeightMap
 
 
 

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from footfall.control.cog import CogConfig, GRAVITY, incircle, plan_cog, support_margin
-from footfall.errors import FootfallError
-from footfall.robot import LEG_NAMES, LITTLEDOG
+from footfall.core.errors import FootfallError
+from footfall.core.robot import LEG_NAMES, LITTLEDOG
 from scipy.spatial import ConvexHull
 
 

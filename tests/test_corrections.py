@@ -3,13 +3,13 @@
 import numpy as np
 import pytest
 
-from footfall.corrections import corrections_to_demonstrations, inspect_run, source_of, \
+from footfall.expert.corrections import corrections_to_demonstrations, inspect_run, source_of, \
     step_verdicts
-from footfall.errors import FootfallError
-from footfall.reproduce import _worst
-from footfall.runlog import RunRecord, RunStep
-from footfall.state import nominal_state
-from footfall.store import DemoStore
+from footfall.core.errors import FootfallError
+from footfall.experiments.reproduce import _worst
+from footfall.data.runlog import RunRecord, RunStep
+from footfall.core.state import nominal_state
+from footfall.data.store import DemoStore
 
 from test_store import terrain
 

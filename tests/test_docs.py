@@ -2,8 +2,8 @@
 
 from pathlib import Path
 
-from footfall.pose_features import POSE_FEATURE_NAMES
-from footfall.terrain_features import QUANTITIES
+from footfall.features.pose_features import POSE_FEATURE_NAMES
+from footfall.features.terrain_features import QUANTITIES
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
 

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from footfall.errors import FootfallError
-from footfall.stats import bootstrap_ci, wilson_interval
-from footfall.learning import L2_LOG_C, FootholdRanker
-from footfall.offline import compare_feature_sets
+from footfall.core.errors import FootfallError
+from footfall.core.stats import bootstrap_ci, wilson_interval
+from footfall.learning.ranker import L2_LOG_C, FootholdRanker
+from footfall.experiments.offline import compare_feature_sets
 
 
 def test_bootstrap_interval_brackets_the_mean_and_shrinks_with_more_data():

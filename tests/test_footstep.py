@@ -5,17 +5,17 @@ import dataclasses
 import numpy as np
 import pytest
 
-from footfall.candidates import reachable_footholds
+from footfall.features.candidates import reachable_footholds
 from footfall.control.body_path import BodyPath, terrain_grids
 from footfall.control.footstep import (FootstepConfig, FootstepPlan, FootstepPlanner,
                                        NoFootholdError)
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.pose_features import POSE_FEATURE_NAMES
-from footfall.reward import LinearReward, default_reward, weights_from_names
-from footfall.robot import LEG_NAMES, LITTLEDOG
-from footfall.scoring import score_footholds
-from footfall.state import RobotState, feet_pitch, nominal_state
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.features.pose_features import POSE_FEATURE_NAMES
+from footfall.features.reward import LinearReward, default_reward, weights_from_names
+from footfall.core.robot import LEG_NAMES, LITTLEDOG
+from footfall.features.scoring import score_footholds
+from footfall.core.state import RobotState, feet_pitch, nominal_state
 from footfall.terrain.modules import make_module
 
 REWARD = default_reward()

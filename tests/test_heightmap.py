@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap, PatchGrid
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap, PatchGrid
 
 
 def plane_map(a=0.1, b=-0.05, c=0.02, shape=(60, 40), res=0.002, origin=(0.1, -0.04)):
@@ -160,7 +160,7 @@ def test_bad_files_are_rejected(tmp_path):
 
 
 def test_loading_a_newer_version_fails(tmp_path):
-    from footfall.fileio import save_npz
+    from footfall.core.files import save_npz
 
     path = tmp_path / "future.npz"
     save_npz(path, "footfall.heightmap", 99, {"heights": np.zeros((3, 3))},

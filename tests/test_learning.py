@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from sklearn.linear_model import LogisticRegression
 
-from footfall.errors import FootfallError
-from footfall.learning import FootholdRanker, grouped_folds, pairwise_transform
+from footfall.core.errors import FootfallError
+from footfall.learning.ranker import FootholdRanker, grouped_folds, pairwise_transform
 
 
 def test_pairwise_transform_on_a_hand_made_example():

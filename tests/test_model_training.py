@@ -8,15 +8,15 @@ import numpy as np
 import pytest
 
 from footfall.cli import main
-from footfall.errors import FootfallError
-from footfall.expert import SyntheticExpert
-from footfall.model import FootholdModel
-from footfall.robot import RobotDescription
-from footfall.scales import FeatureConfig
-from footfall.store import DemoStore
+from footfall.core.errors import FootfallError
+from footfall.expert.synthetic import SyntheticExpert
+from footfall.learning.model import FootholdModel
+from footfall.core.robot import RobotDescription
+from footfall.features.config import FeatureConfig
+from footfall.data.store import DemoStore
 from footfall.terrain import make_board
-from footfall.train import TrainingDemo, learn_model
-from footfall.walker import collect_demonstrations
+from footfall.learning.train import TrainingDemo, learn_model
+from footfall.expert.collect import collect_demonstrations
 
 
 @pytest.fixture(scope="module")
@@ -47,7 +47,7 @@ def test_learned_model_round_trips_through_its_file(demos_and_maps, tmp_path):
         (model.feature_set, model.learner, model.config, model.robot)
     d = demos[0]
     hmap = maps[d.terrain_hash]
-    from footfall.scoring import score_footholds
+    from footfall.features.scoring import score_footholds
     for leg in ("LF", "RH"):
         a = score_footholds(hmap, d.state, d.candidates, model.reward_for(leg))
         b = score_footholds(hmap, d.state, d.candidates, back.reward_for(leg))
@@ -94,8 +94,8 @@ def test_learning_never_consults_the_expert(demos_and_maps, monkeypatch):
     model = small("both", demos, maps)
     assert model.functions["front"].info["n_demonstrations"] > 0
     # And the learning modules do not even import it.
-    code = ("import sys, footfall.train, footfall.learning, footfall.dataset, footfall.model; "
-            "print('footfall.expert' in sys.modules)")
+    code = ("import sys, footfall.learning.train, footfall.learning.ranker, footfall.learning.dataset, footfall.learning.model; "
+            "print('footfall.expert.synthetic' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
 
@@ -160,7 +160,7 @@ def test_learning_bad_input_is_one_line_and_exit_2(demos_and_maps, tmp_path, cap
 
 
 def test_nan_features_are_refused():
-    from footfall.learning import FootholdRanker
+    from footfall.learning.ranker import FootholdRanker
     X = np.zeros((4, 2))
     X[1, 0] = np.nan
     with pytest.raises(FootfallError, match="NaN"):
@@ -170,7 +170,7 @@ def test_nan_features_are_refused():
 def test_servo_gains_do_not_make_a_model_incompatible():
     import dataclasses
 
-    from footfall.robot import LITTLEDOG, SERVO_FIELDS
+    from footfall.core.robot import LITTLEDOG, SERVO_FIELDS
     model = FootholdModel("terrain", "l1", {}, FeatureConfig(), LITTLEDOG)
     softer = dataclasses.replace(LITTLEDOG, joint_kp=LITTLEDOG.joint_kp / 2, joint_kd=0.3)
     model.check_compatible(robot=softer)  # the servo only tracks set-points: same footholds

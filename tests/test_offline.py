@@ -2,7 +2,7 @@
 
 import json
 
-from footfall.offline import OfflineConfig, run_offline
+from footfall.experiments.offline import OfflineConfig, run_offline
 
 
 def test_tiny_offline_experiment_writes_its_report(tmp_path):

@@ -3,15 +3,15 @@
 import numpy as np
 import pytest
 
-from footfall.candidates import lattice, reachable_footholds
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.kinematics import inverse_kinematics, world_to_body
-from footfall.pose_features import POSE_FEATURE_DOCS, POSE_FEATURE_NAMES, hull_area, \
+from footfall.features.candidates import lattice, reachable_footholds
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.kinematics import inverse_kinematics, world_to_body
+from footfall.features.pose_features import POSE_FEATURE_DOCS, POSE_FEATURE_NAMES, hull_area, \
     triangle_margins, pose_features
-from footfall.robot import LEG_NAMES, LITTLEDOG
-from footfall.scales import FeatureConfig
-from footfall.state import RobotState, nominal_state
+from footfall.core.robot import LEG_NAMES, LITTLEDOG
+from footfall.features.config import FeatureConfig
+from footfall.core.state import RobotState, nominal_state
 
 
 def flat(size=(800, 600), origin=(-0.4, -0.3), z=0.0):

@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 from footfall.control.pose_finder import PoseConfig, TERMS, find_pose, preferred_pose
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.kinematics import body_to_world, inverse_kinematics, knee_position, world_to_body
-from footfall.robot import LEG_NAMES, LITTLEDOG
-from footfall.state import nominal_state
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.kinematics import body_to_world, inverse_kinematics, knee_position, world_to_body
+from footfall.core.robot import LEG_NAMES, LITTLEDOG
+from footfall.core.state import nominal_state
 
 ORIGIN = (-0.3, -0.2)  # [m] the maps of these tests: 0.6 x 0.4 m at 1 mm
 X = ORIGIN[0] + np.arange(600) * 0.001

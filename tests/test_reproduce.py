@@ -4,11 +4,11 @@ import json
 
 import pytest
 
-from footfall.errors import FootfallError
-from footfall.expert import ExpertConfig
-from footfall.reproduce import ReproduceConfig, run_reproduction
-from footfall.store import DemoStore
-from footfall.walk import WALL_CLOCK_FIELDS, WalkConfig
+from footfall.core.errors import FootfallError
+from footfall.expert.synthetic import ExpertConfig
+from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
+from footfall.data.store import DemoStore
+from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig
 
 TINY = ReproduceConfig(
     train_boards=((("rocky", 0.5),),), test_board=(("rocky", 0.6),), sweep_difficulties=(),
@@ -101,7 +101,7 @@ def test_another_configuration_in_the_same_folder_is_refused(uninterrupted):
 def test_a_round_learns_only_when_both_leg_groups_have_enough_corrections():
     from types import SimpleNamespace
 
-    from footfall.reproduce import _short_groups
+    from footfall.experiments.reproduce import _short_groups
 
     demos = [SimpleNamespace(state=SimpleNamespace(swing_leg=leg))
              for leg in ("LF", "RH", "LH", "RH")]
@@ -111,8 +111,8 @@ def test_a_round_learns_only_when_both_leg_groups_have_enough_corrections():
 
 
 def test_the_default_reproduction_walks_with_the_walking_expert_and_a_local_f():
-    from footfall.expert import walking_expert
-    from footfall.reproduce import REPRODUCTION_SEARCH_RADIUS
+    from footfall.expert.synthetic import walking_expert
+    from footfall.experiments.reproduce import REPRODUCTION_SEARCH_RADIUS
 
     config = ReproduceConfig()
     assert config.expert == walking_expert(config.walk.footstep.lead)
@@ -125,7 +125,7 @@ def test_the_default_reproduction_walks_with_the_walking_expert_and_a_local_f():
 def test_tables_do_not_depend_on_the_order_in_which_runs_finished():
     from types import SimpleNamespace
 
-    from footfall.reproduce import _runs_by_key
+    from footfall.experiments.reproduce import _runs_by_key
 
     rows = [{"key": "eval/both/s5002", "id": 1}, {"key": "eval/both/s5000", "id": 2},
             {"key": "eval/both/s5001", "id": 3}]

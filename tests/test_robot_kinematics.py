@@ -3,12 +3,12 @@
 import numpy as np
 import pytest
 
-from footfall.errors import FootfallError
-from footfall.kinematics import (body_to_world, forward_kinematics, inverse_kinematics,
+from footfall.core.errors import FootfallError
+from footfall.core.kinematics import (body_to_world, forward_kinematics, inverse_kinematics,
                                  joint_limit_margin, knee_position, legs_inverse_kinematics,
                                  legs_joint_limit_margin, legs_knee_position, rotation_matrix,
                                  world_to_body)
-from footfall.robot import LEG_NAMES, LITTLEDOG, RobotDescription
+from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 
 
 def test_littledog_numbers_match_the_paper_class():

@@ -6,10 +6,10 @@ import sqlite3
 import numpy as np
 import pytest
 
-from footfall.errors import FootfallError
-from footfall.runlog import RunRecord, RunStep
-from footfall.state import nominal_state
-from footfall.store import SCHEMA_VERSION, DemoStore
+from footfall.core.errors import FootfallError
+from footfall.data.runlog import RunRecord, RunStep
+from footfall.core.state import nominal_state
+from footfall.data.store import SCHEMA_VERSION, DemoStore
 
 from test_store import demo, terrain
 

@@ -5,11 +5,11 @@ import math
 import numpy as np
 import pytest
 
-from footfall.errors import FootfallError
-from footfall.runlog import RunRecord, RunStep
-from footfall.runs import summarise
-from footfall.state import nominal_state
-from footfall.stats import wilson_interval
+from footfall.core.errors import FootfallError
+from footfall.data.runlog import RunRecord, RunStep
+from footfall.experiments.batch import summarise
+from footfall.core.state import nominal_state
+from footfall.core.stats import wilson_interval
 
 from test_store import terrain
 
@@ -53,7 +53,7 @@ def test_summary_without_a_success_has_no_slip():
 def test_video_and_strip_are_written(tmp_path):
     import imageio.v2 as imageio
 
-    from footfall.runs import save_strip, save_video
+    from footfall.experiments.batch import save_strip, save_video
 
     frames = [np.full((64, 96, 3), 10 * i, np.uint8) for i in range(12)]
     save_video(frames, tmp_path / "run.mp4", fps=25.0)

@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 from scipy.ndimage import gaussian_filter
 
-from footfall.heightmap import HeightMap
-from footfall.reward import LinearReward
-from footfall.scales import FeatureConfig
-from footfall.scoring import score_grid
-from footfall.templates import bandwidth_for_rms, extract_templates
+from footfall.core.heightmap import HeightMap
+from footfall.features.reward import LinearReward
+from footfall.features.config import FeatureConfig
+from footfall.features.scoring import score_grid
+from footfall.features.templates import bandwidth_for_rms, extract_templates
 
 CONFIG = FeatureConfig()
 RES = 0.001  # [m/cell]

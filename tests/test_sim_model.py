@@ -10,16 +10,16 @@ import mujoco
 import numpy as np
 import pytest
 
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.kinematics import (
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.kinematics import (
     body_to_world,
     forward_kinematics,
     inverse_kinematics,
     knee_position,
     rotation_matrix,
 )
-from footfall.robot import LEG_NAMES, LITTLEDOG, RobotDescription
+from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.sim.mjcf import (
     TERRAIN_GEOM_GROUP,
     build_mjcf,
@@ -33,7 +33,7 @@ from footfall.sim.simulation import (
     Simulation,
     bench_stepping,
 )
-from footfall.state import nominal_state
+from footfall.core.state import nominal_state
 from footfall.terrain.modules import make_module
 
 R = LITTLEDOG

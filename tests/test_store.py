@@ -9,10 +9,10 @@ import textwrap
 import numpy as np
 import pytest
 
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.state import nominal_state
-from footfall.store import FORMAT, SCHEMA_VERSION, DemoStore, Demonstration
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.state import nominal_state
+from footfall.data.store import FORMAT, SCHEMA_VERSION, DemoStore, Demonstration
 
 
 def terrain(seed=0, shape=(120, 80)):
@@ -309,7 +309,7 @@ def test_writer_killed_mid_transaction_leaves_the_store_intact(filled):
     before = contents(path)
     script = textwrap.dedent(f"""
         import os
-        from footfall.store import DemoStore
+        from footfall.data.store import DemoStore
         n = 0
         original = DemoStore._insert_demonstration
         def die(self, con, d):
@@ -353,7 +353,7 @@ def test_parallel_writers_all_land(filled):
     path, _, _ = filled
     script = textwrap.dedent(f"""
         import sys
-        from footfall.store import DemoStore
+        from footfall.data.store import DemoStore
         with DemoStore({str(path)!r}) as store:
             template = store.demonstrations(ids=[1])[0]
             for k in range(8):  # one transaction each, interleaved with the other writers

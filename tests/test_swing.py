@@ -5,9 +5,9 @@ import pytest
 from scipy.ndimage import gaussian_filter
 
 from footfall.control.swing import SwingConfig, swing_trajectory, terrain_profile
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.robot import LITTLEDOG
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.robot import LITTLEDOG
 
 RES = 0.001  # [m/cell] the maps of these tests
 ORIGIN = (-0.1, -0.1)  # [m]

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.reward import analytic_templates
-from footfall.scales import FeatureConfig
-from footfall.templates import (TemplateLibrary, bandwidth_for_rms, extract_templates,
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.features.reward import analytic_templates
+from footfall.features.config import FeatureConfig
+from footfall.features.templates import (TemplateLibrary, bandwidth_for_rms, extract_templates,
                                 merge_libraries, rbf_features, squared_distances)
 
 CONFIG = FeatureConfig()
@@ -57,7 +57,7 @@ def test_extracted_templates_are_relative_patches_of_the_footholds():
     lib = extract_templates(hm, pos, 0.0, False, CONFIG)
     assert lib.counts == (3, 2, 2)  # only the small patch still fits at x = 0.385
     # A template compared with its own foothold gives exactly 1.
-    from footfall.patches import foothold_patches
+    from footfall.features.patches import foothold_patches
     fp = foothold_patches(hm, pos[:2], 0.0, False, CONFIG)
     x = lib.features(fp.relative, (50.0, 50.0, 50.0))
     np.testing.assert_allclose(x[[0, 1], [0, 1]], 1.0)

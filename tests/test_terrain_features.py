@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from footfall.heightmap import HeightMap, PatchGrid
-from footfall.patches import foothold_patches
-from footfall.scales import FeatureConfig
-from footfall.terrain_features import (QUANTITIES, TERRAIN_FEATURE_NAMES, fit_kernels,
+from footfall.core.heightmap import HeightMap, PatchGrid
+from footfall.features.patches import foothold_patches
+from footfall.features.config import FeatureConfig
+from footfall.features.terrain_features import (QUANTITIES, TERRAIN_FEATURE_NAMES, fit_kernels,
                                        raw_features, terrain_features_from_patches)
 
 RES = 0.001
@@ -138,7 +138,7 @@ def test_low_coverage_makes_a_foothold_invalid():
 
 
 def test_patch_coverage_equals_the_coverage_of_the_patches():
-    from footfall.patches import patch_coverage
+    from footfall.features.patches import patch_coverage
 
     rng = np.random.default_rng(4)
     h = rng.normal(size=(200, 150)) * 0.01

@@ -1,4 +1,4 @@
-"""Tests for footfall.terrain_io: importing elevation files into a HeightMap."""
+"""Tests for footfall.terrain.scans: importing elevation files into a HeightMap."""
 
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ import pytest
 from PIL import Image
 from plyfile import PlyData, PlyElement
 
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.terrain_io import MAX_CELLS, SUFFIXES, import_terrain, rasterize_points
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.terrain.scans import MAX_CELLS, SUFFIXES, import_terrain, rasterize_points
 
 RES = 0.1  # [m/cell]
 

@@ -12,8 +12,8 @@ import math
 import numpy as np
 import pytest
 
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
 from footfall.terrain import (
     KINDS,
     MODULE_RESOLUTION,

@@ -16,21 +16,21 @@ from footfall.control.lowlevel import (
     shin_rotations,
     transfer_weight,
 )
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.kinematics import (
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.kinematics import (
     body_to_world,
     forward_kinematics,
     inverse_kinematics,
     knee_position,
     rotation_matrix,
 )
-from footfall.model import FootholdModel, RankingFunction
-from footfall.reward import default_reward
-from footfall.robot import LITTLEDOG, RobotDescription
-from footfall.scales import FeatureConfig
-from footfall.terrain_features import feature_names
-from footfall.walk import WALL_CLOCK_FIELDS, WalkConfig, foot_slip, walk
+from footfall.learning.model import FootholdModel, RankingFunction
+from footfall.features.reward import default_reward
+from footfall.core.robot import LITTLEDOG, RobotDescription
+from footfall.features.config import FeatureConfig
+from footfall.features.terrain_features import feature_names
+from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig, foot_slip, walk
 
 R = LITTLEDOG
 
@@ -218,7 +218,7 @@ def test_cli_walk_refuses_a_model_for_another_robot(tmp_path, capsys):
 
 def test_the_expert_can_choose_every_foothold_itself():
     """A judge in place of the reward: every logged candidate value is the expert's own."""
-    from footfall.expert import SyntheticExpert, walking_expert
+    from footfall.expert.synthetic import SyntheticExpert, walking_expert
 
     board = _short_flat_board()
     config = WalkConfig(start_setback=0.2, max_steps=3)

@@ -12,14 +12,15 @@ import pytest
 from scipy.ndimage import gaussian_filter
 
 from cli_helpers import assert_user_error, run
-from footfall.candidates import reachable_footholds
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.robot import LEG_NAMES, LITTLEDOG
-from footfall.scales import FeatureConfig
-from footfall.store import DemoStore
-from footfall.walker import (DEFAULT_STRIDE, EDGE_MARGIN, PATH_OFFSETS, collect_demonstrations,
-                             estimated_steps, expert_settings, lateral_paths, rough_x_range,
+from footfall.features.candidates import reachable_footholds
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.robot import LEG_NAMES, LITTLEDOG
+from footfall.features.config import FeatureConfig
+from footfall.data.store import DemoStore
+from footfall.core.robot import DEFAULT_STRIDE
+from footfall.expert.collect import (EDGE_MARGIN, PATH_OFFSETS, collect_demonstrations,
+                                    estimated_steps, expert_settings, lateral_paths, rough_x_range,
                              walk_demonstrations)
 
 SPACING = 0.01  # [m] a coarse candidate lattice keeps the walks fast
@@ -228,7 +229,7 @@ def test_collect_returns_what_fits_and_checks_arguments():
 
 
 def test_with_the_synthetic_expert(board):
-    expert_module = pytest.importorskip("footfall.expert")
+    expert_module = pytest.importorskip("footfall.expert.synthetic")
     expert = expert_module.SyntheticExpert()
     demos = walk_demonstrations(board, expert, np.random.default_rng(0), 2, spacing=SPACING)
     assert len(demos) == 2 and demos[0].expert["class"].endswith("SyntheticExpert")
@@ -245,7 +246,7 @@ class FakeExpertConfig:
 
 
 class FakeSyntheticExpert(ProgressExpert):
-    """Stands in for footfall.expert.SyntheticExpert (same constructor and methods)."""
+    """Stands in for footfall.expert.synthetic.SyntheticExpert (same constructor and methods)."""
 
     calls = 0
     fail_at = None  # raise on this call of choose, to test a command failing mid-walk
@@ -263,10 +264,10 @@ class FakeSyntheticExpert(ProgressExpert):
 
 @pytest.fixture
 def fake_expert(monkeypatch):
-    module = types.ModuleType("footfall.expert")
+    module = types.ModuleType("footfall.expert.synthetic")
     module.ExpertConfig = FakeExpertConfig
     module.SyntheticExpert = FakeSyntheticExpert
-    monkeypatch.setitem(sys.modules, "footfall.expert", module)
+    monkeypatch.setitem(sys.modules, "footfall.expert.synthetic", module)
     monkeypatch.setattr(FakeSyntheticExpert, "calls", 0)
     return FakeSyntheticExpert
 

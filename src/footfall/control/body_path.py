@@ -10,7 +10,7 @@ cheapest path, which is smoothed lightly into a :class:`BodyPath`. The
 footstep planner (:mod:`footfall.control.footstep`) follows that path.
 
 The foothold rewards come from dense terrain-reward grids
-(:func:`footfall.scoring.score_grid`), computed once per distinct (reward,
+(:func:`footfall.features.scoring.score_grid`), computed once per distinct (reward,
 mirror) pair by :func:`terrain_grids` and shared with the footstep planner.
 """
 
@@ -26,12 +26,12 @@ from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.kinematics import inverse_kinematics, knee_position
-from footfall.reward import LinearReward
-from footfall.robot import LEG_NAMES, LITTLEDOG, RobotDescription
-from footfall.scoring import ScoreGrid, score_grid
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.kinematics import inverse_kinematics, knee_position
+from footfall.features.reward import LinearReward
+from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
+from footfall.features.scoring import ScoreGrid, score_grid
 
 RewardFor = Callable[[str], LinearReward]  # leg name -> the reward its footholds are ranked by
 
@@ -109,7 +109,7 @@ def terrain_grids(hmap: HeightMap, reward_for: RewardFor, robot: RobotDescriptio
     Returns
     -------
     dict
-        Leg name -> :class:`~footfall.scoring.ScoreGrid` (reward -inf where invalid).
+        Leg name -> :class:`~footfall.features.scoring.ScoreGrid` (reward -inf where invalid).
     """
     cache: dict[tuple[str, bool], ScoreGrid] = {}
     out = {}

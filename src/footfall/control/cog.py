@@ -47,8 +47,8 @@ from scipy.linalg import solve_triangular
 from scipy.optimize import nnls
 from scipy.spatial import ConvexHull, QhullError
 
-from footfall.errors import FootfallError
-from footfall.robot import LEG_NAMES, LITTLEDOG, RobotDescription
+from footfall.core.errors import FootfallError
+from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 
 GRAVITY = 9.81  # [m/s^2] standard gravity, for the ZMP
 _SAFETY = 1e-6  # [m] extra inset given to the solver so its tolerance cannot eat the margin

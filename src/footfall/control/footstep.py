@@ -21,18 +21,17 @@ from typing import Callable
 
 import numpy as np
 
-from footfall.candidates import lattice, reachable_footholds, reaches
+from footfall.features.candidates import lattice, reachable_footholds, reaches
 from footfall.control.body_path import BodyPath, RewardFor, grid_spacing, grid_values, \
     reward_key, reward_unit, terrain_grids
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.patches import foothold_patches
-from footfall.pose_features import pose_features
-from footfall.robot import LEG_NAMES, LITTLEDOG, RobotDescription
-from footfall.reward import LinearReward, default_reward
-from footfall.scoring import ScoreGrid, score_grid
-from footfall.state import RobotState, feet_pitch, nominal_state
-from footfall.walker import DEFAULT_STRIDE
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.features.patches import foothold_patches
+from footfall.features.pose_features import pose_features
+from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG, RobotDescription
+from footfall.features.reward import LinearReward, default_reward
+from footfall.features.scoring import ScoreGrid, score_grid
+from footfall.core.state import RobotState, feet_pitch, nominal_state
 
 Judge = Callable[[HeightMap, RobotState, np.ndarray], np.ndarray]  # (map, state, footholds
 # (n, 3) [m]) -> value (n,), higher is better: a foothold judge, e.g. SyntheticExpert.values
@@ -283,7 +282,7 @@ class FootstepPlanner:
     def _near(self, state: RobotState, target: np.ndarray) -> np.ndarray:
         """Candidates (m, 3) of the swing leg within lookahead_radius of target (2,) [m].
 
-        The same rule as :func:`~footfall.candidates.reachable_footholds`
+        The same rule as :func:`~footfall.features.candidates.reachable_footholds`
         (lattice point with data, ball-foot centre reachable within the joint
         limits), on a small window instead of the leg's whole reach.
         """
@@ -301,7 +300,7 @@ class FootstepPlanner:
         the path at ``xy`` heading ``yaw``, no roll.
 
         The body stands ``nominal_height`` above the mean height of the feet,
-        pitched along them (:func:`~footfall.state.feet_pitch`) -- unless from
+        pitched along them (:func:`~footfall.core.state.feet_pitch`) -- unless from
         there the swing leg cannot reach its path-nominal foothold ``target``
         (2,) [m] on the ground at height ``ground`` [m] (:meth:`_ground`; NaN: no
         data there, the mean height of the feet): then it is posed so over the

@@ -23,7 +23,7 @@ true body pose (motion capture on the real robot, the simulator here):
   target that stayed put would make the leg drag it back.
 
 Poses here are (position (3,) [m], rotation matrix (3, 3)) pairs, the
-rotation as :func:`footfall.kinematics.rotation_matrix` makes it.
+rotation as :func:`footfall.core.kinematics.rotation_matrix` makes it.
 """
 
 from __future__ import annotations
@@ -32,12 +32,11 @@ import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
 
-import footfall.sim  # noqa: F401  -- picks the offscreen OpenGL backend before mujoco loads
 import mujoco
 import numpy as np
 
-from footfall.errors import FootfallError
-from footfall.robot import Leg, RobotDescription
+from footfall.core.errors import FootfallError
+from footfall.core.robot import Leg, RobotDescription
 
 Pose = tuple[np.ndarray, np.ndarray]  # (position (3,) [m], rotation matrix (3, 3)): body -> world
 
@@ -110,7 +109,7 @@ def shin_rotations(q: np.ndarray, body_rotation: np.ndarray) -> np.ndarray:
 
     ``body_rotation`` (3, 3) turns the body frame into the world; then hip
     roll about x, then hip pitch plus knee about the rolled y axis (see
-    :mod:`footfall.kinematics`): Rx(q1) Ry(q2 + q3).
+    :mod:`footfall.core.kinematics`): Rx(q1) Ry(q2 + q3).
     """
     legs = []
     for roll, hip_pitch, knee in np.asarray(q, dtype=np.float64).tolist():  # Python floats: four
@@ -211,7 +210,7 @@ def _stacked_legs(robot: RobotDescription) -> _LegStack:
     """The four legs as one leg of the first leg's knee direction, hip (4, 3) and side (4,) stacked.
 
     A knee-backward leg is the knee-forward one reflected front to back (see
-    :class:`footfall.robot.RobotDescription`): its angles at the body-frame
+    :class:`footfall.core.robot.RobotDescription`): its angles at the body-frame
     point (x, y, z) are those of a knee-forward leg with the hip at (-hip_x,
     hip_y, hip_z) reaching for (-x, y, z), with hip pitch and knee negated
     (and the other way round). The closed form takes hip and side as arrays,
@@ -240,7 +239,7 @@ def _stacked_legs(robot: RobotDescription) -> _LegStack:
 
 def _solve_legs(local: list, legs: _LegStack, robot: RobotDescription, previous: np.ndarray
                 ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`footfall.kinematics.inverse_kinematics` of the stacked legs, one leg at a time.
+    """:func:`footfall.core.kinematics.inverse_kinematics` of the stacked legs, one leg at a time.
 
     ``local`` holds the four reflected body-frame targets [m] as lists of
     three floats. The same closed form, operation for operation (so the same
@@ -280,7 +279,7 @@ def _solve_legs(local: list, legs: _LegStack, robot: RobotDescription, previous:
 def body_rotation(rpy: np.ndarray) -> np.ndarray:
     """Rotation matrix (3, 3) of one body attitude: roll, pitch, yaw (3,) [rad], Z-Y-X.
 
-    The same matrix as :func:`footfall.kinematics.rotation_matrix`, by
+    The same matrix as :func:`footfall.core.kinematics.rotation_matrix`, by
     MuJoCo's C routines: a single pose at control rate, where the
     vectorised NumPy version's overhead would dominate.
     """

@@ -20,15 +20,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.kinematics import (
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.kinematics import (
     legs_inverse_kinematics,
     legs_joint_limit_margin,
     legs_knee_position,
     rotation_matrix,
 )
-from footfall.robot import LITTLEDOG, RobotDescription
+from footfall.core.robot import LITTLEDOG, RobotDescription
 
 TERMS = ("joint", "reach", "leg_clearance", "trunk_clearance", "height", "attitude", "yaw")
 # names of the cost terms, in the order of Pose.terms

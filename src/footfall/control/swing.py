@@ -8,7 +8,7 @@ zero velocity at both ends.
 
 Convention: ``start``, ``end`` and every position of a :class:`SwingTrajectory`
 are *contact-point* positions -- the lowest point of the ball foot, as in
-:attr:`footfall.state.RobotState.feet` and the footstep plan. The ball's
+:attr:`footfall.core.state.RobotState.feet` and the footstep plan. The ball's
 centre, the inverse-kinematics target, is ``robot.foot_radius`` above it.
 
 Why the path clears the terrain: the terrain profile bounds the terrain
@@ -31,9 +31,9 @@ from scipy.interpolate import PchipInterpolator
 from scipy.ndimage import maximum_filter1d
 from scipy.spatial import ConvexHull, QhullError
 
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.robot import LITTLEDOG, RobotDescription
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.robot import LITTLEDOG, RobotDescription
 
 TIMINGS = ("cubic", "quintic")  # names of the time scalings SwingConfig.timing accepts
 _MAX_PROFILE_SAMPLES = 200_000  # [-] guard against a path of kilometres at 1 mm

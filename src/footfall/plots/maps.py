@@ -14,9 +14,9 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from footfall.fileio import atomic_path
-from footfall.heightmap import PatchGrid
-from footfall.scoring import ScoreGrid
+from footfall.core.files import atomic_path
+from footfall.core.heightmap import PatchGrid
+from footfall.features.scoring import ScoreGrid
 
 DPI = 130  # [dots/inch]
 INVALID_RGBA = (0.6, 0.6, 0.62, 1.0)  # grey: not a valid foothold

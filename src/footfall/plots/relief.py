@@ -17,9 +17,9 @@ from matplotlib.colors import LightSource, ListedColormap, Normalize
 from matplotlib.figure import Figure
 from matplotlib.image import AxesImage
 
-from footfall.errors import FootfallError
-from footfall.fileio import atomic_path
-from footfall.heightmap import HeightMap
+from footfall.core.errors import FootfallError
+from footfall.core.files import atomic_path
+from footfall.core.heightmap import HeightMap
 
 # Land part of matplotlib's "terrain" map (its low end is sea blue).
 RELIEF_CMAP = ListedColormap(matplotlib.colormaps["terrain"](np.linspace(0.25, 0.95, 256)),

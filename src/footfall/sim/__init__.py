@@ -1,9 +1,2 @@
-"""The simulated robot: MuJoCo model, terrain and physics (issue 4).
-
-MuJoCo picks its OpenGL backend when it is first imported; footfall renders
-offscreen, so EGL is the default here (``MUJOCO_GL`` in the environment wins).
-"""
-
-import os
-
-os.environ.setdefault("MUJOCO_GL", "egl")
+"""The simulated robot: the MuJoCo model of the robot on the terrain, its physics, and a
+walking episode that runs the control stack on it."""

@@ -1,10 +1,10 @@
 """The simulated robot and terrain as a MuJoCo model, generated from the robot description.
 
 Every length, mass, limit and gain comes from a
-:class:`~footfall.robot.RobotDescription`; the kinematic tree reproduces
-:mod:`footfall.kinematics` exactly, so MuJoCo's forward kinematics and the
+:class:`~footfall.core.robot.RobotDescription`; the kinematic tree reproduces
+:mod:`footfall.core.kinematics` exactly, so MuJoCo's forward kinematics and the
 closed-form one agree to rounding. The terrain is made from a
-:class:`~footfall.heightmap.HeightMap`: MuJoCo height fields whose vertices
+:class:`~footfall.core.heightmap.HeightMap`: MuJoCo height fields whose vertices
 are map cells, at most 2 mm apart (see :func:`terrain_layout`).
 
 Model layout (names are the API the simulation wrapper and tests rely on):
@@ -41,17 +41,14 @@ elliptic cones, see JACOBIAN).
 from __future__ import annotations
 
 import math
-import os
 from itertools import pairwise
-
-os.environ.setdefault("MUJOCO_GL", "egl")  # headless rendering unless the caller chose otherwise
 
 import mujoco
 import numpy as np
 
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.robot import LEG_NAMES, RobotDescription
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.robot import LEG_NAMES, RobotDescription
 
 JOINTS = ("hip_roll", "hip_pitch", "knee")  # joint name suffixes, in kinematics.py order
 TERRAIN_BASE = 0.02  # [m] thickness of the solid slab under the height field's lowest point

@@ -17,20 +17,17 @@ state -- a sample read out one servo period (2.5 ms) late.
 from __future__ import annotations
 
 import math
-import os
 import time
 from dataclasses import asdict, dataclass
 from typing import Self
 
-os.environ.setdefault("MUJOCO_GL", "egl")  # headless rendering unless the caller chose otherwise
-
 import mujoco
 import numpy as np
 
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
-from footfall.kinematics import inverse_kinematics, rotation_matrix, world_to_body
-from footfall.robot import LEG_NAMES, LITTLEDOG, RobotDescription
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.kinematics import inverse_kinematics, rotation_matrix, world_to_body
+from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.sim.mjcf import JOINTS, MAX_HFIELD_SPACING, SHIN_PIECES, compile_model
 
 LEG_PARTS = ("foot", "knee", "shin")  # parts of a leg that collide with the terrain
@@ -427,8 +424,8 @@ class Simulation:
         """An image (height, width, 3) uint8 of the current state from a model camera.
 
         ``"track"`` follows the trunk from the front right, above (the
-        paper's Fig. 4). Needs an OpenGL backend (``MUJOCO_GL``, EGL by
-        default); call :meth:`close` when done.
+        paper's Fig. 4). Needs an OpenGL backend (``MUJOCO_GL``; EGL by
+        default, see :mod:`footfall`); call :meth:`close` when done.
         """
         if mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_CAMERA, camera) < 0:
             raise FootfallError(f"unknown camera {camera!r}")

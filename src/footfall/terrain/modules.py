@@ -3,7 +3,7 @@
 The paper's testbed (§IV-A) is a row of interchangeable 61 x 61 cm terrain
 modules scanned at 1 mm: flat, steps, barriers, slopes, logs and rocky
 terrain of varying difficulty. This module generates such modules as
-:class:`~footfall.heightmap.HeightMap` objects, deterministically from a seed.
+:class:`~footfall.core.heightmap.HeightMap` objects, deterministically from a seed.
 
 Module frame: x in [0, 0.61) m forward, y in [-0.305, 0.305) m left, z up;
 heights >= 0 above the ground plane z = 0.
@@ -19,8 +19,8 @@ import numpy as np
 from scipy.ndimage import gaussian_filter
 from scipy.spatial import cKDTree
 
-from footfall.errors import FootfallError
-from footfall.heightmap import HeightMap
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
 
 MODULE_SIZE = 0.61  # [m] side length of a square terrain module (61 cm)
 MODULE_RESOLUTION = 0.001  # [m/cell] scan resolution (1 mm)

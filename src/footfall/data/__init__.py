@@ -1,0 +1,1 @@
+"""Stored data: demonstrations and run logs in one SQLite store."""

@@ -1,0 +1,1 @@
+"""Experiments that prove the method: the offline experiment, the walking reproduction, its report, batches of runs and benchmarks."""

@@ -1,0 +1,187 @@
+"""Many walking runs of one configuration, in parallel processes, and their statistics.
+
+Run i of ``walk_many(..., seed=S)`` has seed S + i, so ``footfall walk --seed
+S+i`` repeats any one of them exactly. The summary follows the paper's
+Table II: success rate (with a 95 % Wilson interval) and slip averaged over
+the successful runs only.
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.robot import LITTLEDOG
+from footfall.data.runlog import RunRecord
+from footfall.core.stats import wilson_interval
+from footfall.sim.episode import WalkConfig, walk
+
+
+def reward_source(model_path: str | os.PathLike | None, hmap: HeightMap):
+    """The reward ``reward_for(leg)`` of a model file, or the hand-tuned default (None).
+
+    Raises
+    ------
+    FootfallError
+        If the model is for another robot or another map resolution.
+    """
+    if model_path is None:
+        from footfall.features.reward import default_reward
+
+        reward = default_reward()
+        return lambda leg: reward
+    from footfall.learning.model import FootholdModel
+
+    model = FootholdModel.load(model_path)
+    model.check_compatible(robot=LITTLEDOG, map_resolution=hmap.resolution)
+    return model.reward_for
+
+
+def expert_judge(config: WalkConfig):
+    """The walking expert's value (:func:`footfall.expert.synthetic.walking_expert`) as a foothold judge."""
+    from footfall.expert.synthetic import SyntheticExpert, walking_expert
+
+    return SyntheticExpert(walking_expert(config.footstep.lead)).values
+
+
+def _one_run(terrain_path: str, model_path: str | None, seed: int, config: WalkConfig,
+             expert: bool = False) -> RunRecord:
+    from threadpoolctl import threadpool_limits
+
+    hmap = HeightMap.load(terrain_path)
+    # One core per run: the stack's small matrix products only lose to BLAS threads
+    # fighting over the cores the other runs use.
+    with threadpool_limits(limits=1):
+        return walk(hmap, reward_source(model_path, hmap), seed, config,
+                    judge=expert_judge(config) if expert else None)
+
+
+def workers() -> int:
+    """Processes to use: the cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def walk_many(terrain_path: str | os.PathLike, model_path: str | os.PathLike | None, runs: int,
+              seed: int, config: WalkConfig = WalkConfig(), processes: int | None = None,
+              progress: Callable[[RunRecord], None] | None = None,
+              expert: bool = False) -> list[RunRecord]:
+    """``runs`` runs with seeds ``seed .. seed + runs - 1``, in parallel; returned in seed order.
+
+    Each process loads the terrain and the model itself (nothing is
+    pickled but paths, seeds and the frozen config). ``expert``: the walking
+    expert chooses the footholds (:func:`expert_judge`), not a reward.
+    """
+    if expert and model_path is not None:
+        raise FootfallError("the expert chooses the footholds itself: give no model with it")
+    if isinstance(runs, bool) or not isinstance(runs, int) or runs < 1:
+        raise FootfallError(f"runs must be an integer >= 1, got {runs!r}")
+    hmap = HeightMap.load(terrain_path)
+    reward_source(model_path, hmap)  # fail early, in this process, on a bad model
+    n = min(processes or workers(), runs)
+    seeds = [seed + i for i in range(runs)]
+    out: dict[int, RunRecord] = {}
+    if n == 1:
+        for s in seeds:
+            out[s] = _one_run(str(terrain_path), None if model_path is None else str(model_path),
+                              s, config, expert)
+            if progress:
+                progress(out[s])
+    else:
+        # spawn: a fresh interpreter per worker (no forked BLAS or renderer state)
+        with ProcessPoolExecutor(max_workers=n, mp_context=get_context("spawn")) as pool:
+            futures = {pool.submit(_one_run, str(terrain_path),
+                                   None if model_path is None else str(model_path), s, config,
+                                   expert): s
+                       for s in seeds}
+            for f in as_completed(futures):
+                out[futures[f]] = f.result()
+                if progress:
+                    progress(out[futures[f]])
+    return [out[s] for s in seeds]
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """Table II's measures of a set of runs."""
+
+    runs: int
+    successes: int
+    success_rate: float  # [-]
+    success_ci: tuple[float, float]  # 95 % Wilson interval of the success rate
+    slip_mean_mm: float | None  # [mm] mean over every foothold of the successful runs
+    slip_std_mm: float | None  # [mm] standard deviation of the same
+    slip_count: int  # footholds measured
+    speed_cm_s: float | None  # [cm/s] mean speed of the successful runs
+    speed_body_lengths_s: float | None  # [body lengths / s]
+    reasons: dict  # how the runs ended: {reason: count}
+
+    def as_dict(self) -> dict:
+        d = dict(vars(self))
+        d["success_ci"] = list(self.success_ci)
+        return d
+
+
+def summarise(records: list[RunRecord]) -> RunSummary:
+    """Success rate, slip over the successful runs (as the paper), speed."""
+    if not records:
+        raise FootfallError("no runs to summarise")
+    ok = [r for r in records if r.result.get("success")]
+    slips = np.concatenate([r.slips() for r in ok]) if ok else np.zeros(0)
+    reasons: dict[str, int] = {}
+    for r in records:
+        reasons[r.result.get("reason", "?")] = reasons.get(r.result.get("reason", "?"), 0) + 1
+    speeds = [r.result["speed_cm_s"] for r in ok]
+    bl = [r.result["speed_body_lengths_s"] for r in ok]
+    return RunSummary(len(records), len(ok), len(ok) / len(records),
+                      wilson_interval(len(ok), len(records)),
+                      1e3 * float(slips.mean()) if slips.size else None,
+                      1e3 * float(slips.std()) if slips.size else None, int(slips.size),
+                      float(np.mean(speeds)) if speeds else None,
+                      float(np.mean(bl)) if bl else None, reasons)
+
+
+def save_strip(frames: list, path: str | os.PathLike, title: str | None = None) -> None:
+    """A strip of snapshot frames [(time [s], image)] side by side (as the paper's Fig. 4)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from footfall.core.files import atomic_path
+
+    if not frames:
+        raise FootfallError("no frames to draw")
+    fig, axes = plt.subplots(1, len(frames), figsize=(2.6 * len(frames), 2.4), squeeze=False)
+    for ax, (t, img) in zip(axes[0], frames):
+        ax.imshow(img)
+        ax.set_title(f"t = {t:.1f} s", fontsize=9)
+        ax.axis("off")
+    if title:
+        fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    with atomic_path(Path(path)) as tmp:
+        fig.savefig(tmp, dpi=110, format="png")
+    plt.close(fig)
+
+
+def save_video(images: list, path: str | os.PathLike, fps: float) -> None:
+    """Write frames (h, w, 3) uint8 as an H.264 MP4 (imageio's bundled ffmpeg)."""
+    import imageio.v2 as imageio
+
+    from footfall.core.files import atomic_path
+
+    if not images:
+        raise FootfallError("no frames to write")
+    with atomic_path(Path(path)) as tmp:
+        with imageio.get_writer(tmp, format="FFMPEG", mode="I", fps=fps, codec="libx264",
+                                macro_block_size=8, ffmpeg_log_level="error") as writer:
+            for img in images:
+                writer.append_data(img)

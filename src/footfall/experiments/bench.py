@@ -1,0 +1,355 @@
+"""Benchmarks: figures printed, with a baseline measured in the same process.
+
+``bench_scoring``: dense scoring of a 3-module board (flat | rocky | flat,
+1.83 x 0.61 m at 1 mm) at 5 mm candidate spacing (~45 000 candidates) with
+60 templates (20 per scale) and the 27 terrain features, against a plain
+per-candidate loop of the same definitions (timed on a sample of candidates
+and extrapolated), with the floating-point work and the peak memory.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import time
+import tracemalloc
+
+import numpy as np
+
+from footfall.features.patches import foothold_patches
+from footfall.features.reward import LinearReward
+from footfall.features.config import FeatureConfig
+from footfall.features.scoring import score_grid
+from footfall.features.templates import TemplateLibrary, bandwidth_for_rms, extract_templates
+from footfall.terrain import make_board
+from footfall.features.terrain_features import feature_names
+
+TEMPLATES_PER_SCALE = 20  # the issue's benchmark: 60 templates in all
+BENCH_TEMPLATE_RMS = 0.005  # [m] RMS height difference at which a match scores exp(-1)
+
+
+def benchmark_reward(board, config: FeatureConfig, rng: np.random.Generator) -> LinearReward:
+    """A reward with 20 templates per scale taken from the rocky module and random weights."""
+    pos = np.column_stack([rng.uniform(0.65, 1.18, 200), rng.uniform(-0.22, 0.22, 200)])
+    lib = extract_templates(board, pos, 0.0, False, config)
+    keep = tuple(np.arange(TEMPLATES_PER_SCALE) for _ in lib.templates)
+    lib = lib.subset(keep)
+    return LinearReward(
+        config=config,
+        terrain_weights=rng.normal(size=len(feature_names(config))),
+        library=lib,
+        template_weights=tuple(rng.normal(size=c) for c in lib.counts),
+        bandwidths=tuple(bandwidth_for_rms(BENCH_TEMPLATE_RMS, g) for g in config.grids),
+        name="benchmark")
+
+
+def _flops(n: int, config: FeatureConfig, lib: TemplateLibrary) -> float:
+    """Floating-point operations of dense scoring (multiply-adds count 2)."""
+    total = 0.0
+    for grid, t in zip(config.grids, lib.templates):
+        cols = t.shape[0] + 5  # templates, 4 fit kernels, a sum
+        total += n * grid.size * (2 * cols + 3)  # matrix product, squares, centring
+        total += n * t.shape[0] * 6  # distances, exponentials, weights
+    return total
+
+
+def bench_scoring(repeats: int = 7, baseline_sample: int = 300, seed: int = 0) -> dict:
+    """Time dense scoring against a per-candidate loop; return the figures."""
+    rng = np.random.default_rng(seed)
+    config = FeatureConfig()
+    board = make_board([("rocky", 0.5)], seed)
+    reward = benchmark_reward(board, config, rng)
+
+    t0 = time.perf_counter()
+    grid = score_grid(board, reward)
+    first = time.perf_counter() - t0
+    times, times64 = [], []
+    for _ in range(repeats):  # alternate the two precisions: both see the same machine load
+        t0 = time.perf_counter()
+        grid = score_grid(board, reward)
+        times.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        grid64 = score_grid(board, reward, dtype=np.float64)
+        times64.append(time.perf_counter() - t0)
+    dense = float(np.median(times))
+    finite = np.isfinite(grid64.reward)
+    float32_error = float(np.max(np.abs(grid.reward[finite] - grid64.reward[finite]))
+                          / np.max(np.abs(grid64.reward[finite])))
+    tracemalloc.start()
+    score_grid(board, reward)
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+
+    # Baseline: the same definitions, one candidate at a time.
+    pts = grid.positions
+    sample = rng.choice(pts.shape[0], size=min(baseline_sample, pts.shape[0]), replace=False)
+    loop_values = np.empty(sample.size)
+    t0 = time.perf_counter()
+    for k, idx in enumerate(sample):  # the slow reference: one candidate per iteration
+        fp = foothold_patches(board, pts[idx:idx + 1], 0.0, False, config)
+        loop_values[k] = reward.terrain_reward(fp)[0]
+    per_candidate = (time.perf_counter() - t0) / sample.size
+    loop_total = per_candidate * pts.shape[0]
+    dense_values = grid64.reward.ravel()[sample]
+    both = np.isfinite(loop_values) & np.isfinite(dense_values)
+    flops = _flops(pts.shape[0], config, reward.library)
+    return {
+        "board": "flat | rocky 0.5 | flat, 1.83 x 0.61 m at 1 mm",
+        "candidates": int(pts.shape[0]),
+        "spacing_m": 0.005,
+        "templates": list(reward.library.counts),
+        "terrain_features": len(feature_names(config)),
+        "template_resolution_m": config.template_resolution,
+        "dense_seconds_median": dense,
+        "dense_seconds_all": times,
+        "dense_seconds_first_call": first,
+        "dense_float64_seconds_median": float(np.median(times64)),
+        "float32_max_relative_difference": float32_error,
+        "target_seconds": 0.1,
+        "baseline_per_candidate_seconds": per_candidate,
+        "baseline_sample": int(sample.size),
+        "baseline_seconds_extrapolated": loop_total,
+        "speedup_vs_loop": loop_total / dense,
+        "max_abs_difference_vs_loop": float(np.max(np.abs(loop_values[both] - dense_values[both])))
+        if both.any() else None,
+        "gflop": flops / 1e9,
+        "gflop_per_second": flops / dense / 1e9,
+        "peak_memory_mib": peak / 2 ** 20,
+        "cores": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count(),
+        "machine": f"{platform.machine()} {platform.processor() or ''}".strip(),
+        "numpy": np.__version__,
+    }
+
+
+def format_scoring(r: dict) -> str:
+    """Human-readable summary of :func:`bench_scoring`."""
+    return "\n".join([
+        f"dense scoring: {r['candidates']} candidates ({r['board']}), "
+        f"{sum(r['templates'])} templates + {r['terrain_features']} terrain features",
+        f"  dense:    {r['dense_seconds_median'] * 1000:8.1f} ms median of "
+        f"{len(r['dense_seconds_all'])} (first call {r['dense_seconds_first_call'] * 1000:.1f} ms;"
+        f" target {r['target_seconds'] * 1000:.0f} ms)",
+        f"  float64:  {r['dense_float64_seconds_median'] * 1000:8.1f} ms median "
+        f"(float32 differs by {r['float32_max_relative_difference']:.1e} of the reward scale)",
+        f"  loop:     {r['baseline_seconds_extrapolated'] * 1000:8.1f} ms extrapolated from "
+        f"{r['baseline_sample']} candidates ({r['baseline_per_candidate_seconds'] * 1e6:.0f} us each)",
+        f"  speed-up: {r['speedup_vs_loop']:8.1f} x   (max |dense float64 - loop| = "
+        f"{r['max_abs_difference_vs_loop']:.2e})",
+        f"  work:     {r['gflop']:8.2f} GFLOP, {r['gflop_per_second']:.1f} GFLOP/s;"
+        f" peak memory {r['peak_memory_mib']:.1f} MiB; {r['cores']} cores",
+    ])
+
+
+def bench_learning(n_demos: int = 100, library_size: int = 1000, seed: int = 0) -> dict:
+    """Paper-scale learning: the L1 path with 5-fold grouped CV, against LogisticRegressionCV.
+
+    Demonstrations come from the synthetic expert on rocky, steps, barrier
+    and slope boards (not timed); the timed part is the learning of one
+    ranking function (front and hind legs together, as one problem) on the
+    templates + features set with a ~1000-template library.
+    """
+    import warnings
+
+    from sklearn.exceptions import ConvergenceWarning
+    from sklearn.linear_model import LogisticRegressionCV
+
+    from footfall.learning.dataset import build_library, make_example, stack, training_rows
+    from footfall.expert.synthetic import SyntheticExpert
+    from footfall.learning.ranker import FootholdRanker, grouped_folds, pairwise_transform
+    from footfall.expert.collect import collect_demonstrations
+
+    rng = np.random.default_rng(seed)
+    config = FeatureConfig()
+    boards = [make_board([(k, d)], seed + i) for i, (k, d) in
+              enumerate([("rocky", 0.5), ("rocky", 0.8), ("steps", 0.6), ("barrier", 0.6),
+                          ("slope", 0.6)])]
+    maps = {b.content_hash(): b for b in boards}
+    t0 = time.perf_counter()
+    demos = collect_demonstrations(boards, SyntheticExpert(), n_demos, seed)
+    collect = time.perf_counter() - t0
+    hmaps = [maps[d.terrain_hash] for d in demos]
+    t0 = time.perf_counter()
+    library = build_library(hmaps, [d.state for d in demos], [d.candidates for d in demos],
+                            [d.chosen for d in demos], config, rng, size=library_size)
+    examples = [make_example(h, d.state, d.candidates, d.chosen, library, config,
+                             training_rows(d.candidates.shape[0], d.chosen, 100, rng))
+                for h, d in zip(hmaps, demos)]
+    X, y, groups = stack(examples, "both",
+                         tuple(bandwidth_for_rms(r, g) for r, g in zip((0.004,) * 3, config.grids)))
+    features = time.perf_counter() - t0
+
+    tracemalloc.start()
+    t0 = time.perf_counter()
+    ours = FootholdRanker(learner="l1", Cs=10, cv=5).fit(X, y, groups)
+    ours_s = time.perf_counter() - t0
+    _, ours_peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+
+    # The baseline: scikit-learn's own cross-validated L1 logistic regression on
+    # the same standardised mirrored pairs, folds and C values, without early stop.
+    pairs, labels, pair_groups = pairwise_transform(X, y, groups)
+    scale = pairs.std(axis=0)
+    scale[scale < 1e-12] = 1.0
+    Cs = np.array([p.C for p in ours.path_])
+    Cs = np.concatenate([Cs, Cs[-1] * np.logspace(0.41, 0.41 * (10 - Cs.size), 10 - Cs.size)]) \
+        if Cs.size < 10 else Cs
+    tracemalloc.start()
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        warnings.simplefilter("ignore", FutureWarning)
+        ref = LogisticRegressionCV(Cs=Cs, cv=grouped_folds(pair_groups, 5), l1_ratios=(1.0,),
+                                   solver="liblinear", fit_intercept=False, tol=1e-4,
+                                   max_iter=2000, random_state=0).fit(pairs / scale, labels)
+    ref_s = time.perf_counter() - t0
+    _, ref_peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    ref_nonzero = int(np.count_nonzero(ref.coef_))
+    return {
+        "demonstrations": len(demos), "library": list(library.counts),
+        "features": int(X.shape[1]), "candidate_rows": int(X.shape[0]),
+        "pairs_mirrored": int(pairs.shape[0]),
+        "collect_seconds_untimed_part": collect, "feature_seconds": features,
+        "learn_seconds": ours_s, "target_seconds": 30.0,
+        "path_points_evaluated": len(ours.path_), "lambda": ours.lambda_,
+        "cv_error": ours.cv_error_, "non_zero": int(np.count_nonzero(ours.coef_)),
+        "learn_peak_memory_mib": ours_peak / 2 ** 20,
+        "baseline": "sklearn LogisticRegressionCV(l1, liblinear) on the same mirrored pairs, "
+                    "folds and C values",
+        "baseline_seconds": ref_s, "baseline_peak_memory_mib": ref_peak / 2 ** 20,
+        "baseline_non_zero": ref_nonzero, "speedup_vs_baseline": ref_s / ours_s,
+    }
+
+
+def format_learning(r: dict) -> str:
+    """Human-readable summary of :func:`bench_learning`."""
+    return "\n".join([
+        f"learning: {r['demonstrations']} demonstrations, library {sum(r['library'])} "
+        f"{tuple(r['library'])}, {r['features']} features, {r['pairs_mirrored']} mirrored pairs",
+        f"  features: {r['feature_seconds']:7.1f} s (patches, template distances, pose)",
+        f"  footfall: {r['learn_seconds']:7.1f} s for the L1 path ({r['path_points_evaluated']} "
+        f"values x 5 grouped folds; target {r['target_seconds']:.0f} s), lambda "
+        f"{r['lambda']:.3g}, {r['non_zero']} non-zero, peak {r['learn_peak_memory_mib']:.0f} MiB",
+        f"  sklearn:  {r['baseline_seconds']:7.1f} s LogisticRegressionCV, "
+        f"peak {r['baseline_peak_memory_mib']:.0f} MiB -> speed-up {r['speedup_vs_baseline']:.1f} x",
+    ])
+
+
+def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0) -> dict:
+    """Real-time factor of the whole walking stack against bare MuJoCo stepping (the ceiling).
+
+    One seeded run of the hand-tuned reward over a flat | rocky | flat board
+    (planning, control and physics, on this process's one core: CPU time),
+    then bare stepping of the same model on the same terrain with the robot
+    standing on the rocky module, and on the flat start module. Also a run
+    on a flat board, for the walking speed on flat ground.
+    """
+    from footfall.features.reward import default_reward
+    from footfall.sim.simulation import Simulation, bench_stepping
+    from footfall.core.state import nominal_state
+    from footfall.sim.episode import walk
+
+    reward = default_reward()
+    out: dict = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version()}}
+    boards = {"rocky": make_board([("rocky", difficulty)], seed=seed),
+              "flat": make_board([("flat", 0.0)] * 3, seed=seed)}
+    for name, board in boards.items():
+        cpu, wall = time.process_time(), time.perf_counter()
+        record = walk(board, lambda leg: reward, seed)
+        cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
+        r = record.result
+        out[f"walk_{name}"] = {
+            "success": r["success"], "reason": r["reason"], "simulated_s": r["time"],
+            "cpu_s": cpu, "wall_s": wall, "real_time_factor": r["time"] / cpu,
+            "wall_real_time_factor": r["time"] / wall,
+            "planning_ms_per_step": r["planning_ms_per_step"], "steps": r["steps"],
+            "speed_cm_s": r["speed_cm_s"], "speed_body_lengths_s": r["speed_body_lengths_s"]}
+    board = boards["rocky"]
+    for where, x in (("rocky", 0.915), ("flat", 0.3)):
+        sim = Simulation(hmap=board)
+        st = nominal_state(board, (x, 0.0), 0.0, "LF")
+        sim.stand(st.body_position, st.body_rpy, st.feet)
+        sim.advance(0.2)
+        out[f"bare_{where}"] = bench_stepping(sim, bare_seconds)
+        sim.close()
+    out["stack_over_bare_rocky"] = (out["walk_rocky"]["real_time_factor"]
+                                    / out["bare_rocky"]["real_time_factor"])
+    return out
+
+
+def format_sim(r: dict) -> str:
+    """Human-readable lines of :func:`bench_sim`."""
+    lines = []
+    for name in ("rocky", "flat"):
+        w = r[f"walk_{name}"]
+        lines.append(f"whole stack, {name} board: {w['real_time_factor']:.1f}x real time (CPU), "
+                     f"{w['wall_real_time_factor']:.1f}x wall; {w['simulated_s']:.1f} s walked "
+                     f"({'success' if w['success'] else w['reason']}), {w['steps']} steps, "
+                     f"planning {w['planning_ms_per_step']:.1f} ms/step, "
+                     f"{w['speed_cm_s']:.1f} cm/s ({w['speed_body_lengths_s']:.2f} body lengths/s)")
+    for where in ("rocky", "flat"):
+        b = r[f"bare_{where}"]
+        lines.append(f"bare MuJoCo stepping, robot on the {where} module: "
+                     f"{b['real_time_factor']:.1f}x real time ({b['steps_per_second']:.0f} steps/s)")
+    lines.append(f"whole stack / bare stepping on the rocky board: {r['stack_over_bare_rocky']:.2f}")
+    return "\n".join(lines)
+
+
+def bench_expert(states: int = 16, repeats: int = 3, seed: int = 0) -> dict:
+    """Cost of the walking expert's judgement with its placement error, against without.
+
+    ``states`` robot states standing at evenly spaced places on a rocky 0.5
+    module (swing legs in turn); for each, the candidate set F of the
+    reproduction (reachable footholds within 3 cm of the gait-nominal one)
+    and every reachable foothold (5 mm lattice). Each set is judged by the
+    walking expert with no placement error (the baseline) and with the
+    default one, alternately, ``repeats`` times; the best time of each
+    counts. Medians over the states [ms] and their ratio.
+    """
+    from footfall.features.candidates import reachable_footholds
+    from footfall.control.footstep import FootstepConfig
+    from footfall.expert.synthetic import SyntheticExpert, walking_expert
+    from footfall.core.robot import LEG_NAMES, LITTLEDOG
+    from footfall.core.state import nominal_state
+
+    lead = FootstepConfig().lead
+    judges = {"baseline": SyntheticExpert(walking_expert(lead, placement_error=0.0)).values,
+              "placement": SyntheticExpert(walking_expert(lead)).values}
+    board = make_board([("rocky", 0.5)], seed)
+    xs = np.linspace(0.75, 1.10, states)
+    times: dict[str, dict[str, list[float]]] = {s: {j: [] for j in judges} for s in ("F", "all")}
+    sizes: dict[str, list[int]] = {"F": [], "all": []}
+    for i, x in enumerate(xs):
+        leg = LEG_NAMES[i % 4]
+        st = nominal_state(board, (float(x), 0.0), 0.0, leg)
+        every = reachable_footholds(board, st)
+        nominal = st.body_position[:2] + np.asarray(LITTLEDOG.nominal_foot(leg)[:2]) + (lead, 0.0)
+        sets = {"all": every,
+                "F": every[np.linalg.norm(every[:, :2] - nominal, axis=1) <= 0.03]}
+        for name, cand in sets.items():
+            sizes[name].append(int(cand.shape[0]))
+            best = {j: np.inf for j in judges}
+            for _ in range(repeats):
+                for j, judge in judges.items():
+                    t = time.perf_counter()
+                    judge(board, st, cand)
+                    best[j] = min(best[j], time.perf_counter() - t)
+            for j in judges:
+                times[name][j].append(best[j] * 1000)
+    out: dict = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version()},
+                 "states": states}
+    for name in ("F", "all"):
+        med = {j: float(np.median(times[name][j])) for j in judges}
+        out[name] = {"candidates_median": float(np.median(sizes[name])),
+                     "baseline_ms": med["baseline"], "placement_ms": med["placement"],
+                     "ratio": med["placement"] / med["baseline"]}
+    return out
+
+
+def format_expert(r: dict) -> str:
+    """Human-readable lines of :func:`bench_expert`."""
+    labels = {"F": "the reproduction's F (3 cm)", "all": "every reachable foothold"}
+    return "\n".join(
+        f"{labels[k]}: {r[k]['candidates_median']:.0f} candidates, walking expert "
+        f"{r[k]['placement_ms']:.1f} ms with its placement error, {r[k]['baseline_ms']:.1f} ms "
+        f"without (x{r[k]['ratio']:.2f}; medians over {r['states']} states)" for k in ("F", "all"))

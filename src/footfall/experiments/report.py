@@ -1,0 +1,250 @@
+"""The reproduction's report: Markdown and one self-contained HTML page, with its figures.
+
+Every number comes from the results of :func:`footfall.experiments.reproduce.run_reproduction`;
+the page embeds its pictures, so it can be mailed or archived on its own.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import re
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from footfall.core.files import atomic_path, write_text_atomic
+
+PAPER_TABLE2 = {"terrain": (47.6, 24.8, 5.9), "templates": (76.2, 20.2, 5.1),
+                "both": (100.0, 17.3, 3.3), "flat": (100.0, 13.4, 0.4)}
+TABLE2_ROWS = ("terrain", "templates", "both", "flat", "expert", "default")
+# the paper's Table II: success [%], slip mean and std [mm]
+PAPER_TABLE1 = {"both": (1, 19, 23), "templates": (10, 24, 28)}  # templates kept of 946
+NAMES = {"terrain": "Features only", "templates": "Templates only",
+         "both": "Templates + Features", "flat": "Baseline (flat terrain)",
+         "expert": "Expert choosing (reference)", "default": "Hand-tuned reward (reference)"}
+
+
+def _figures(out: Path, results: dict, maps: dict, models: dict, config, log) -> list[tuple[str, str]]:
+    """Draw the report's pictures; returns (file name, caption) pairs."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    from footfall.plots.maps import save_kept_templates, save_score_maps
+    from footfall.plots.relief import save_relief
+    from footfall.features.scoring import score_grid
+
+    figs = []
+    save_relief(maps["test"], out / "test-board.png", title="the test board (never trained on)")
+    figs.append(("test-board.png", "The test board: modules the robot never trained on."))
+    grids = [score_grid(maps["test"], models[fs].reward_for("LF")) for fs in models]
+    save_score_maps(grids, [f"{NAMES[fs]}: learned reward, front legs (terrain part)"
+                            for fs in models], ["reward"] * len(grids), out / "reward-maps.png")
+    figs.append(("reward-maps.png", "Learned rewards over the test board (front legs; the "
+                                    "terrain part, before pose features)."))
+    for fs in ("templates", "both"):
+        if fs in models and save_kept_templates(models[fs], out / f"templates-{fs}.png"):
+            figs.append((f"templates-{fs}.png", f"{NAMES[fs]}: the kept templates with the "
+                                                f"largest weights on the three scales (front legs)."))
+    # Slip distributions of the successful runs.
+    fig = Figure(figsize=(7, 3.2), layout="constrained")
+    ax = fig.subplots()
+    data = [(NAMES[k], v) for k, v in results["slips_mm"].items() if v]
+    if data:
+        ax.boxplot([v for _, v in data], showfliers=True)
+        ax.set_xticks(range(1, len(data) + 1), [n for n, _ in data], fontsize=7, rotation=15,
+                      ha="right")
+    ax.set_ylabel("slip per foothold [mm]")
+    ax.set_title("slip at every foothold of the successful runs")
+    with atomic_path(out / "slip.png") as tmp:
+        fig.savefig(tmp, format="png", dpi=110)
+    figs.append(("slip.png", "Slip per foothold over the successful runs (touch-down to the "
+                             "next lift-off, as the paper)."))
+    # Success against difficulty.
+    fig = Figure(figsize=(6, 3.2), layout="constrained")
+    ax = fig.subplots()
+    for fs in ("terrain", "templates", "both"):
+        xs = [results["test_difficulty"]] + [float(d) for d in results["sweep"]]
+        ys = [results["table2"][fs]["success_rate"]] + [v[fs]["success_rate"]
+                                                        for v in results["sweep"].values()]
+        ax.plot(xs, [100 * y for y in ys], "o-", label=NAMES[fs])
+    ax.set_xlabel("test board difficulty")
+    ax.set_ylabel("success [%]")
+    ax.set_ylim(-5, 105)
+    ax.legend(fontsize=8)
+    with atomic_path(out / "success-difficulty.png") as tmp:
+        fig.savefig(tmp, format="png", dpi=110)
+    figs.append(("success-difficulty.png", "Success rate against the test board's difficulty "
+                                           "(the sweep runs only if all three reach 100 %)."))
+    strip = out / "crossing.png"
+    if not strip.exists():
+        log("snapshot strip of a crossing (offscreen rendering)")
+        _strip(maps["test"], out / "models" / "both.npz", config, strip, results["strip_seed"])
+    figs.append(("crossing.png", "Templates + features on the test board: its first evaluation "
+                                 "run that crossed, if any (as the paper's Fig. 4; the title "
+                                 "says how it ended)."))
+    return figs
+
+
+def _strip(board, model_path: Path, config, path: Path, seed: int) -> None:
+    """Snapshots of the evaluation run of templates + features with ``seed`` (replayed: seeded)."""
+    from footfall.experiments.batch import reward_source, save_strip
+    from footfall.sim.episode import Frames, walk
+
+    frames = Frames(snapshot_count=6, width=360, height=270)
+    record = walk(board, reward_source(model_path, board), seed, config.walk, frames=frames)
+    r = record.result
+    save_strip(frames.snapshots, path, title=f"templates + features, seed "
+               f"{seed}: {'success' if r['success'] else r['reason']}")
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:.1f} %"
+
+
+def _markdown(results: dict, figs: list[tuple[str, str]]) -> str:
+    c = results["config"]
+    lines = ["# footfall: the paper's walking experiment, reproduced", "",
+             "Kalakrishnan et al., *Learning Locomotion over Rough Terrain using Terrain "
+             "Templates* (IROS 2009), §II-B and §V, on the simulated LittleDog. "
+             f"Seed {c['seed']}; every setting in `config.json`, every number in `results.json`, "
+             f"every run and demonstration in `reproduce.sqlite`.", "",
+             "## Demonstrations (expert corrections of run logs)", "",
+             "| round | robot's reward | crossings | corrections so far |",
+             "| --- | --- | --- | --- |"]
+    for r in results["rounds"]:
+        lines.append(f"| {r['round']} | {r['reward']} | {r['successes']} / {r['runs']} | "
+                     f"{r['demonstrations_total']} |")
+    d = results["demonstrations"]
+    lines += ["", f"{d['n']} demonstrations, by module: " + ", ".join(
+        f"{k} {v}" for k, v in d["by_module"].items()) + "; by leg: " + ", ".join(
+        f"{k} {v}" for k, v in sorted(d["by_leg"].items())) + ".", "",
+        "## Table I: templates kept per scale (L1, lambda at the smallest CV error)", "",
+        "| features | legs | small | medium | large | paper (of 946) |",
+        "| --- | --- | --- | --- | --- | --- |"]
+    for fs, groups in results["table1"].items():
+        for g, v in groups.items():
+            paper = " / ".join(str(x) for x in PAPER_TABLE1[fs])
+            lines.append(f"| {NAMES[fs]} | {g} | " + " | ".join(
+                f"{k} / {n}" for k, n in zip(v["kept"], v["library"])) + f" | {paper} |")
+    lines += ["", "## Table II: walking on the unseen test board "
+              f"(difficulty {results['test_difficulty']:g})", "",
+              "| method | success | 95 % CI (Wilson) | slip on successful runs [mm] | footholds | "
+              "speed [cm/s] | paper: success, slip |",
+              "| --- | --- | --- | --- | --- | --- | --- |"]
+    for k in (k for k in TABLE2_ROWS if k in results["table2"]):
+        t = results["table2"][k]
+        slip = ("-" if t["slip_mean_mm"] is None
+                else f"{t['slip_mean_mm']:.1f} +- {t['slip_std_mm']:.1f}")
+        speed = "-" if t["speed_cm_s"] is None else f"{t['speed_cm_s']:.1f}"
+        p = PAPER_TABLE2.get(k)
+        paper = "-" if p is None else f"{p[0]:.1f} %, {p[1]:.1f} +- {p[2]:.1f}"
+        lines.append(f"| {NAMES[k]} | {t['successes']} / {t['runs']} ({_pct(t['success_rate'])}) | "
+                     f"{_pct(t['success_ci'][0])} - {_pct(t['success_ci'][1])} | {slip} | "
+                     f"{t['slip_count']} | {speed} | {paper} |")
+    lines += ["", "The references walk the same test board with the same seeds: the synthetic "
+              "expert choosing every foothold itself bounds what a function learned from its "
+              "corrections can do; the hand-tuned reward is the robot before any learning.", "",
+              "How runs ended: " + "; ".join(
+                  f"{NAMES[k]}: " + ", ".join(f"{r} {n}" for r, n in
+                                              sorted(results["table2"][k]["reasons"].items()))
+                  for k in TABLE2_ROWS if k in results["table2"]) + ".", ""]
+    if results["sweep"]:
+        lines += ["### Success against difficulty", "",
+                  "| difficulty | " + " | ".join(NAMES[k] for k in ("terrain", "templates", "both"))
+                  + " |", "| --- | --- | --- | --- |"]
+        for dd, v in results["sweep"].items():
+            lines.append(f"| {dd} | " + " | ".join(
+                f"{v[k]['successes']} / {v[k]['runs']}" for k in ("terrain", "templates", "both"))
+                + " |")
+        lines.append("")
+    lines += ["## Offline ranking on expert demonstrations over the test board", "",
+              "Loss: the expert's value of its best candidate minus its value of the function's "
+              "pick (1 unit = 1 cm off the gait-nominal foothold for the walking expert), 95 % "
+              "bootstrap interval.", "",
+              "| features | top-1 | within 1 cm | percentile | loss | loss 95 % CI |",
+              "| --- | --- | --- | --- | --- | --- |"]
+    for fs, a in results["ranking"].items():
+        lo, hi = a["reward_loss_ci"]
+        lines.append(f"| {NAMES[fs]} | {a['top1']:.3f} | {a['top1_near']:.3f} | "
+                     f"{a['percentile']:.3f} | {a['reward_loss']:.2f} | {lo:.2f} to {hi:.2f} |")
+    judged = {k: v for k, v in results.get("choices", {}).items() if v["steps"]}
+    if judged:
+        severe = next(iter(judged.values()))["severe_above"]
+        lines += ["", "## The expert's verdict on the robot's choices in the test-board runs", "",
+                  "Shortfall: the expert's value of its best foothold in a step's candidate set "
+                  "minus its value of the robot's choice [value units], over every step of the "
+                  f"{c['eval_runs']} runs of each Table II row; corrected above {c['margin']:g} (the "
+                  f"reproduction's margin), severe above {severe:g}.", "",
+                  "| method | steps | mean | median | 90th percentile | above the margin | severe |",
+                  "| --- | --- | --- | --- | --- | --- | --- |"]
+        for k, v in judged.items():
+            lines.append(f"| {NAMES[k]} | {v['steps']} | {v['mean']:.2f} | {v['median']:.2f} | "
+                         f"{v['p90']:.2f} | {_pct(v['above_margin'])} | {_pct(v['severe'])} |")
+    lines += ["", "## Pictures", ""]
+    for name, caption in figs:
+        lines += [f"![{caption}]({name})", "", f"*{caption}*", ""]
+    return "\n".join(lines)
+
+
+def _inline(md: str) -> str:
+    text = html.escape(md)
+    text = re.sub(r"\*\*(.+?)\*\*", r"<b>\1</b>", text)
+    text = re.sub(r"`(.+?)`", r"<code>\1</code>", text)
+    return re.sub(r"\*(.+?)\*", r"<i>\1</i>", text)
+
+
+def _html(md: str, out: Path) -> str:
+    """The Markdown report as one HTML page with its pictures embedded (no external files)."""
+    body, table = [], []
+
+    def flush() -> None:
+        if table:
+            head, rows = table[0], table[2:]
+            body.append("<table><tr>" + "".join(f"<th>{_inline(c)}</th>" for c in head)
+                        + "</tr>" + "".join("<tr>" + "".join(f"<td>{_inline(c)}</td>" for c in r)
+                                            + "</tr>" for r in rows) + "</table>")
+            table.clear()
+
+    for line in md.splitlines():
+        if line.startswith("|"):
+            table.append([c.strip() for c in line.strip().strip("|").split("|")])
+            continue
+        flush()
+        m = re.match(r"!\[(.*)\]\((.*)\)", line)
+        if m:
+            data = base64.b64encode((out / m.group(2)).read_bytes()).decode()
+            body.append(f'<img alt="{html.escape(m.group(1))}" src="data:image/png;base64,{data}">')
+        elif line.startswith("#"):
+            level = len(line) - len(line.lstrip("#"))
+            body.append(f"<h{level}>{_inline(line[level:].strip())}</h{level}>")
+        elif line.strip():
+            body.append(f"<p>{_inline(line)}</p>")
+    flush()
+    style = ("body{font-family:sans-serif;max-width:1000px;margin:2em auto;line-height:1.4}"
+             "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;"
+             "padding:3px 8px;font-size:90%}img{max-width:100%}")
+    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>footfall reproduction"
+            f"</title><style>{style}</style></head><body>{''.join(body)}</body></html>")
+
+
+def write_report(out: Path, results: dict, maps: dict, models: dict, config,
+                 log: Callable[[str], None] = print) -> None:
+    """Write results.json, report.md and report.html (pictures embedded) into ``out``."""
+    figs = _figures(out, results, maps, models, config, log)
+    md = _markdown(results, figs)
+    write_text_atomic(out / "results.json", json.dumps(results, indent=1, default=_plain))
+    write_text_atomic(out / "report.md", md)
+    write_text_atomic(out / "report.html", _html(md, out))
+
+
+def _plain(value):
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, tuple):
+        return list(value)
+    raise TypeError(f"not JSON-serialisable: {type(value).__name__}")

@@ -1,0 +1,385 @@
+"""The kinematic walker: robot states for demonstrations until the simulator exists.
+
+The body glides along a straight line across a board in the crawl gait while
+an expert picks each swing leg's next foothold from the candidate set F; each
+decision is a :class:`~footfall.data.store.Demonstration`. No dynamics, no balance.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import numbers
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol
+
+import numpy as np
+
+from footfall.features.candidates import DEFAULT_SPACING, reachable_footholds
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG, RobotDescription
+from footfall.features.config import FeatureConfig
+from footfall.core.state import RobotState, nominal_state
+from footfall.data.store import Demonstration
+
+APPROACH = 0.12  # [m] flat approach walked before the recorded x range begins
+EDGE_MARGIN = 0.15  # [m] the hips stay this far inside the board's x ends (start and stop)
+PATH_OFFSETS = (-0.15, -0.05, 0.05, 0.15)  # [m] lateral paths, relative to the board's centre
+MAX_PATH_ROUNDS = 6  # rounds of ever denser lateral paths before collect gives up
+PATH_HALF_WIDTH = 0.15  # [m] the lateral paths cover the board's centre +- this
+
+
+class Expert(Protocol):
+    """What the walker needs of an expert (e.g. :class:`footfall.expert.synthetic.SyntheticExpert`)."""
+
+    def choose(self, hmap: HeightMap, state: RobotState, candidates: np.ndarray,
+               rng: np.random.Generator) -> int:
+        """Index of the chosen foothold in ``candidates`` (n, 3) [m]."""
+
+    def values(self, hmap: HeightMap, state: RobotState, candidates: np.ndarray) -> np.ndarray:
+        """Noiseless value of each candidate, shape (n,), higher is better."""
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, np.generic | np.ndarray):
+        return value.tolist()
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return dataclasses.asdict(value)
+    return repr(value)
+
+
+def expert_settings(expert: Any) -> dict:
+    """JSON settings of an expert, recorded with each demonstration it makes.
+
+    ``{"class": "<module>.<name>", "config": ...}``: the config is
+    ``expert.to_dict()`` if the expert has it, else its ``config``
+    attribute (through ``to_dict()`` or as a dataclass) if it has one.
+    """
+    cls = type(expert)
+    settings: dict[str, Any] = {"class": f"{cls.__module__}.{cls.__qualname__}"}
+    to_dict = getattr(expert, "to_dict", None)
+    config = getattr(expert, "config", None)
+    if callable(to_dict):
+        settings["config"] = to_dict()
+    elif config is not None:
+        config_to_dict = getattr(config, "to_dict", None)
+        settings["config"] = config_to_dict() if callable(config_to_dict) else config
+    return json.loads(json.dumps(settings, default=_jsonable, sort_keys=True))
+
+
+def _check_rng(rng: Any) -> np.random.Generator:
+    if not isinstance(rng, np.random.Generator):
+        raise FootfallError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
+    return rng
+
+
+def _finite(value: Any, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
+        raise FootfallError(f"{what} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def walk_demonstrations(hmap: HeightMap, expert: Expert, rng: np.random.Generator, n_max: int,
+                        y: float = 0.0, start_x: float | None = None,
+                        stride: float = DEFAULT_STRIDE, source: str = "walker",
+                        x_range: tuple[float, float] | None = None,
+                        robot: RobotDescription = LITTLEDOG, spacing: float = DEFAULT_SPACING,
+                        config: FeatureConfig | None = None, expert_info: dict | None = None,
+                        progress: Callable[[Demonstration], None] | None = None,
+                        record_every: int = 1, record_phase: int = 0) -> list[Demonstration]:
+    """Walk straight along +x (heading 0) at lateral position ``y``, recording each foothold choice.
+
+    The robot starts standing in its nominal stance with the body at
+    ``(start_x, y)``. Step k swings leg ``robot.gait_order[k % 4]`` (crawl:
+    LH, LF, RH, RF): the body first moves ``stride / 4`` forward, to where it
+    is at touch-down, at height ``robot.nominal_height`` above the mean height
+    of the four feet, which stay where they are; F is
+    ``reachable_footholds(hmap, state, robot, spacing, config)`` for that
+    state, the expert chooses from F, and the swing foot moves there.
+
+    The walk stops when ``n_max`` demonstrations are recorded, when the front
+    hips would come within ``EDGE_MARGIN`` of the board's far x end, or when
+    the swing leg has fewer than two candidates (e.g. a hole under it).
+    Feet are not checked for reach after touch-down: an expert that places a
+    foot far behind its hip leaves it beyond reach later in the stance.
+
+    Parameters
+    ----------
+    hmap : HeightMap
+        The board; its frame's x axis is the walking direction.
+    expert : Expert
+        Anything with ``choose(hmap, state, candidates, rng) -> int``.
+    rng : numpy.random.Generator
+        Passed to every ``expert.choose``; the same seed gives the same walk.
+    n_max : int
+        Most demonstrations to record (>= 0).
+    y : float
+        Lateral position [m] of the body's path.
+    start_x : float, optional
+        Start position [m] of the body; by default the hind hips start
+        ``EDGE_MARGIN`` inside the board's near x end.
+    stride : float
+        Body advance [m] per gait cycle (four steps), > 0.
+    source : str
+        The source recorded with each demonstration.
+    x_range : (float, float), optional
+        Record only steps whose chosen foothold has ``x_range[0] <= x <=
+        x_range[1]`` [m] (e.g. the rough modules); the walk itself takes
+        every step. By default every step is recorded.
+    robot : RobotDescription
+        The robot: stance, gait order, kinematics.
+    spacing : float
+        Candidate lattice spacing [m].
+    config : FeatureConfig, optional
+        Candidates need enough data for these feature patches; default
+        ``FeatureConfig()``, so every candidate has valid features.
+    expert_info : dict, optional
+        Expert settings to record; default :func:`expert_settings` of ``expert``.
+    progress : callable, optional
+        Called with each recorded demonstration.
+    record_every, record_phase : int
+        Record only eligible steps (those ``x_range`` keeps) number
+        ``record_phase``, ``record_phase + record_every``, ... (counting from
+        0), to spread a few demonstrations along the path; an odd
+        ``record_every`` rotates them through the legs.
+
+    Returns
+    -------
+    list of Demonstration
+        In walking order, ``id`` None, all with ``terrain_hash = hmap.content_hash()``.
+
+    Raises
+    ------
+    FootfallError
+        For bad arguments, a start stance off the map or on cells without
+        data, or an expert that returns an index outside F.
+    """
+    if not isinstance(hmap, HeightMap):
+        raise FootfallError(f"the walker needs a HeightMap, got {type(hmap).__name__}")
+    rng = _check_rng(rng)
+    if isinstance(n_max, bool) or not isinstance(n_max, numbers.Integral) or n_max < 0:
+        raise FootfallError(f"n_max must be a non-negative integer, got {n_max!r}")
+    stride = _finite(stride, "stride")
+    if stride <= 0:
+        raise FootfallError(f"stride must be > 0 m, got {stride}")
+    y = _finite(y, "y")
+    x_min, x_max, _, _ = hmap.bounds
+    default_start = start_x is None
+    start_x = x_min + robot.hip_x + EDGE_MARGIN if start_x is None else _finite(start_x, "start_x")
+    if x_range is not None:
+        lo, hi = (_finite(v, "x_range") for v in x_range)
+        if lo > hi:
+            raise FootfallError(f"x_range must be (low, high), got {tuple(x_range)}")
+        if default_start:
+            # Steps long before the recorded range only cost time: start an
+            # approach of APPROACH metres before the front feet reach it.
+            start_x = max(start_x, lo - robot.hip_x - APPROACH)
+    for value, what in ((record_every, "record_every"), (record_phase, "record_phase")):
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 0:
+            raise FootfallError(f"{what} must be a non-negative integer, got {value!r}")
+    if not 0 <= record_phase < record_every:
+        raise FootfallError(f"record_phase must be in [0, record_every), got {record_phase} "
+                            f"with record_every {record_every}")
+    config = FeatureConfig() if config is None else config
+    info = expert_settings(expert) if expert_info is None else dict(expert_info)
+
+    state = nominal_state(hmap, (start_x, y), 0.0, robot.gait_order[0], robot=robot)
+    if np.isnan(hmap.height_at(state.feet[:, :2])).any():
+        raise FootfallError(f"walker start ({start_x:.3f}, {y:.3f}) m: the feet of the nominal "
+                            f"stance are off the terrain or on cells without data")
+    terrain_hash = hmap.content_hash()
+    feet = state.feet.copy()  # (4, 3) [m], in LEG_NAMES order
+    goal = state.goal  # 1 km straight ahead along the path
+    stop_x = x_max - robot.hip_x - EDGE_MARGIN  # [m] last body x: the front hips stay on
+    step = stride / 4  # [m] body advance per swing
+    out: list[Demonstration] = []
+    k = 0
+    eligible = 0  # steps so far whose foothold x_range keeps
+    while len(out) < n_max:
+        body_x = start_x + (k + 1) * step  # [m] at the touch-down of step k
+        if body_x > stop_x:
+            break
+        if x_range is not None and body_x - robot.hip_x - robot.max_reach > hi:
+            break  # no foot can land in the recorded range any more
+        leg = robot.gait_order[k % len(robot.gait_order)]
+        body = np.array([body_x, y, feet[:, 2].mean() + robot.nominal_height])
+        state = RobotState(feet, body, np.zeros(3), leg, goal)
+        candidates = reachable_footholds(hmap, state, robot, spacing, config)
+        if candidates.shape[0] < 2:
+            break
+        choice = expert.choose(hmap, state, candidates, rng)
+        if isinstance(choice, bool) or not isinstance(choice, numbers.Integral) \
+                or not 0 <= choice < candidates.shape[0]:
+            raise FootfallError(f"the expert chose {choice!r}, not an index into the "
+                                f"{candidates.shape[0]} candidates")
+        foothold = candidates[int(choice)]
+        if x_range is None or lo <= foothold[0] <= hi:
+            if eligible % record_every == record_phase:
+                demo = Demonstration(terrain_hash, state, candidates, int(choice), source, info)
+                out.append(demo)
+                if progress is not None:
+                    progress(demo)
+            eligible += 1
+        feet[LEG_NAMES.index(leg)] = foothold
+        k += 1
+    return out
+
+
+def rough_x_range(hmap: HeightMap) -> tuple[float, float] | None:
+    """The x range [m] of a board's non-flat modules, from its metadata.
+
+    Returns
+    -------
+    (float, float) or None
+        From the first non-flat module's ``x_start`` to the last one's
+        ``x_end`` [m], in the map's frame; None if the metadata lists no
+        modules or only flat ones (then the whole board counts).
+    """
+    modules = hmap.metadata.get("modules")
+    if not isinstance(modules, list):
+        return None
+    rough = [m for m in modules if isinstance(m, dict) and m.get("kind") != "flat"
+             and isinstance(m.get("x_start"), numbers.Real)
+             and isinstance(m.get("x_end"), numbers.Real)]
+    if not rough:
+        return None
+    return float(min(m["x_start"] for m in rough)), float(max(m["x_end"] for m in rough))
+
+
+def estimated_steps(hmap: HeightMap, x_range: tuple[float, float] | None,
+                    stride: float = DEFAULT_STRIDE, robot: RobotDescription = LITTLEDOG) -> int:
+    """About how many steps of a default walk across ``hmap`` have footholds in ``x_range``.
+
+    Assumes each foot lands half a stride ahead of its hip's position [m];
+    ``x_range`` None counts every step.
+    """
+    x_min, x_max, _, _ = hmap.bounds
+    start = x_min + robot.hip_x + EDGE_MARGIN  # [m] as in walk_demonstrations
+    stop = x_max - robot.hip_x - EDGE_MARGIN
+    step = stride / 4
+    k = np.arange(max(math.floor((stop - start) / step + 1e-9), 0))
+    hip_x = np.array([robot.leg(leg).hip[0] for leg in robot.gait_order])
+    foot = start + (k + 1) * step + hip_x[k % len(hip_x)] + stride / 2
+    if x_range is None:
+        return int(k.size)
+    return int(np.count_nonzero((foot >= x_range[0]) & (foot <= x_range[1])))
+
+
+def _path_offsets(round_: int) -> list[float]:
+    """Lateral offsets [m] of round ``round_``: PATH_OFFSETS, then midpoints of all before."""
+    if round_ == 0:
+        return list(PATH_OFFSETS)
+    n = (len(PATH_OFFSETS) - 1) * 2 ** (round_ - 1)  # gaps between the earlier paths
+    edges = np.linspace(-PATH_HALF_WIDTH, PATH_HALF_WIDTH, n + 1)
+    return [round(float(o), 12) + 0.0 for o in 0.5 * (edges[:-1] + edges[1:])]
+
+
+def lateral_paths(hmap: HeightMap, round_: int, robot: RobotDescription = LITTLEDOG
+                  ) -> list[float]:
+    """The lateral positions y [m] of the walker's paths in one round.
+
+    Round 0: the board's centre plus :data:`PATH_OFFSETS`; round r > 0: the
+    midpoints between all paths of the earlier rounds, so every round fills
+    the gaps. Paths whose nominal feet would come within 0.05 m of the
+    board's sides are dropped; if that drops all of round 0, it walks the
+    centre line, and no later round repeats a path.
+    """
+    _, _, y_min, y_max = hmap.bounds
+    centre = 0.5 * (y_min + y_max)
+    half = 0.5 * (y_max - y_min) - robot.nominal_foot_y - 0.05  # [m] room for the feet
+    earlier: list[float] = []
+    for r in range(round_ + 1):
+        kept = [o for o in _path_offsets(r) if abs(o) <= half
+                and all(abs(o - e) > 1e-9 for e in earlier)]
+        if r == 0 and not kept:
+            kept = [0.0]
+        if r < round_:
+            earlier += kept
+    return [centre + o for o in kept]
+
+
+def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, seed: int,
+                           rough_only: bool = True, stride: float = DEFAULT_STRIDE,
+                           robot: RobotDescription = LITTLEDOG, spacing: float = DEFAULT_SPACING,
+                           config: FeatureConfig | None = None, source: str = "walker",
+                           progress: Callable[[Demonstration], None] | None = None,
+                           max_rounds: int = MAX_PATH_ROUNDS) -> list[Demonstration]:
+    """About ``n`` demonstrations spread evenly over terrains and lateral paths.
+
+    In round r every terrain is walked along each path of
+    :func:`lateral_paths` (round r), each walk recording an equal share of
+    the demonstrations still missing. Rounds continue, with new paths
+    between the old ones, until ``n`` are collected, a round adds none, or
+    after ``max_rounds`` rounds; so fewer than ``n`` come back only
+    when the terrains are too short for them. A walk whose share is smaller
+    than the eligible steps on its path (:func:`estimated_steps`) records
+    every m-th of them (m odd, so the legs take turns), so that a small
+    ``n`` is spread along the rough modules and over all four legs rather
+    than taken from where they begin.
+
+    Parameters
+    ----------
+    hmaps : sequence of HeightMap
+        The terrains (duplicates, by content hash, are walked once).
+    expert : Expert
+        Chooses every foothold.
+    n : int
+        Demonstrations wanted (>= 1).
+    seed : int
+        Each walk gets its own generator, seeded from ``(seed, terrain,
+        round, path)``: the result is the same for the same arguments.
+    rough_only : bool
+        Record only footholds on a board's non-flat modules
+        (:func:`rough_x_range`; boards without module metadata count whole).
+    stride, robot, spacing, config, source, progress
+        As for :func:`walk_demonstrations`.
+    max_rounds : int
+        Most rounds of lateral paths (>= 1).
+
+    Returns
+    -------
+    list of Demonstration
+        At most ``n``, in walking order.
+    """
+    if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 1:
+        raise FootfallError(f"the number of demonstrations must be >= 1, got {n!r}")
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
+        raise FootfallError(f"seed must be a non-negative integer, got {seed!r}")
+    unique: dict[str, HeightMap] = {}
+    for hmap in hmaps:
+        unique.setdefault(hmap.content_hash(), hmap)
+    terrains = list(unique.values())
+    if not terrains:
+        raise FootfallError("collecting demonstrations needs at least one terrain")
+    info = expert_settings(expert)
+    out: list[Demonstration] = []
+    for round_ in range(max_rounds):
+        paths = [lateral_paths(hmap, round_, robot) for hmap in terrains]
+        # Path by path, terrain by terrain: the shares even out over the terrains.
+        walks = [(t, j, ys[j]) for j in range(max(map(len, paths)))
+                 for t, ys in enumerate(paths) if j < len(ys)]
+        before = len(out)
+        for w, (t, j, y) in enumerate(walks):
+            remaining = n - len(out)
+            if remaining <= 0:
+                break
+            quota = -(-remaining // (len(walks) - w))  # an equal share; later walks make up
+            hmap = terrains[t]
+            x_range = rough_x_range(hmap) if rough_only else None
+            # Spread a small share along the path: every m-th eligible step, m odd so
+            # that the legs take turns, each walk starting at another phase.
+            every = max(estimated_steps(hmap, x_range, stride, robot) // quota, 1)
+            if every % 2 == 0:
+                every -= 1
+            rng = np.random.default_rng(np.random.SeedSequence(int(seed),
+                                                               spawn_key=(t, round_, j)))
+            out += walk_demonstrations(hmap, expert, rng, quota, y=y, stride=stride,
+                                       source=source, x_range=x_range, robot=robot,
+                                       spacing=spacing, config=config, expert_info=info,
+                                       progress=progress, record_every=every,
+                                       record_phase=(every // 2 + w) % every)
+        if len(out) >= n or len(out) == before:
+            break
+    return out[:n]

@@ -1,0 +1,97 @@
+"""Expert corrections of run logs (paper §II-B): the demonstrations the robot learns from.
+
+The expert is shown a logged run. At every step it judges the candidate set
+F the robot chose from; where the robot's choice falls short of the expert's
+own best by more than a margin, it labels the foothold it would have chosen
+among the same F, and that label becomes a demonstration -- with the state
+the robot was in, the whole F, and its source (the run's key and the step).
+Steps where the robot chose well enough teach nothing new and are left
+alone, exactly as a human expert skims the good parts of a run.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.data.runlog import RunRecord
+from footfall.data.store import Demonstration
+from footfall.expert.collect import Expert, expert_settings
+
+DEFAULT_MARGIN = 1.0  # [value units; 1 unit = 1 cm of progress for the synthetic expert] a choice
+# this much worse than the expert's best is corrected: about the value spread of footholds a few
+# millimetres apart on smooth ground, so near-ties are not labelled as mistakes
+
+
+@dataclass(frozen=True)
+class Correction:
+    """The expert's verdict on one logged step."""
+
+    k: int  # step number in the run
+    chosen: int  # index in F of the robot's choice
+    best: int  # index in F of the expert's (noiseless) best
+    shortfall: float  # [value units] expert value of its best minus of the robot's choice (>= 0)
+    label: int | None  # index in F the expert demonstrates (None: not corrected)
+
+
+def source_of(run_key: str, k: int) -> str:
+    """The demonstration source of a correction at step ``k`` of the run stored as ``run_key``."""
+    return f"run:{run_key}:step:{k}"
+
+
+def step_verdicts(run: RunRecord, hmap: HeightMap, expert: Expert) -> tuple[np.ndarray, np.ndarray]:
+    """The expert's noiseless best index in F and the robot's shortfall, for every step of ``run``.
+
+    Returns ``(best, shortfall)``, each of shape (n_steps,): ``best`` indexes the
+    step's candidates; ``shortfall`` [value units] is the expert's value of its
+    best minus its value of the robot's choice (>= 0). ``hmap`` must be the
+    map the run was logged on.
+    """
+    if not isinstance(run, RunRecord):
+        raise FootfallError(f"inspecting a run needs a RunRecord, got {type(run).__name__}")
+    if hmap.content_hash() != run.terrain_hash:
+        raise FootfallError("the run was logged on another terrain than the map given")
+    best = np.zeros(len(run.steps), dtype=np.intp)
+    shortfall = np.zeros(len(run.steps))
+    for i, step in enumerate(run.steps):  # steps of one run (dozens), each vectorised over F
+        values = np.asarray(expert.values(hmap, step.state, step.candidates), dtype=np.float64)
+        best[i] = int(np.argmax(values))
+        shortfall[i] = float(values[best[i]] - values[step.chosen])
+    return best, shortfall
+
+
+def inspect_run(run: RunRecord, hmap: HeightMap, expert: Expert, margin: float = DEFAULT_MARGIN,
+                rng: np.random.Generator | int = 0) -> list[Correction]:
+    """The expert's verdict on every step of ``run`` (on the map ``hmap`` the planner saw).
+
+    A step is corrected when ``max(values) - values[chosen] > margin``;
+    its label is ``expert.choose`` among the step's candidates (the noiseless
+    best for a perfect expert; an imperfect one may pick another). ``rng``
+    draws the imperfection, step by step in order, so the same run and seed
+    give the same labels.
+    """
+    if not (isinstance(margin, (int, float)) and math.isfinite(margin) and margin >= 0):
+        raise FootfallError(f"the correction margin must be a number >= 0, got {margin!r}")
+    best, shortfall = step_verdicts(run, hmap, expert)
+    rng = np.random.default_rng(rng)
+    out = []
+    for step, b, sf in zip(run.steps, best, shortfall):  # labels: only the corrected steps
+        label = None
+        if sf > margin and step.candidates.shape[0] >= 2:
+            label = int(expert.choose(hmap, step.state, step.candidates, rng))
+        out.append(Correction(step.k, step.chosen, int(b), float(sf), label))
+    return out
+
+
+def corrections_to_demonstrations(run: RunRecord, run_key: str, corrections: list[Correction],
+                                  expert: Expert) -> list[Demonstration]:
+    """One demonstration per corrected step, sourced ``run:<run_key>:step:<k>``."""
+    settings = expert_settings(expert)
+    steps = {s.k: s for s in run.steps}
+    return [Demonstration(run.terrain_hash, steps[c.k].state, steps[c.k].candidates, c.label,
+                          source=source_of(run_key, c.k), expert=settings)
+            for c in corrections if c.label is not None]

@@ -1,0 +1,87 @@
+"""How well a ranking function agrees with the expert on demonstrations.
+
+For each demonstration, the model ranks the whole candidate set F; the
+measures are top-1 agreement (the model's best is the expert's choice), the
+percentile rank of the expert's choice among the candidates (1.0 = ranked
+first), the share of picks within ``NEAR`` (1 cm) of the expert's choice
+(candidates are 5 mm apart, so an exact match is a strict test), and the
+reward loss: the expert's own value of its best candidate minus its value
+of the candidate the model picks (in the expert's value units, 1 unit = 1 cm
+of progress), with a bootstrap confidence interval over demonstrations. The
+loss needs the expert's judgement: evaluation may ask the expert, the learner
+never does.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import numpy as np
+
+from footfall.core.errors import FootfallError
+from footfall.features.scoring import score_footholds
+from footfall.core.stats import bootstrap_ci
+
+NEAR = 0.01  # [m] a pick this close (horizontally) to the expert's choice counts as "near"
+
+
+@dataclass(frozen=True)
+class RankScores:
+    """Agreement of a model with the expert on a set of demonstrations."""
+
+    n: int  # demonstrations
+    top1: float  # fraction whose chosen candidate the model ranks first
+    percentile: float  # mean fraction of other candidates the chosen one outranks
+    reward_loss: float  # mean expert value of its best minus of the model's pick [value units]
+    reward_loss_std: float  # standard deviation of the above over demonstrations
+    top1_near: float = float("nan")  # fraction of picks within NEAR [m] of the expert's choice
+    reward_loss_ci: tuple[float, float] = (float("nan"), float("nan"))  # 95 % bootstrap CI
+    losses: tuple[float, ...] = ()  # per-demonstration reward loss, in demonstration order
+
+    def as_dict(self) -> dict:
+        """Plain data for JSON (the per-demonstration losses included)."""
+        d = dict(vars(self))
+        d["reward_loss_ci"] = list(self.reward_loss_ci)
+        d["losses"] = list(self.losses)
+        return d
+
+
+def expert_values(demos: Sequence, terrain: Callable[[str], object], expert) -> list[np.ndarray]:
+    """The expert's noiseless values of every candidate of each demonstration."""
+    return [expert.values(terrain(d.terrain_hash), d.state, d.candidates) for d in demos]
+
+
+def rank_scores(model, demos: Sequence, terrain: Callable[[str], object],
+                expert=None, values: Sequence[np.ndarray] | None = None) -> RankScores:
+    """Score ``model`` on demonstrations; ``terrain(hash)`` returns each map.
+
+    The reward loss uses the expert's ``values`` of each demonstration's
+    candidates (computed with ``expert`` when not given; NaN without either).
+    """
+    if values is None and expert is not None:
+        values = expert_values(demos, terrain, expert)
+    if not demos:
+        raise FootfallError("no demonstrations to evaluate on")
+    top1, near, pct, loss = [], [], [], []
+    for k, d in enumerate(demos):  # one demonstration at a time, vectorised over its candidates
+        hmap = terrain(d.terrain_hash)
+        model.check_compatible(map_resolution=hmap.resolution)
+        reward = model.reward_for(d.state.swing_leg)
+        r = score_footholds(hmap, d.state, d.candidates, reward, model.robot)
+        if not np.isfinite(r).all():
+            raise FootfallError(f"demonstration {d.id}: a candidate has no valid features")
+        pick = int(np.argmax(r))
+        others = np.delete(r, d.chosen)
+        top1.append(pick == d.chosen or r[pick] == r[d.chosen])
+        near.append(bool(np.hypot(*(d.candidates[pick, :2] - d.candidates[d.chosen, :2]))
+                         <= NEAR + 1e-9))
+        pct.append(float(np.mean(others < r[d.chosen])) if others.size else 1.0)
+        if values is not None:
+            loss.append(float(values[k].max() - values[k][pick]))
+    return RankScores(len(demos), float(np.mean(top1)), float(np.mean(pct)),
+                      float(np.mean(loss)) if loss else float("nan"),
+                      float(np.std(loss)) if loss else float("nan"),
+                      top1_near=float(np.mean(near)),
+                      reward_loss_ci=bootstrap_ci(np.array(loss)) if loss else (float("nan"),) * 2,
+                      losses=tuple(loss))

@@ -1,0 +1,296 @@
+"""Learning a foothold ranking function from demonstrations (paper §II-C, §III-B).
+
+A demonstration says the chosen foothold c beats every other candidate i of
+its set F: w^T (x_c - x_i) > 0 (Eq. 3). :func:`pairwise_transform` turns
+demonstrations into those difference vectors, labelled +1, with their
+mirrored copies -(x_c - x_i) labelled -1 so that a classifier sees two
+classes; :class:`FootholdRanker` standardises them and fits a linear
+classifier without intercept -- L1-regularised logistic regression (Eq. 5),
+which selects a sparse set of features (templates), or L2 logistic regression
+or a linear SVM for comparison -- choosing lambda = 1/C by k-fold
+cross-validation with folds grouped by demonstration.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+from sklearn.base import BaseEstimator
+from sklearn.exceptions import ConvergenceWarning
+from sklearn.linear_model import LogisticRegression
+from sklearn.model_selection import GroupKFold
+from sklearn.svm import LinearSVC
+from sklearn.utils.validation import check_is_fitted
+
+from footfall.core.errors import FootfallError
+
+LEARNERS = ("l1", "l2", "svm")
+SELECTIONS = ("1se", "min")  # lambda: one-standard-error rule, or the smallest CV error
+L2_LOG_C = (-6.0, 0.0)  # log10 of the smallest and largest C on the L2 / SVM path
+
+
+def pairwise_transform(X: np.ndarray, y: np.ndarray, groups: np.ndarray,
+                       mirrored: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pairwise difference vectors of demonstrations (paper Eq. 3).
+
+    Parameters
+    ----------
+    X : array of shape (n_candidates, n_features)
+        Features of the candidates of all demonstrations, stacked.
+    y : array of shape (n_candidates,)
+        1 for the chosen candidate of its demonstration, 0 for the others.
+    groups : array of shape (n_candidates,)
+        The demonstration each candidate belongs to.
+    mirrored : bool
+        Also emit -(x_c - x_i) with label -1 for every pair.
+
+    Returns
+    -------
+    pairs : array of shape (n_pairs, n_features)
+        x_c - x_i for every other candidate i of each demonstration (then,
+        if ``mirrored``, their negatives), demonstrations in order of first
+        appearance.
+    labels : array of shape (n_pairs,) of +1 / -1
+    pair_groups : array of shape (n_pairs,), the demonstration of each pair
+    """
+    X = np.asarray(X, dtype=np.float64)
+    y = np.asarray(y)
+    groups = np.asarray(groups)
+    _check_demonstrations(X, y, groups)
+    chosen = np.flatnonzero(y == 1)
+    # Index of each candidate's demonstration's chosen row.
+    uniq, inverse = np.unique(groups, return_inverse=True)
+    chosen_of_group = np.empty(uniq.size, dtype=np.intp)
+    chosen_of_group[inverse[chosen]] = chosen
+    others = np.flatnonzero(y != 1)
+    order = np.argsort(inverse[others], kind="stable")
+    others = others[order]
+    pairs = X[chosen_of_group[inverse[others]]] - X[others]
+    pair_groups = groups[others]
+    labels = np.ones(pairs.shape[0])
+    if mirrored:
+        pairs = np.concatenate([pairs, -pairs])
+        labels = np.concatenate([labels, -labels])
+        pair_groups = np.concatenate([pair_groups, pair_groups])
+    return pairs, labels, pair_groups
+
+
+def _check_demonstrations(X: np.ndarray, y: np.ndarray, groups: np.ndarray) -> None:
+    if X.ndim != 2 or y.shape != (X.shape[0],) or groups.shape != (X.shape[0],):
+        raise FootfallError("need X (n, d), y (n,) and groups (n,) of the same length")
+    if not np.isfinite(X).all():
+        raise FootfallError("features contain NaN or infinite values")
+    if not np.isin(y, (0, 1)).all():
+        raise FootfallError("y must be 1 for the chosen candidate and 0 for the others")
+    uniq, inverse = np.unique(groups, return_inverse=True)
+    n_chosen = np.bincount(inverse, weights=(y == 1), minlength=uniq.size)
+    n_all = np.bincount(inverse, minlength=uniq.size)
+    if np.any(n_chosen != 1):
+        bad = uniq[np.flatnonzero(n_chosen != 1)[0]]
+        raise FootfallError(f"demonstration {bad} must have exactly one chosen candidate")
+    if np.any(n_all < 2):
+        raise FootfallError("every demonstration needs at least two candidates")
+
+
+def grouped_folds(pair_groups: np.ndarray, n_splits: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """K folds of pair indices; all pairs of one demonstration fall in the same fold."""
+    n_groups = np.unique(pair_groups).size
+    if n_groups < n_splits:
+        raise FootfallError(f"{n_splits}-fold cross-validation needs at least {n_splits} "
+                            f"demonstrations, got {n_groups}")
+    return list(GroupKFold(n_splits=n_splits).split(pair_groups, groups=pair_groups))
+
+
+def _classifier(learner: str, C: float, tol: float, max_iter: int):
+    if learner == "svm":
+        return LinearSVC(C=C, fit_intercept=False, tol=tol, max_iter=max_iter, dual=True,
+                         random_state=0)
+    # liblinear shuffles the data: a fixed seed makes every fit reproducible.
+    return LogisticRegression(C=C, l1_ratio=1.0 if learner == "l1" else 0.0,
+                              solver="liblinear", fit_intercept=False, tol=tol,
+                              max_iter=max_iter, random_state=0)
+
+
+def _fit_coef(learner: str, C: float, X: np.ndarray, y: np.ndarray, tol: float,
+              max_iter: int) -> np.ndarray:
+    clf = _classifier(learner, C, tol, max_iter)
+    with warnings.catch_warnings():
+        # On separable folds liblinear may stop at max_iter: the path goes on.
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        clf.fit(X, y)
+    return clf.coef_.ravel().copy()
+
+
+def _cross_validate(learner: str, Cs: np.ndarray, X: np.ndarray, y: np.ndarray, folds: list,
+                    tol: float, max_iter: int) -> list["PathPoint"]:
+    """Held-out errors along the path, the folds of one C fitted one after another.
+
+    The path runs from strong to weak regularisation and stops once the
+    held-out error has risen for two values in a row past its minimum: the
+    weakly regularised fits are the slow ones, and the selection never
+    reaches them.
+
+    The folds are NOT fitted in parallel threads: scikit-learn's liblinear
+    (logistic regression and LinearSVC alike) draws its coordinate order
+    from one process-wide random generator (``set_seed`` in its
+    ``newrand.h``), so concurrent fits race for it and the cross-validation
+    errors -- and with them lambda and the bandwidths -- would change from
+    run to run. Sequential fits give the same model for the same seed.
+    """
+    def one(C: float, train: np.ndarray, test: np.ndarray) -> tuple[float, float, int]:
+        w = _fit_coef(learner, C, X[train], y[train], tol, max_iter)
+        margin = y[test] * (X[test] @ w)
+        return float(np.mean(margin <= 0)), float(np.mean(np.logaddexp(0.0, -margin))), \
+            int(np.count_nonzero(w))
+
+    path: list[PathPoint] = []
+    for C in Cs:  # the regularisation path: a handful of values
+        res = [one(C, *f) for f in folds]
+        errors = np.array([r[0] for r in res])
+        path.append(PathPoint(float(C), float(errors.mean()), float(errors.std()),
+                              float(np.mean([r[1] for r in res])) if learner != "svm"
+                              else float("nan"), float(np.mean([r[2] for r in res]))))
+        errs = [p.error for p in path]
+        k = int(np.argmin(errs))
+        if len(errs) - k > 2 and errs[-1] > errs[-2] > errs[k]:
+            break
+    return path
+
+
+@dataclass
+class PathPoint:
+    """Cross-validation result of one value of the regularisation."""
+
+    C: float  # inverse regularisation strength (lambda = 1 / C)
+    error: float  # mean held-out pairwise misclassification rate
+    error_std: float  # its standard deviation over folds
+    log_loss: float  # mean held-out logistic loss (NaN for the SVM)
+    n_nonzero: float  # mean number of non-zero weights over folds
+
+
+class FootholdRanker(BaseEstimator):
+    """A linear foothold ranking function learned from demonstrations.
+
+    Parameters
+    ----------
+    learner : {"l1", "l2", "svm"}
+        L1- or L2-regularised logistic regression, or a linear SVM (hinge
+        loss, L2), all without intercept, on pairwise differences.
+    Cs : int or array-like
+        The regularisation path: values of C = 1 / lambda, or how many
+        log-spaced values to try (for L1 from just above the smallest C that
+        keeps a weight non-zero, upward over 3.7 decades; for L2 and the SVM
+        over ``L2_LOG_C``).
+    cv : int
+        Number of folds, grouped by demonstration.
+    selection : {"1se", "min"}
+        How lambda is picked from the path: the strongest regularisation
+        within one standard error of the smallest CV error (sparser), or
+        the smallest CV error.
+    tol, max_iter : solver tolerance and iteration limit.
+
+    Attributes
+    ----------
+    coef_ : array of shape (n_features,)
+        Weights on the *raw* features: rank candidates by ``X @ coef_``.
+    scale_ : array of shape (n_features,)
+        Standard deviation of each feature over the training pairs; the
+        classifier was fitted to ``pairs / scale_``.
+    C_ : float
+        The chosen C (``lambda_ = 1 / C_``).
+    path_ : list of PathPoint
+        Cross-validation results along the path.
+    """
+
+    def __init__(self, learner: str = "l1", Cs: int | np.ndarray = 10, cv: int = 5,
+                 tol: float = 1e-4, max_iter: int = 2000, selection: str = "1se"):
+        self.learner = learner
+        self.selection = selection
+        self.Cs = Cs
+        self.cv = cv
+        self.tol = tol
+        self.max_iter = max_iter
+
+    def _path(self, pairs: np.ndarray, labels: np.ndarray) -> np.ndarray:
+        if not np.isscalar(self.Cs):
+            Cs = np.sort(np.asarray(self.Cs, dtype=np.float64))
+            if Cs.size == 0 or not (Cs > 0).all():
+                raise FootfallError("Cs must be positive")
+            return Cs
+        n = int(self.Cs)
+        if n < 1:
+            raise FootfallError("Cs must be at least 1")
+        if self.learner == "l1":
+            # The smallest C at which a weight leaves zero: 1 / max |X^T y| / 2 (logistic loss).
+            c_min = 2.0 / np.max(np.abs(pairs.T @ labels))
+            return c_min * np.logspace(0.3, 4.0, n)
+        # L2 and the SVM have no such end: as C -> 0 their weights shrink toward
+        # the direction of the mean pairwise difference, whose ranking no longer
+        # changes with C. Six decades reach from that limit to weak regularisation.
+        return np.logspace(L2_LOG_C[0], L2_LOG_C[1], n)
+
+    def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray) -> "FootholdRanker":
+        """Learn from stacked candidate features of demonstrations (see :func:`pairwise_transform`).
+
+        The mirrored pair set holds every pair twice, once with each sign, and
+        a linear classifier without intercept has the same loss on (x, +1)
+        and (-x, -1). Fitting it is therefore exactly fitting each pair once
+        at twice the C; that is what is solved (half the work, the same
+        weights). Pairs alternate in sign so that the solver sees two classes.
+        """
+        if self.learner not in LEARNERS:
+            raise FootfallError(f"unknown learner {self.learner!r}; use one of {', '.join(LEARNERS)}")
+        if int(self.cv) < 2:
+            raise FootfallError("cv needs at least 2 folds")
+        if self.selection not in SELECTIONS:
+            raise FootfallError(f"unknown selection rule {self.selection!r}; use one of "
+                                f"{', '.join(SELECTIONS)}")
+        pairs, _, pair_groups = pairwise_transform(X, y, groups, mirrored=False)
+        scale = np.sqrt(np.mean(pairs * pairs, axis=0))  # std over the mirrored set: mean is 0
+        scale[scale < 1e-12] = 1.0  # a constant feature carries no preference
+        signs = np.where(np.arange(pairs.shape[0]) % 2 == 0, 1.0, -1.0)
+        Xs = pairs / scale * signs[:, None]
+        labels = signs
+        Cs = self._path(Xs, labels)
+        folds = grouped_folds(pair_groups, int(self.cv))
+        self.path_ = _cross_validate(self.learner, 2.0 * Cs, Xs, labels, folds, self.tol,
+                                     self.max_iter)
+        for point, C in zip(self.path_, Cs):
+            point.C = float(C)  # report the C of the mirrored problem
+        # One-standard-error rule: the strongest regularisation whose held-out
+        # error is within one standard error of the smallest (sparser, and as
+        # good within the noise of the folds); or the smallest error itself.
+        errors = np.array([p.error for p in self.path_])
+        best = int(np.argmin(errors))
+        if self.selection == "1se":
+            bound = errors[best] + self.path_[best].error_std / np.sqrt(len(folds))
+            best = int(np.flatnonzero(errors <= bound + 1e-12)[0])
+        self.C_ = float(Cs[best])
+        self.lambda_ = 1.0 / self.C_
+        self.cv_error_ = self.path_[best].error
+        w = _fit_coef(self.learner, 2.0 * self.C_, Xs, labels, self.tol, self.max_iter)
+        self.scale_ = scale
+        self.coef_ = w / scale
+        self.n_features_in_ = X.shape[1]
+        return self
+
+    def decision_function(self, X: np.ndarray) -> np.ndarray:
+        """Reward w^T x of each candidate (Eq. 1), (n, d) -> (n,)."""
+        check_is_fitted(self)
+        X = np.asarray(X, dtype=np.float64)
+        if X.ndim != 2 or X.shape[1] != self.n_features_in_:
+            raise FootfallError(f"expected {self.n_features_in_} features, got shape {X.shape}")
+        return X @ self.coef_
+
+    def score(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray) -> float:
+        """Top-1 agreement: the fraction of demonstrations whose chosen candidate ranks first."""
+        X, y, groups = np.asarray(X, dtype=np.float64), np.asarray(y), np.asarray(groups)
+        _check_demonstrations(X, y, groups)
+        r = self.decision_function(X)
+        uniq, inverse = np.unique(groups, return_inverse=True)
+        best = np.full(uniq.size, -np.inf)
+        np.maximum.at(best, inverse, r)
+        chosen = y == 1
+        return float(np.mean(r[chosen] >= best[inverse[chosen]]))

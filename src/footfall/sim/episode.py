@@ -1,0 +1,503 @@
+"""A walking run: the simulated robot crosses a board with the paper's control stack (§IV-B).
+
+The hierarchy, top to bottom, each stage in its own module:
+
+1. body path (:mod:`footfall.control.body_path`) -- fixed and straight by
+   default, as in the paper's evaluation; planned by Dijkstra on request;
+2. footstep planner (:mod:`footfall.control.footstep`) -- the foothold of
+   the swing leg by the reward function, with a five-step look-ahead;
+3. pose finder (:mod:`footfall.control.pose_finder`) -- body height, roll,
+   pitch and yaw for the stance after touch-down;
+4. COG trajectory (:mod:`footfall.control.cog`) -- through the support
+   triangles of the next steps, the ZMP kept inside with a margin;
+5. swing trajectory (:mod:`footfall.control.swing`) -- over the convex hull
+   of the terrain;
+6. low-level control (:mod:`footfall.control.lowlevel`) -- inverse
+   kinematics at 100 Hz, closed on the true body pose, and the simulator's
+   400 Hz PD servo.
+
+Each step is planned when the previous foot has touched down (a receding
+horizon: five steps planned, one executed), from the feet where they
+actually stand. The swing foot goes to a point ``touchdown_approach`` above
+its foothold and comes down the rest of the way slowly until its force
+sensor feels the ground (a contact on the way counts only near the end of
+the swing and close to the foothold); it then takes its load over
+``LowLevelConfig.transfer_time``. A run ends at the goal line, or in failure: a fall (trunk
+roll or pitch beyond ``fall_tilt``, or the trunk touching the terrain), a
+stuck robot (no swing leg candidate, or less than ``stuck_progress`` of
+forward progress in ``stuck_time``), or the time limit. Every step goes
+into the run log (:mod:`footfall.data.runlog`), with the slip of its foot
+(:func:`foot_slip`) once the foot lifts off again.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from footfall.control.body_path import BodyPath, BodyPathConfig, plan_body_path
+from footfall.control.cog import CogConfig, plan_cog, support_margin
+from footfall.control.footstep import FootstepConfig, FootstepPlanner, Judge, \
+    JudgedFootstepPlanner, NoFootholdError
+from footfall.control.lowlevel import (
+    BodyCorrection,
+    LowLevelConfig,
+    body_rotation,
+    joint_targets,
+    rolled,
+    shin_rotations,
+    transfer_weight,
+)
+from footfall.control.pose_finder import PoseConfig, find_pose
+from footfall.control.swing import SwingConfig, swing_trajectory
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.features.reward import LinearReward
+from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
+from footfall.data.runlog import RunRecord, RunStep
+from footfall.sim.simulation import PerturbationConfig, Simulation
+from footfall.core.state import RobotState, nominal_state
+
+RewardFor = Callable[[str], LinearReward]
+_OTHER_LEGS = np.array([[j for j in range(4) if j != k] for k in range(4)])  # stance legs while
+# leg k swings, in order (an index array: np.delete's overhead counts at 100 Hz)
+SNAPSHOT_PERIOD = 0.5  # [s] of simulated time between candidate snapshot frames
+WALL_CLOCK_FIELDS = ("planning_ms_per_step", "wall_seconds", "setup_seconds", "real_time_factor")
+# result fields that measure the computer, not the run (they differ between identical runs)
+
+
+@dataclass(frozen=True)
+class WalkConfig:
+    """Every setting of a walking run; written next to its result."""
+
+    footstep: FootstepConfig = field(default_factory=lambda: FootstepConfig(
+        bias_weight=60.0, step_advance=0.025))
+    # bias 60 reward/m: keeps the hind feet following the body onto rough ground (at 30 they
+    # stay on the flat behind it and the robot stalls at the first rocks); 25 mm per step
+    # (a 10 cm stride): 21/21 runs on flat and on rocky 0.5 (27.5 mm too, 30 mm only 4/8 on rocky)
+    cog: CogConfig = field(default_factory=lambda: CogConfig(
+        swing_duration=0.4, centring=100.0, slowdown=4.0))
+    # a 0.4 s swing tracks its path within millimetres (0.3 s: feet clip rock edges); centring 100
+    # halves the sway (less reach and roll needed); slowdown 4 keeps slowed shifts feasible
+    swing: SwingConfig = field(default_factory=SwingConfig)
+    pose: PoseConfig = field(default_factory=PoseConfig)
+    lowlevel: LowLevelConfig = field(default_factory=LowLevelConfig)
+    path: BodyPathConfig = field(default_factory=BodyPathConfig)
+    perturbation: PerturbationConfig = field(default_factory=PerturbationConfig)
+    plan_path: bool = False  # False: the fixed straight path along the board's axis (as the paper)
+    start_setback: float = 0.35  # [m] body start this far before the end of the first module
+    goal_margin: float = 0.02  # [m] goal line: hind hips this far past the last non-final module
+    settle_time: float = 0.3  # [s] standing still before the first step
+    touchdown_force: float = 2.0  # [N] vertical foot force that means the foot is down
+    touchdown_early: float = 0.7  # [-] share of the swing (to above the foothold) after which a
+    # contact ends it early
+    touchdown_reach: float = 0.015  # [m] a contact counts as touch-down only this close to the
+    # foothold horizontally (farther off, the foot has brushed an obstacle on its way: it goes on)
+    touchdown_approach: float = 0.008  # [m] the swing ends this far above the foothold; the foot
+    # comes down the rest of the way at touchdown_speed (at most half the swing time)
+    touchdown_search: float = 0.02  # [m] how far below the planned foothold the foot keeps looking
+    touchdown_speed: float = 0.1  # [m/s] how fast it goes down while looking
+    fall_tilt: float = 0.6  # [rad] trunk roll or pitch beyond this is a fall
+    stuck_time: float = 10.0  # [s] a robot that advanced less than stuck_progress in this long is stuck
+    stuck_progress: float = 0.02  # [m]
+    time_limit: float = 240.0  # [s] of simulated time
+    max_steps: int | None = None  # [steps] stop (reason "step limit", no success) after this
+    # many steps; None: no limit (short test runs)
+
+    def __post_init__(self) -> None:
+        for name in ("settle_time", "touchdown_approach", "touchdown_search", "goal_margin"):
+            if not getattr(self, name) >= 0:
+                raise FootfallError(f"walk config: {name} must be >= 0")
+        for name in ("touchdown_force", "touchdown_speed", "touchdown_reach", "fall_tilt",
+                     "stuck_time", "time_limit"):
+            if not getattr(self, name) > 0:
+                raise FootfallError(f"walk config: {name} must be > 0")
+        if not 0 <= self.touchdown_early <= 1:
+            raise FootfallError("walk config: touchdown_early must be in [0, 1]")
+        if self.max_steps is not None and (isinstance(self.max_steps, bool)
+                                           or not isinstance(self.max_steps, int)
+                                           or self.max_steps < 1):
+            raise FootfallError(f"walk config: max_steps must be an integer >= 1 or None, "
+                                f"got {self.max_steps!r}")
+
+    def to_dict(self) -> dict:
+        """Plain JSON-serialisable settings."""
+        return asdict(self)
+
+
+@dataclass
+class Frames:
+    """Requests for pictures of a run: snapshot times and a video frame rate."""
+
+    snapshot_count: int = 0  # frames evenly spaced over the run (0: none)
+    video_fps: float = 0.0  # [1/s] video frame rate (0: no video)
+    width: int = 480
+    height: int = 360
+    snapshots: list = field(default_factory=list)  # filled: (time [s], image (h, w, 3) uint8)
+    video: list = field(default_factory=list)  # filled: images (h, w, 3) uint8
+
+
+def foot_slip(touchdown: np.ndarray, liftoff: np.ndarray) -> np.ndarray:
+    """Slip [m] of stance feet: how far each ball-foot centre moved while it stood.
+
+    The paper's measure (Table II): the distance between the foot's position
+    when it touched down and when it lifted off again -- sliding, and the
+    ball rolling, alike.
+
+    Parameters
+    ----------
+    touchdown, liftoff : array of shape (..., 3)
+        World positions [m] of the ball-foot centre at touch-down and at the
+        next lift-off of the same foot.
+
+    Returns
+    -------
+    ndarray of shape (...)
+        Euclidean distance [m].
+    """
+    a = np.asarray(touchdown, dtype=np.float64)
+    b = np.asarray(liftoff, dtype=np.float64)
+    if a.shape[-1:] != (3,) or b.shape[-1:] != (3,):
+        raise FootfallError(f"foot_slip needs positions (..., 3), got {a.shape} and {b.shape}")
+    return np.linalg.norm(b - a, axis=-1)
+
+
+def board_line(hmap: HeightMap, robot: RobotDescription, config: WalkConfig
+               ) -> tuple[np.ndarray, float]:
+    """Start body position (2,) [m] and goal line x [m] of a board.
+
+    The robot starts on the first module ``start_setback`` before its end; the
+    goal is reached when the hind hips are ``goal_margin`` past the start of
+    the last module (a board from :func:`footfall.terrain.make_board` ends
+    with a flat module). A map without module records is treated as one
+    module spanning the whole map.
+    """
+    x0, x1, y0, y1 = hmap.bounds
+    modules = hmap.metadata.get("modules") if isinstance(hmap.metadata, dict) else None
+    if modules and len(modules) >= 2:
+        first_end = x0 + float(modules[0]["x_end"]) - float(modules[0]["x_start"])
+        last_start = x0 + float(modules[-1]["x_start"])
+    else:
+        first_end, last_start = x0 + 0.5 * (x1 - x0), x1 - 2 * robot.hip_x - 0.1
+    start = np.array([first_end - config.start_setback, 0.5 * (y0 + y1)])
+    goal = last_start + robot.hip_x + config.goal_margin
+    if not start[0] - robot.hip_x - 0.05 > x0 or not goal > start[0]:
+        raise FootfallError("the terrain is too short for a walking run")
+    return start, goal
+
+
+class _Failure(Exception):
+    """A run ends in failure (the message is the reason)."""
+
+
+class Walk:
+    """One run of the simulated robot over a board (use :func:`walk`)."""
+
+    def __init__(self, hmap: HeightMap, reward_for: RewardFor, seed: int,
+                 config: WalkConfig = WalkConfig(), robot: RobotDescription = LITTLEDOG,
+                 frames: Frames | None = None, judge: Judge | None = None) -> None:
+        if not isinstance(hmap, HeightMap):
+            raise FootfallError(f"a walk needs a HeightMap, got {type(hmap).__name__}")
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise FootfallError(f"seed must be a non-negative integer, got {seed!r}")
+        self.hmap, self.reward_for, self.seed = hmap, reward_for, int(seed)
+        self.config, self.robot, self.frames = config, robot, frames
+        t0 = time.perf_counter()
+        self.start_xy, self.goal_x = board_line(hmap, robot, config)
+        goal_xy = np.array([self.goal_x + 0.3, self.start_xy[1]])
+        if config.plan_path:
+            self.path = plan_body_path(hmap, reward_for, self.start_xy, goal_xy, robot,
+                                       config.path)
+        else:
+            self.path = BodyPath.straight(self.start_xy, goal_xy)
+        self.judge_name = None if judge is None else getattr(judge, "__qualname__", "judge")
+        self.planner = (FootstepPlanner(hmap, reward_for, self.path, robot, config.footstep)
+                        if judge is None else
+                        JudgedFootstepPlanner(hmap, judge, self.path, robot, config.footstep))
+        self.sim = Simulation.from_seed(robot, hmap, self.seed, config.perturbation)
+        self.setup_seconds = time.perf_counter() - t0
+        self.goal = goal_xy
+        self.period = config.lowlevel.period
+        self.ticks = round(self.period / self.sim.timestep)
+        if self.ticks < 1 or abs(self.ticks * self.sim.timestep - self.period) > 1e-9:
+            raise FootfallError("the control period must be a whole number of servo periods")
+        self._lift = np.array([0.0, 0.0, robot.foot_radius])  # contact point -> ball centre
+
+    # ------------------------------------------------------------ the 100 Hz loop
+    def _capture(self) -> None:
+        f = self.frames
+        if f is None:
+            return
+        t = self.sim.time
+        if f.video_fps > 0 and t + 1e-9 >= len(f.video) / f.video_fps:
+            f.video.append(self.sim.render(width=f.width, height=f.height))
+        if f.snapshot_count > 0 and t + 1e-9 >= len(self._all_frames) * SNAPSHOT_PERIOD:
+            self._all_frames.append((t, self.sim.render(width=f.width, height=f.height)))
+
+    def _set_role(self, leg: int, stance: bool) -> None:
+        """Leg ``leg`` starts passing its load on (stance) or off (swing) now."""
+        self._stance[leg] = stance
+        self._since[leg] = self.sim.time
+
+    def _tick(self, position: np.ndarray, rpy: np.ndarray, swing: int | None) -> None:
+        """One control period toward the desired body pose; raises _Failure on a fall or stall.
+
+        While a leg swings, the measured centre of mass and the stance feet
+        are logged for the stability margin.
+        """
+        cfg, sim = self.config, self.sim
+        mpos, mrpy = self._pose
+        cpos, crpy = self._correction.update(position, rpy, mpos, mrpy)
+        rot = body_rotation(crpy), body_rotation(mrpy)  # commanded, measured
+        ramp = transfer_weight(sim.time - self._since, cfg.lowlevel.transfer_time)
+        weight = np.where(self._stance, ramp, 1.0 - ramp)
+        # Stance feet: where they touched down, moved on as far as their balls have rolled since.
+        stance = self._stance
+        self._targets[stance] = self._anchor[stance] + rolled(
+            self._shin0[stance], shin_rotations(sim.joint_angles(), rot[1])[stance],
+            self.robot.foot_radius)
+        q, _ = joint_targets(self.robot, self._targets, (cpos, rot[0]), (mpos, rot[1]), weight,
+                             self._q)
+        sim.set_targets(q, (q - self._q) / self.period)
+        self._q = q
+        sim.step(self.ticks)
+        self._capture()
+        self._pose = mpos, mrpy = sim.body_pose()
+        if swing is not None:
+            self._com.append(sim.centre_of_mass()[:2])
+            self._support.append(sim.foot_positions()[_OTHER_LEGS[swing], :2])
+        if abs(mrpy[0]) > cfg.fall_tilt or abs(mrpy[1]) > cfg.fall_tilt:
+            raise _Failure("fall: trunk tilted")
+        if sim.trunk_touches_terrain():
+            raise _Failure("fall: trunk touched the terrain")
+        if mpos[0] > self._best_x + cfg.stuck_progress:
+            self._best_x, self._best_t = mpos[0], sim.time
+        elif sim.time - self._best_t > cfg.stuck_time:
+            raise _Failure("stuck: no progress")
+        if sim.time > cfg.time_limit:
+            raise _Failure("time limit")
+
+    def _touching_down(self, leg: int) -> bool:
+        """Whether the foot force sensor of ``leg`` says the foot is down."""
+        return bool(self.sim.foot_forces()[leg, 2] > self.config.touchdown_force)
+
+    # --------------------------------------------------------------- one step
+    def _step(self, k: int) -> None:
+        """Plan step ``k``, log it, and execute it: shift, swing, touch-down."""
+        cfg, robot, sim = self.config, self.robot, self.sim
+        leg = robot.gait_order[k % 4]
+        s = LEG_NAMES.index(leg)
+        tp = time.perf_counter()
+        feet = sim.foot_positions() - self._lift  # where the feet stand now: contact points
+        state = RobotState(feet, *self._pose, leg, self.goal)
+        record = {"k": k, "plan": None, "t_liftoff": math.nan,
+                  "t_touchdown": math.nan, "touchdown": np.full(3, np.nan), "slip": math.nan}
+        try:
+            plan = self.planner.plan(state)
+        except NoFootholdError:
+            raise _Failure(f"stuck: no foothold for {leg}") from None
+        record["plan"] = plan
+        self._steps.append(record)
+        traj = plan_cog(feet, plan.steps, self._cog[0], self._cog[1], cfg.cog, robot)
+        after = feet.copy()
+        after[s] = plan.foothold
+        pose = find_pose(self.hmap, after, traj.waypoints[0, 1], float(plan.body_yaw[0]),
+                         robot, cfg.pose)
+        t_lift, t_down = float(traj.lift_off[0]), float(traj.touch_down[0])
+        self._planned.append(float(np.min(support_margin(
+            traj.triangles[0], traj.position(np.linspace(t_lift, t_down, 20))))))
+        # The desired body pose at every control period of the step, at once.
+        n = max(1, round(t_down / self.period))
+        times = np.minimum(np.arange(1, n + 1) * self.period, t_down)
+        u = transfer_weight(times, t_down)[:, None]  # smoothstep from this pose to the next
+        z0, rpy0 = self._desired[0][2], self._desired[1]
+        rpy1 = np.array(pose.rpy)
+        rpy1[2] = rpy0[2] + ((rpy1[2] - rpy0[2] + np.pi) % (2 * np.pi) - np.pi)
+        positions = np.column_stack([traj.position(times), z0 + (pose.height - z0) * u[:, 0]])
+        attitudes = rpy0 + (rpy1 - rpy0) * u
+        self._plan_seconds.append(time.perf_counter() - tp)
+
+        t_begin = sim.time
+        swing_time = t_down - t_lift
+        # The foot swings to a point `approach` above the foothold and comes down the rest of the
+        # way slowly, so that a terrain a little higher or lower than the map meets it gently.
+        descent = min(cfg.touchdown_approach / cfg.touchdown_speed, 0.5 * swing_time)
+        reach = swing_time - descent  # [s] after lift-off: above the foothold
+        above = plan.foothold + [0.0, 0.0, descent * cfg.touchdown_speed]
+        swing, path, i_lift = None, None, n
+        landed = False
+        for i in range(n):  # shift, then swing along the planned trajectories
+            t = times[i]
+            if t > t_lift and swing is None:  # lift-off: this foot's last stance ends
+                centre = sim.foot_positions()[s]
+                if s in self._stood:
+                    j, down = self._stood.pop(s)
+                    self._steps[j]["slip"] = float(foot_slip(down, centre))
+                record["t_liftoff"] = sim.time
+                swing = swing_trajectory(self.hmap, centre - self._lift, above, reach, robot,
+                                         cfg.swing)
+                after_lift = times[i:] - t_lift
+                path = swing.position(after_lift) + self._lift
+                path[:, 2] -= cfg.touchdown_speed * np.maximum(after_lift - reach, 0.0)
+                i_lift = i
+                self._set_role(s, stance=False)
+            if swing is not None:
+                self._targets[s] = path[i - i_lift]
+            self._desired = positions[i].copy(), attitudes[i].copy()
+            self._tick(*self._desired, s if swing is not None else None)
+            if swing is not None and t - t_lift > cfg.touchdown_early * reach \
+                    and self._touching_down(s) \
+                    and np.hypot(*(sim.foot_positions()[s, :2] - above[:2])) < cfg.touchdown_reach:
+                landed = True
+                break
+        if swing is None:  # a step too short to lift: count it as landed where it stands
+            landed = True
+        bottom = plan.foothold[2] + robot.foot_radius - cfg.touchdown_search
+        while not landed:  # not down yet: keep going down at the foothold
+            self._targets[s, 2] -= cfg.touchdown_speed * self.period
+            if self._targets[s, 2] < bottom:
+                break  # nothing there within reach: put the weight on it anyway
+            self._tick(*self._desired, s)
+            landed = self._touching_down(s)
+        centre = sim.foot_positions()[s]
+        self._targets[s] = centre
+        self._anchor[s] = centre
+        self._shin0[s] = shin_rotations(sim.joint_angles(), body_rotation(self._pose[1]))[s]
+        self._set_role(s, stance=True)
+        record["t_touchdown"] = sim.time
+        record["touchdown"] = centre.copy()
+        self._stood[s] = (k, centre.copy())
+        elapsed = min(sim.time - t_begin, t_down)
+        self._cog = traj.position(elapsed), traj.velocity(elapsed)
+        self._desired[0][:2] = self._cog[0]
+
+    # ------------------------------------------------------------------ a run
+    def run(self) -> RunRecord:
+        """Walk until the goal or a failure; return the run log with its result."""
+        # A run is one core's work on small matrices: BLAS threads would only spin beside it
+        # (and steal the cores that walk-many's parallel runs need).
+        with threadpool_limits(limits=1):
+            return self._run()
+
+    def _run(self) -> RunRecord:
+        cfg, robot, sim = self.config, self.robot, self.sim
+        wall0 = time.perf_counter()
+        state0 = nominal_state(self.hmap, self.start_xy, 0.0, robot.gait_order[0],
+                               goal=self.goal, robot=robot)
+        sim.stand(state0.body_position, state0.body_rpy, state0.feet)
+        self._all_frames: list = []
+        self._q = sim.joint_angles().copy()  # (4, 3) [rad] last set-points
+        self._targets = np.array(state0.feet) + self._lift  # (4, 3) [m] foot-centre targets
+        self._stance = np.ones(4, dtype=bool)  # role of each leg
+        self._since = np.full(4, -np.inf)  # [s] when each leg took its role
+        self._correction = BodyCorrection(cfg.lowlevel)
+        self._pose = sim.body_pose()  # measured (position (3,), rpy (3,))
+        self._anchor = self._targets.copy()  # (4, 3) [m] stance feet's centres at touch-down
+        self._shin0 = shin_rotations(self._q, body_rotation(self._pose[1]))  # (4, 3, 3) shins then
+        # The robot stands where the start error put it: the plan starts from there, so that the
+        # first set-points do not jerk the body (and drag the unloaded feet) to the nominal pose.
+        self._desired = self._pose[0].copy(), self._pose[1].copy()
+        self._cog = self._desired[0][:2].copy(), np.zeros(2)  # planned COG position, velocity
+        self._stood: dict[int, tuple[int, np.ndarray]] = {}  # leg -> (step, centre at touch-down)
+        self._steps: list[dict] = []
+        self._com: list[np.ndarray] = []  # (2,) [m] centre of mass during swings
+        self._support: list[np.ndarray] = []  # (3, 2) [m] stance feet during swings
+        self._planned: list[float] = []  # [m] planned least COG margin of each swing
+        self._plan_seconds: list[float] = []
+        self._best_x, self._best_t = self._pose[0][0], 0.0
+        start_x = self._pose[0][0]
+        outcome: dict = {"success": False, "reason": "time limit"}
+        try:
+            for _ in range(max(1, round(cfg.settle_time / self.period))):
+                self._tick(*self._desired, None)
+            start_x = self._pose[0][0]
+            k = 0
+            while True:
+                if self._pose[0][0] >= self.goal_x:
+                    outcome = {"success": True, "reason": "goal"}
+                    break
+                if cfg.max_steps is not None and k >= cfg.max_steps:
+                    outcome["reason"] = "step limit"
+                    break
+                self._step(k)
+                k += 1
+        except _Failure as failure:
+            outcome["reason"] = str(failure)
+        outcome["distance"] = float(self._pose[0][0] - start_x)
+        return self._finish(outcome, wall0)
+
+    def _finish(self, outcome: dict, wall0: float) -> RunRecord:
+        sim, robot = self.sim, self.robot
+        sim_time = sim.time
+        steps = self._steps
+        slips = np.array([s["slip"] for s in steps if np.isfinite(s["slip"])])
+        margins = (support_margin(np.array(self._support), np.array(self._com))
+                   if self._com else np.zeros(0))
+        wall = time.perf_counter() - wall0
+        speed = outcome["distance"] / sim_time if sim_time > 0 else 0.0
+        outcome.update({
+            "time": sim_time,  # [s] simulated
+            "steps": len(steps),
+            "speed_cm_s": 100.0 * speed,
+            "speed_body_lengths_s": speed / robot.overall_length,
+            "slip_mean_mm": 1e3 * float(slips.mean()) if slips.size else None,
+            "slip_std_mm": 1e3 * float(slips.std()) if slips.size else None,
+            "slip_count": int(slips.size),
+            "min_stability_margin_mm": 1e3 * float(margins.min()) if margins.size else None,
+            "planned_min_stability_margin_mm": (1e3 * min(self._planned) if self._planned
+                                                else None),
+            "planning_ms_per_step": (1e3 * float(np.mean(self._plan_seconds))
+                                     if self._plan_seconds else None),
+            "wall_seconds": wall,
+            "setup_seconds": self.setup_seconds,
+            "real_time_factor": sim_time / wall if wall > 0 else None,
+        })
+        if self.frames is not None and self.frames.snapshot_count > 0:
+            kept = self._all_frames
+            if kept:
+                pick = np.unique(np.linspace(0, len(kept) - 1,
+                                             self.frames.snapshot_count).round().astype(int))
+                self.frames.snapshots = [kept[i] for i in pick]
+        # Each step is logged with the state its candidates were computed for (the body as
+        # predicted at touch-down), so that the expert and the learner judge F as the planner did.
+        run_steps = tuple(RunStep(s["k"], s["plan"].state, s["plan"].candidates,
+                                  np.nan_to_num(s["plan"].reward, nan=-np.inf), s["plan"].index,
+                                  s["t_liftoff"] if np.isfinite(s["t_liftoff"]) else sim_time,
+                                  s["t_touchdown"], s["touchdown"], s["slip"])
+                          for s in steps)
+        settings = {"walk": _jsonable(self.config.to_dict()),
+                    "perturbation": sim.perturbation.to_dict(), "robot": robot.name}
+        if self.judge_name is not None:  # the footholds were chosen by a judge, not a reward
+            settings["judge"] = self.judge_name
+        self.sim.close()
+        return RunRecord(self.hmap.content_hash(), self.seed, settings, _jsonable(outcome),
+                         run_steps)
+
+
+def _jsonable(value):
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, (np.floating, float)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+def walk(hmap: HeightMap, reward_for: RewardFor, seed: int, config: WalkConfig = WalkConfig(),
+         robot: RobotDescription = LITTLEDOG, frames: Frames | None = None,
+         judge: Judge | None = None) -> RunRecord:
+    """One seeded run over ``hmap`` with the reward ``reward_for(leg)``; the same seed, the same run.
+
+    With ``judge`` (e.g. ``SyntheticExpert(...).values``), the judge chooses
+    the footholds instead of the reward (:class:`JudgedFootstepPlanner`);
+    ``reward_for`` then only plans the body path if ``config.plan_path``.
+    """
+    return Walk(hmap, reward_for, seed, config, robot, frames, judge).run()

@@ -1,0 +1,89 @@
+"""The tree is the architecture: each layer imports only from the layers below it."""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parent.parent / "src" / "footfall"
+
+# The pipeline, lowest layer first (docs/architecture.md). A package may import from packages of
+# a lower rank and from itself; packages of the same rank are independent of each other.
+LAYERS = {
+    "core": 0,         # height map, robot, state, kinematics, errors, files, seeds, statistics
+    "terrain": 1,      # terrain generators and scan import
+    "features": 2,     # candidates, patches, feature families, the reward, dense scoring
+    "data": 2,         # the demonstration store and run logs
+    "learning": 3,     # pairwise data, rank learners, training, model files, evaluation
+    "expert": 3,       # the synthetic expert, its corrections, the demonstration walker
+    "control": 3,      # the control stack: body path, footsteps, pose, COG, swing, low level
+    "sim": 4,          # the MuJoCo robot and a walking episode
+    "plots": 5,        # pictures
+    "experiments": 6,  # offline experiment, reproduction, report, batches of runs, benchmarks
+    "cli": 7,          # the command line
+}
+
+
+def _imported_modules(path: Path) -> list[tuple[int, str]]:
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            out.append((node.lineno, node.module))
+        elif isinstance(node, ast.Import):
+            out += [(node.lineno, alias.name) for alias in node.names]
+    return [(line, m) for line, m in out if m == "footfall" or m.startswith("footfall.")]
+
+
+def layer_violations(root: Path, layers: dict[str, int] = LAYERS) -> list[str]:
+    """Every import in the package at ``root`` that goes from a layer to the same or a higher one.
+
+    Also reports a top-level package that is not in ``layers`` (every part has a place).
+    """
+    problems = []
+    for path in sorted(root.rglob("*.py")):
+        parts = path.relative_to(root).parts
+        if len(parts) == 1:
+            continue  # the package's own __init__ (version, environment defaults)
+        here = parts[0]
+        if here not in layers:
+            problems.append(f"{path.relative_to(root)}: package {here!r} has no layer")
+            continue
+        for line, module in _imported_modules(path):
+            there = module.split(".")[1] if "." in module else None
+            if there is None or there == here:
+                continue
+            if there not in layers:
+                problems.append(f"{path.relative_to(root)}:{line}: imports {module}, which has no layer")
+            elif layers[there] >= layers[here]:
+                problems.append(f"{path.relative_to(root)}:{line}: {here} (layer {layers[here]}) "
+                                f"imports {module} (layer {layers[there]})")
+    return problems
+
+
+def test_every_layer_imports_only_from_lower_layers():
+    assert layer_violations(SRC) == []
+
+
+def test_the_layering_check_catches_an_upward_import(tmp_path):
+    # A copy of two packages' worth of tree: features importing control is an upward import.
+    for pkg in ("features", "control"):
+        (tmp_path / pkg).mkdir()
+        (tmp_path / pkg / "__init__.py").write_text("")
+    (tmp_path / "control" / "planner.py").write_text("from footfall.features.reward import R\n")
+    (tmp_path / "features" / "reward.py").write_text(
+        "import numpy\nfrom footfall.control.planner import plan\n")
+    found = layer_violations(tmp_path)
+    assert found == ["features/reward.py:2: features (layer 2) imports "
+                     "footfall.control.planner (layer 3)"]
+    # Packages of the same rank may not import each other either.
+    (tmp_path / "features" / "reward.py").write_text("from footfall.data.store import S\n")
+    (tmp_path / "data").mkdir()
+    assert layer_violations(tmp_path) == ["features/reward.py:1: features (layer 2) imports "
+                                          "footfall.data.store (layer 2)"]
+
+
+def test_the_top_level_holds_a_handful_of_entries():
+    entries = sorted(p.name for p in SRC.iterdir() if p.name != "__pycache__")
+    assert len(entries) <= 12, entries
+    assert set(LAYERS) <= set(entries)

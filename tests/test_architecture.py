@@ -3,8 +3,6 @@
 import ast
 from pathlib import Path
 
-import pytest
-
 SRC = Path(__file__).resolve().parent.parent / "src" / "footfall"
 
 # The pipeline, lowest layer first (docs/architecture.md). A package may import from packages of

@@ -170,8 +170,7 @@ def test_path_does_not_depend_on_the_reward_scale(flat):
     hmap, _ = flat
     board = with_patch(hmap, (0.5, 0.75), (-0.3, 0.04),
                        lambda X, Y: 0.015 * (1 + np.sin(300 * X) * np.cos(260 * Y)))
-    scaled = dataclasses.replace(REWARD, terrain_weights=7.0 * REWARD.terrain_weights,
-                                 template_weights=tuple(7.0 * w for w in REWARD.template_weights))
+    scaled = REWARD.scaled(7.0)
     a = plan_body_path(board, reward_for, (0.25, 0.0), 1.0)
     b = plan_body_path(board, lambda leg: scaled, (0.25, 0.0), 1.0)
     assert a.waypoints.shape == b.waypoints.shape

@@ -11,15 +11,16 @@ from footfall.control.footstep import (FootstepConfig, FootstepPlan, FootstepPla
                                        NoFootholdError)
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.features.pose_features import POSE_FEATURE_NAMES
+from footfall.features.pose_features import POSE_FEATURE_NAMES, PoseFeatures
 from footfall.features.reward import LinearReward, default_reward, weights_from_names
 from footfall.core.robot import LEG_NAMES, LITTLEDOG
 from footfall.features.scoring import score_footholds
+from footfall.features.spread import reward_spread
 from footfall.core.state import RobotState, feet_pitch, nominal_state
 from footfall.terrain.modules import make_module
 
 REWARD = default_reward()
-POSED = dataclasses.replace(REWARD, pose_weights=weights_from_names(
+POSED = REWARD.with_weights(PoseFeatures(), weights_from_names(
     {"next_cog_margin": 20.0, "knee_clearance": 10.0, "fore_aft_height_diff": -20.0,
      "swing_obstacle": -20.0}, POSE_FEATURE_NAMES))
 
@@ -144,8 +145,8 @@ def test_look_ahead_avoids_a_hole_that_leaves_the_next_steps_badly_off():
     h[(X >= 0.48) & (X <= 0.52) & (Y >= 0.05) & (Y <= 0.11)] = -0.03  # pit under LF
     h[(X >= 0.368) & (X <= 0.387) & (Y >= 0.068) & (Y <= 0.092)] = -0.03  # hole by LH's target
     hmap = grid_map(h)
-    level = LinearReward(pose_weights=weights_from_names({"fore_aft_height_diff": -100.0},
-                                                         POSE_FEATURE_NAMES))
+    level = LinearReward((PoseFeatures(),), (weights_from_names({"fore_aft_height_diff": -100.0},
+                                                                POSE_FEATURE_NAMES),))
     path = BodyPath.straight((0.2, 0.0), (0.8, 0.0))
     feet = np.array([[0.50, 0.08, -0.03], [0.50, -0.08, 0.0], [0.30, 0.08, 0.0], [0.30, -0.08, 0.0]])
     state = RobotState(feet, np.array([0.4, 0.0, 0.14]), np.zeros(3), "LH")
@@ -253,11 +254,7 @@ def test_bad_input_raises(flat):
 
 def test_path_bias_follows_the_rewards_scale():
     """A reward in other units (a learned one: logits) trades terrain against the path alike."""
-    from footfall.control.footstep import reward_spread
-
-    doubled = dataclasses.replace(
-        REWARD, terrain_weights=2 * REWARD.terrain_weights,
-        template_weights=tuple(2 * w for w in REWARD.template_weights), name="doubled")
+    doubled = REWARD.scaled(2.0, name="doubled")
     assert reward_spread(doubled) == pytest.approx(2 * reward_spread(REWARD), rel=1e-4)
     hmap = flat_map()
     path = BodyPath.straight((0.3, 0.0), (0.8, 0.0))
@@ -294,11 +291,9 @@ def test_search_radius_keeps_f_near_the_gait_nominal_position_or_falls_back(flat
 
 
 def test_the_path_bias_holds_against_a_rewards_pose_part_too():
-    from footfall.control.footstep import reward_spread
-
-    strong = dataclasses.replace(POSED, pose_weights=10 * POSED.pose_weights, name="strong")
+    strong = POSED.scaled(10.0, state=True, name="strong")
     assert reward_spread(strong) > reward_spread(POSED) > reward_spread(
-        dataclasses.replace(POSED, pose_weights=0 * POSED.pose_weights, name="no pose"))
+        POSED.scaled(0.0, state=True, name="no pose"))
     hmap = flat_map()
     path = BodyPath.straight((0.3, 0.0), (0.8, 0.0))
     config = FootstepConfig(bias_weight=60.0)

@@ -54,7 +54,7 @@ def test_learned_model_round_trips_through_its_file(demos_and_maps, tmp_path):
         np.testing.assert_array_equal(a, b)
     # Only templates with a non-zero weight are kept, and the kept counts are Table I.
     for f in back.functions.values():
-        template_weights = [w for n, w in zip(f.names, f.coef) if ".template_" in n]
+        template_weights = list(f.weights("templates"))
         assert all(w != 0 for w in template_weights)
         assert len(template_weights) == sum(f.library.counts) <= 60
     table = back.templates_kept()
@@ -77,7 +77,8 @@ def test_model_refuses_another_robot_or_feature_setting(demos_and_maps, tmp_path
     model.save(path)
     raw = dict(np.load(path, allow_pickle=False))
     meta = json.loads(str(raw.pop("meta")))
-    meta["groups"]["front"]["names"] = meta["groups"]["front"]["names"][:-1]
+    columns = meta["groups"]["front"]["families"][0]["columns"]
+    meta["groups"]["front"]["families"][0]["columns"] = columns[:-1]
     np.savez(tmp_path / "bad.npz", meta=json.dumps(meta), **raw)
     with pytest.raises(FootfallError, match="malformed model"):
         FootholdModel.load(tmp_path / "bad.npz")
@@ -104,7 +105,10 @@ def test_learning_is_deterministic(demos_and_maps):
     demos, maps = demos_and_maps
     a, b = small("templates", demos, maps), small("templates", demos, maps)
     for g in ("front", "hind"):
-        np.testing.assert_array_equal(a.functions[g].coef, b.functions[g].coef)
+        for fa, fb, ca, cb in zip(a.functions[g].families, b.functions[g].families,
+                                  a.functions[g].coef, b.functions[g].coef):
+            assert fa.columns() == fb.columns()
+            np.testing.assert_array_equal(ca, cb)
 
 
 def test_learn_and_rank_eval_commands(demos_and_maps, tmp_path, capsys):

@@ -5,10 +5,11 @@ import pytest
 from scipy.ndimage import gaussian_filter
 
 from footfall.core.heightmap import HeightMap
-from footfall.features.reward import LinearReward
 from footfall.features.config import FeatureConfig
-from footfall.features.scoring import score_grid
-from footfall.features.templates import bandwidth_for_rms, extract_templates
+from footfall.features.dense import score_grid
+from footfall.features.reward import LinearReward
+from footfall.features.templates import TemplateFeatures, extract_templates
+from footfall.features.terrain_features import TerrainFeatures
 
 CONFIG = FeatureConfig()
 RES = 0.001  # [m/cell]
@@ -34,9 +35,18 @@ def _reward(hmap: HeightMap, seed: int = 1) -> LinearReward:
                            rng.uniform(y0 + 0.03, y1 - 0.03, 12)])
     library = extract_templates(hmap, pos, 0.0, False, CONFIG)
     assert min(library.counts) >= 3  # every scale has templates
-    return LinearReward(config=CONFIG, terrain_weights=rng.normal(size=27), library=library,
-                        template_weights=tuple(rng.normal(size=n) for n in library.counts),
-                        bandwidths=tuple(bandwidth_for_rms(0.004, g) for g in CONFIG.grids))
+    templates = TemplateFeatures(CONFIG, library).with_rms((0.004,) * len(CONFIG.scales))
+    terrain_weights = rng.normal(size=27)
+    template_weights = np.concatenate([rng.normal(size=n) for n in library.counts])
+    return LinearReward((TerrainFeatures(CONFIG), templates), (terrain_weights, template_weights),
+                        CONFIG)
+
+
+def _templates(reward: LinearReward) -> tuple[TemplateFeatures, list[np.ndarray]]:
+    """The reward's template family and its weights split by scale."""
+    family, w = reward.family("templates")
+    bounds = np.cumsum((0,) + family.library.counts)
+    return family, [w[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
 
 
 HMAP = _terrain()
@@ -51,6 +61,8 @@ def _literal_reward(hmap: HeightMap, reward: LinearReward, point: np.ndarray, ya
     std of those samples, and Eq. 4 summed over them (scaled by taps / n_valid).
     """
     h0 = hmap.height_at(point[None])[0]
+    terrain_weights = reward.family("terrain")[1]
+    templates, template_weights = _templates(reward)
     total = 0.0
     for s, grid in enumerate(reward.config.grids):
         patch = hmap.patches(point[None], yaw, mirror, grid)[0] - h0  # (nu, nv)
@@ -65,12 +77,12 @@ def _literal_reward(hmap: HeightMap, reward: LinearReward, point: np.ndarray, ya
         for g in signed:
             features += [max(g, 0.0), max(-g, 0.0)]
         features.append(np.std(z))
-        total += float(np.dot(reward.terrain_weights[9 * s:9 * (s + 1)], features))
+        total += float(np.dot(terrain_weights[9 * s:9 * (s + 1)], features))
         flat = patch.ravel()
-        for t, w in zip(reward.library.templates[s], reward.template_weights[s]):
+        for t, w in zip(templates.library.templates[s], template_weights[s]):
             d = sum((t[i] - flat[i]) ** 2 for i in range(grid.size) if not np.isnan(flat[i]))
             d *= grid.size / ok.sum()
-            total += w * np.exp(-reward.bandwidths[s] * d)
+            total += w * np.exp(-templates.bandwidths[s] * d)
     return total
 
 
@@ -106,11 +118,10 @@ def test_dense_scores_equal_the_per_candidate_definitions(yaw, mirror):
 
 def _one_template_reward(hmap: HeightMap, s: int) -> LinearReward:
     """A reward that is exactly the Eq. 4 feature of one template on scale s."""
-    full = _reward(hmap)
-    weights = tuple(np.eye(n)[0] if k == s else np.zeros(n)
-                    for k, n in enumerate(full.library.counts))
-    return LinearReward(config=CONFIG, library=full.library, template_weights=weights,
-                        bandwidths=full.bandwidths)
+    templates, _ = _templates(_reward(hmap))
+    weights = np.concatenate([np.eye(n)[0] if k == s else np.zeros(n)
+                              for k, n in enumerate(templates.library.counts)])
+    return LinearReward((templates,), (weights,), CONFIG)
 
 
 @pytest.mark.parametrize("s", [0, 1, 2])
@@ -118,8 +129,9 @@ def test_masked_template_distance_is_rescaled_over_the_data(s):
     reward = _one_template_reward(HMAP, s)
     grid = score_grid(HMAP, reward, spacing=SPACING, dtype=np.float64)
     cfg = reward.config.grids[s]
-    template = reward.library.templates[s][0]
-    h = reward.bandwidths[s]
+    templates, _ = _templates(reward)
+    template = templates.library.templates[s][0]
+    h = templates.bandwidths[s]
     checked = 0
     for i, j in [(39, 15), (43, 15), (40, 13), (40, 17), (42, 12), (3, 15), (40, 2)]:
         p = np.array([grid.x[i], grid.y[j]])

@@ -29,7 +29,7 @@ from footfall.learning.model import FootholdModel, RankingFunction
 from footfall.features.reward import default_reward
 from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.features.config import FeatureConfig
-from footfall.features.terrain_features import feature_names
+from footfall.features.terrain_features import TerrainFeatures
 from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig, foot_slip, walk
 
 R = LITTLEDOG
@@ -206,8 +206,9 @@ def test_cli_walk_refuses_a_model_for_another_robot(tmp_path, capsys):
     board = tmp_path / "board.npz"
     _short_flat_board().save(board)
     config = FeatureConfig()
-    f = RankingFunction(names=(feature_names(config)[0],), coef=np.array([1.0]),
-                        scale=np.array([1.0]), library=None, bandwidths=())
+    terrain = TerrainFeatures(config)
+    n = len(terrain.columns())
+    f = RankingFunction(families=(terrain,), coef=(np.eye(n)[0],), scale=(np.ones(n),))
     other = RobotDescription(upper_leg=0.09)
     FootholdModel("terrain", "l1", {"front": f, "hind": f}, config, robot=other).save(
         tmp_path / "model.npz")

@@ -384,8 +384,10 @@ def learn(store_path: str, feature_set: str, learner: str, library_size: int,
     for g, f in model.functions.items():
         summary["groups"][g] = {
             "lambda": f.info["lambda"], "cv_error": f.info["cv_error"],
-            "bandwidths_per_m2": list(f.bandwidths), "bandwidth_rms_m": f.info["bandwidth_rms_m"],
-            "templates_kept": f.info["kept_counts"], "library": f.info["library_counts"],
+            "bandwidths_per_m2": list(getattr(f.family("templates"), "bandwidths", ())),
+            "bandwidth_rms_m": f.info.get("bandwidth_rms_m"),
+            "templates_kept": f.info.get("kept_counts", [0] * len(model.config.scales)),
+            "library": f.info.get("library_counts", [0] * len(model.config.scales)),
             "non_zero_weights": f.info["n_nonzero"]}
     lines = [f"wrote {out}: {feature_set}/{learner} from {len(demos)} demonstrations "
              f"in {model.info['seconds']:.1f} s"]

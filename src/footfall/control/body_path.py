@@ -16,7 +16,6 @@ mirror) pair by :func:`terrain_grids` and shared with the footstep planner.
 
 from __future__ import annotations
 
-import hashlib
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -29,15 +28,12 @@ from scipy.sparse.csgraph import dijkstra
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import inverse_kinematics, knee_position
-from footfall.features.reward import LinearReward
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
-from footfall.features.scoring import ScoreGrid, score_grid
+from footfall.features.dense import ScoreGrid, score_grid
+from footfall.features.reward import LinearReward
+from footfall.features.spread import reward_unit
 
 RewardFor = Callable[[str], LinearReward]  # leg name -> the reward its footholds are ranked by
-
-# A cell reward that differs from the best by less than this fraction of the
-# rewards' mean magnitude is float noise of the dense scoring (float32), not terrain.
-_UNIT_FLOOR = 1e-3  # [-]
 
 
 @dataclass(frozen=True)
@@ -78,18 +74,6 @@ class BodyPathConfig:
 
 
 # ------------------------------------------------------------ reward grids
-def reward_key(reward: LinearReward) -> str:
-    """Digest of everything that sets a reward's terrain part (pose weights excluded)."""
-    digest = hashlib.sha256(repr(reward.config.to_dict()).encode())
-    digest.update(np.ascontiguousarray(reward.terrain_weights).tobytes())
-    if reward.library is not None:
-        for t, w, h in zip(reward.library.templates, reward.template_weights, reward.bandwidths):
-            digest.update(np.ascontiguousarray(t, dtype=np.float64).tobytes())
-            digest.update(np.ascontiguousarray(w).tobytes())
-            digest.update(repr(h).encode())
-    return digest.hexdigest()
-
-
 def terrain_grids(hmap: HeightMap, reward_for: RewardFor, robot: RobotDescription = LITTLEDOG,
                   spacing: float = 0.005, yaw: float = 0.0) -> dict[str, ScoreGrid]:
     """Dense terrain-reward grids of every leg, one :func:`score_grid` per distinct (reward, mirror).
@@ -119,7 +103,7 @@ def terrain_grids(hmap: HeightMap, reward_for: RewardFor, robot: RobotDescriptio
             raise FootfallError(f"reward_for({name!r}) must return a LinearReward, "
                                 f"got {type(reward).__name__}")
         mirror = robot.leg(name).mirrored
-        key = (reward_key(reward), mirror)
+        key = (reward.key(state=False), mirror)
         if key not in cache:
             cache[key] = score_grid(hmap, reward, spacing=spacing, yaw=yaw, mirror=mirror)
         out[name] = cache[key]
@@ -164,20 +148,6 @@ def _interior(grid: ScoreGrid, hmap: HeightMap, half: tuple[float, float]) -> np
     ix = (grid.x - half[0] >= x0 - 1e-9) & (grid.x + half[0] <= x1 + 1e-9)
     iy = (grid.y - half[1] >= y0 - 1e-9) & (grid.y + half[1] <= y1 + 1e-9)
     return ix[:, None] & iy[None, :]
-
-
-def reward_unit(rewards: list[np.ndarray]) -> float:
-    """The reward unit of a map: std of the finite per-foothold rewards, pooled over arrays.
-
-    Floored at ``1e-3`` of their mean magnitude, so that float noise on a
-    uniform terrain is not mistaken for differences; 1.0 if the rewards are
-    all equal to zero or there are none.
-    """
-    finite = np.concatenate([r[np.isfinite(r)] for r in rewards]) if rewards else np.zeros(0)
-    if finite.size == 0:
-        return 1.0
-    unit = max(float(finite.std()), _UNIT_FLOOR * float(np.abs(finite).mean()))
-    return unit if unit > 0 else 1.0
 
 
 # ------------------------------------------------------------ cell rewards

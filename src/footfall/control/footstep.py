@@ -13,32 +13,27 @@ reward (see :meth:`FootstepPlanner.plan` for the approximation).
 
 from __future__ import annotations
 
-import hashlib
 import math
 from dataclasses import dataclass, replace
-from functools import lru_cache
 from typing import Callable
 
 import numpy as np
 
-from footfall.features.candidates import lattice, reachable_footholds, reaches
-from footfall.control.body_path import BodyPath, RewardFor, grid_spacing, grid_values, \
-    reward_key, reward_unit, terrain_grids
+from footfall.control.body_path import BodyPath, RewardFor, grid_spacing, grid_values, terrain_grids
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.features.patches import foothold_patches
-from footfall.features.pose_features import pose_features
 from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG, RobotDescription
-from footfall.features.reward import LinearReward, default_reward
-from footfall.features.scoring import ScoreGrid, score_grid
-from footfall.core.state import RobotState, feet_pitch, nominal_state
+from footfall.core.state import RobotState, feet_pitch
+from footfall.features.candidates import lattice, reachable_footholds, reaches
+from footfall.features.dense import ScoreGrid
+from footfall.features.family import Candidates
+from footfall.features.reward import default_reward
+from footfall.features.spread import reward_spread, spread_key
 
 Judge = Callable[[HeightMap, RobotState, np.ndarray], np.ndarray]  # (map, state, footholds
 # (n, 3) [m]) -> value (n,), higher is better: a foothold judge, e.g. SyntheticExpert.values
 
 GRID_YAW = 0.0  # [rad] heading the planner's dense reward grids are computed for (+x)
-REFERENCE_MODULE = ("rocky", 0.5, 0)  # kind, difficulty, seed of the terrain module on which a
-# reward's spread is measured (see reward_spread): rough enough that every feature varies
 
 
 class NoFootholdError(FootfallError):
@@ -153,58 +148,6 @@ def _diverse_best(score: np.ndarray, points: np.ndarray, count: int, separation:
     return np.array(chosen, dtype=np.int64)
 
 
-@lru_cache(maxsize=1)
-def _reference_module() -> HeightMap:
-    from footfall.terrain import make_module
-
-    return make_module(*REFERENCE_MODULE)
-
-
-def reward_spread(reward: LinearReward) -> float:
-    """The spread of a reward: the unit in which its differences compare to another reward's.
-
-    The terrain part's standard deviation, scored densely (5 mm lattice,
-    heading +x) over :data:`REFERENCE_MODULE`, combined in quadrature with the
-    pose part's standard deviation over reference candidate sets (the robot in
-    its default stance at the module's centre, each leg swinging in turn, its
-    whole candidate set F); the pose part counts only for rewards that have
-    pose weights. A learned reward's pose part can vary over F far more than
-    its terrain part, and the path bias must hold against the whole of it.
-    See :func:`footfall.control.body_path.reward_unit`. Cached by the reward's
-    content (terrain part and pose weights), so equal rewards get the very same number.
-    """
-    key = _spread_key(reward)
-    if key not in _SPREADS:
-        module = _reference_module()
-        grid = score_grid(module, reward, spacing=0.005, yaw=GRID_YAW)
-        spread = reward_unit([np.asarray(grid.reward)[np.asarray(grid.valid)]])
-        if np.any(reward.pose_weights != 0):
-            pose = np.concatenate([pose_features(module, state, reachable_footholds(
-                module, state, spacing=0.005)) @ reward.pose_weights
-                for state in _reference_states()])
-            spread = math.hypot(spread, float(np.nanstd(pose)))
-        _SPREADS[key] = spread
-    return _SPREADS[key]
-
-
-def _spread_key(reward: LinearReward) -> str:
-    """Digest of everything that sets a reward's spread: its terrain part and its pose weights."""
-    pose = np.ascontiguousarray(reward.pose_weights, dtype=np.float64).tobytes()
-    return reward_key(reward) + hashlib.sha256(pose).hexdigest()
-
-
-@lru_cache(maxsize=1)
-def _reference_states() -> tuple[RobotState, ...]:
-    """The robot in its default stance at the reference module's centre, each leg swinging."""
-    module = _reference_module()
-    x0, x1, y0, y1 = module.bounds
-    centre = (0.5 * (x0 + x1), 0.5 * (y0 + y1))
-    return tuple(nominal_state(module, centre, GRID_YAW, leg) for leg in LEG_NAMES)
-
-
-_SPREADS: dict[str, float] = {}  # _spread_key -> spread (a few rewards per process)
-
-
 class FootstepPlanner:
     """Plans footholds along a body path with a reward function.
 
@@ -245,7 +188,7 @@ class FootstepPlanner:
                 raise FootfallError(f"the reward grids must cover every leg at spacing "
                                     f"{config.spacing} m")
         self.grids_ = dict(grids)
-        self._posed = {name: bool(np.any(r.pose_weights != 0)) for name, r in self.rewards_.items()}
+        self._posed = {name: r.has_state_part for name, r in self.rewards_.items()}
         self.bias_ = self._bias_weights()
 
     def _bias_weights(self) -> dict[str, float]:
@@ -257,8 +200,8 @@ class FootstepPlanner:
         by itself); other rewards are scaled by their cached spreads.
         """
         default = default_reward(self.rewards_[LEG_NAMES[0]].config)
-        default_key = _spread_key(default)
-        return {name: (self.config.bias_weight if _spread_key(r) == default_key else
+        default_key = spread_key(default)
+        return {name: (self.config.bias_weight if spread_key(r) == default_key else
                        self.config.bias_weight * (reward_spread(r) / reward_spread(default)))
                 for name, r in self.rewards_.items()}
 
@@ -268,16 +211,16 @@ class FootstepPlanner:
         if abs(_wrap(yaw - GRID_YAW)) <= self.config.heading_tolerance:
             return grid_values(self.grids_[leg], footholds[:, :2], self.config.spacing)
         reward = self.rewards_[leg]
-        patches = foothold_patches(self.hmap, footholds, yaw, self.robot.leg(leg).mirrored,
-                                   reward.config)
-        return reward.terrain_reward(patches)
+        return reward.terrain_reward(Candidates(self.hmap, footholds, yaw,
+                                                self.robot.leg(leg).mirrored, reward.config))
 
     def _pose(self, state: RobotState, footholds: np.ndarray) -> np.ndarray:
-        """Pose part of the swing leg's reward (n,) for the state (0 if it has no pose weights)."""
+        """State part of the swing leg's reward (n,) for the state (0 if it has no pose weights)."""
         if not self._posed[state.swing_leg] or footholds.shape[0] == 0:
             return np.zeros(footholds.shape[0])
-        return pose_features(self.hmap, state, footholds, self.robot) \
-            @ self.rewards_[state.swing_leg].pose_weights
+        reward = self.rewards_[state.swing_leg]
+        return reward.state_reward(Candidates.of_state(self.hmap, state, footholds, reward.config,
+                                                       self.robot))
 
     def _near(self, state: RobotState, target: np.ndarray) -> np.ndarray:
         """Candidates (m, 3) of the swing leg within lookahead_radius of target (2,) [m].

@@ -16,13 +16,13 @@ import tracemalloc
 
 import numpy as np
 
-from footfall.features.patches import foothold_patches
-from footfall.features.reward import LinearReward
 from footfall.features.config import FeatureConfig
-from footfall.features.scoring import score_grid
-from footfall.features.templates import TemplateLibrary, bandwidth_for_rms, extract_templates
+from footfall.features.dense import score_grid
+from footfall.features.family import Candidates
+from footfall.features.reward import LinearReward
+from footfall.features.templates import TemplateFeatures, TemplateLibrary, extract_templates
+from footfall.features.terrain_features import TerrainFeatures, feature_names
 from footfall.terrain import make_board
-from footfall.features.terrain_features import feature_names
 
 TEMPLATES_PER_SCALE = 20  # the issue's benchmark: 60 templates in all
 BENCH_TEMPLATE_RMS = 0.005  # [m] RMS height difference at which a match scores exp(-1)
@@ -34,13 +34,12 @@ def benchmark_reward(board, config: FeatureConfig, rng: np.random.Generator) -> 
     lib = extract_templates(board, pos, 0.0, False, config)
     keep = tuple(np.arange(TEMPLATES_PER_SCALE) for _ in lib.templates)
     lib = lib.subset(keep)
-    return LinearReward(
-        config=config,
-        terrain_weights=rng.normal(size=len(feature_names(config))),
-        library=lib,
-        template_weights=tuple(rng.normal(size=c) for c in lib.counts),
-        bandwidths=tuple(bandwidth_for_rms(BENCH_TEMPLATE_RMS, g) for g in config.grids),
-        name="benchmark")
+    terrain = TerrainFeatures(config)
+    templates = TemplateFeatures(config, lib).with_rms((BENCH_TEMPLATE_RMS,) * len(config.scales))
+    terrain_weights = rng.normal(size=len(terrain.columns()))
+    template_weights = np.concatenate([rng.normal(size=c) for c in lib.counts])
+    return LinearReward((terrain, templates), (terrain_weights, template_weights), config,
+                        "benchmark")
 
 
 def _flops(n: int, config: FeatureConfig, lib: TemplateLibrary) -> float:
@@ -86,18 +85,19 @@ def bench_scoring(repeats: int = 7, baseline_sample: int = 300, seed: int = 0) -
     loop_values = np.empty(sample.size)
     t0 = time.perf_counter()
     for k, idx in enumerate(sample):  # the slow reference: one candidate per iteration
-        fp = foothold_patches(board, pts[idx:idx + 1], 0.0, False, config)
-        loop_values[k] = reward.terrain_reward(fp)[0]
+        loop_values[k] = reward.terrain_reward(
+            Candidates(board, pts[idx:idx + 1], 0.0, False, config))[0]
     per_candidate = (time.perf_counter() - t0) / sample.size
     loop_total = per_candidate * pts.shape[0]
     dense_values = grid64.reward.ravel()[sample]
     both = np.isfinite(loop_values) & np.isfinite(dense_values)
-    flops = _flops(pts.shape[0], config, reward.library)
+    library = reward.family("templates")[0].library
+    flops = _flops(pts.shape[0], config, library)
     return {
         "board": "flat | rocky 0.5 | flat, 1.83 x 0.61 m at 1 mm",
         "candidates": int(pts.shape[0]),
         "spacing_m": 0.005,
-        "templates": list(reward.library.counts),
+        "templates": list(library.counts),
         "terrain_features": len(feature_names(config)),
         "template_resolution_m": config.template_resolution,
         "dense_seconds_median": dense,
@@ -153,10 +153,10 @@ def bench_learning(n_demos: int = 100, library_size: int = 1000, seed: int = 0) 
     from sklearn.exceptions import ConvergenceWarning
     from sklearn.linear_model import LogisticRegressionCV
 
-    from footfall.learning.dataset import build_library, make_example, stack, training_rows
-    from footfall.expert.synthetic import SyntheticExpert
-    from footfall.learning.ranker import FootholdRanker, grouped_folds, pairwise_transform
     from footfall.expert.collect import collect_demonstrations
+    from footfall.expert.synthetic import SyntheticExpert
+    from footfall.learning.dataset import create_families, make_example, stack, training_rows
+    from footfall.learning.ranker import FootholdRanker, grouped_folds, pairwise_transform
 
     rng = np.random.default_rng(seed)
     config = FeatureConfig()
@@ -169,13 +169,15 @@ def bench_learning(n_demos: int = 100, library_size: int = 1000, seed: int = 0) 
     collect = time.perf_counter() - t0
     hmaps = [maps[d.terrain_hash] for d in demos]
     t0 = time.perf_counter()
-    library = build_library(hmaps, [d.state for d in demos], [d.candidates for d in demos],
-                            [d.chosen for d in demos], config, rng, size=library_size)
-    examples = [make_example(h, d.state, d.candidates, d.chosen, library, config,
+    families = tuple(f.fit(hmaps, [d.state for d in demos], [d.candidates for d in demos],
+                           [d.chosen for d in demos], rng, library_size=library_size,
+                           bandwidth_rms=(0.004,) * len(config.scales))
+                     for f in create_families("both", config))
+    library = families[1].library
+    examples = [make_example(h, d.state, d.candidates, d.chosen, families, config,
                              training_rows(d.candidates.shape[0], d.chosen, 100, rng))
                 for h, d in zip(hmaps, demos)]
-    X, y, groups = stack(examples, "both",
-                         tuple(bandwidth_for_rms(r, g) for r, g in zip((0.004,) * 3, config.grids)))
+    X, y, groups = stack(examples, families)
     features = time.perf_counter() - t0
 
     tracemalloc.start()
@@ -244,10 +246,10 @@ def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0)
     standing on the rocky module, and on the flat start module. Also a run
     on a flat board, for the walking speed on flat ground.
     """
-    from footfall.features.reward import default_reward
-    from footfall.sim.simulation import Simulation, bench_stepping
     from footfall.core.state import nominal_state
+    from footfall.features.reward import default_reward
     from footfall.sim.episode import walk
+    from footfall.sim.simulation import Simulation, bench_stepping
 
     reward = default_reward()
     out: dict = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version()}}
@@ -306,11 +308,11 @@ def bench_expert(states: int = 16, repeats: int = 3, seed: int = 0) -> dict:
     default one, alternately, ``repeats`` times; the best time of each
     counts. Medians over the states [ms] and their ratio.
     """
-    from footfall.features.candidates import reachable_footholds
     from footfall.control.footstep import FootstepConfig
-    from footfall.expert.synthetic import SyntheticExpert, walking_expert
     from footfall.core.robot import LEG_NAMES, LITTLEDOG
     from footfall.core.state import nominal_state
+    from footfall.expert.synthetic import SyntheticExpert, walking_expert
+    from footfall.features.candidates import reachable_footholds
 
     lead = FootstepConfig().lead
     judges = {"baseline": SyntheticExpert(walking_expert(lead, placement_error=0.0)).values,

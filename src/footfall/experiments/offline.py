@@ -20,7 +20,7 @@ from typing import Callable
 
 import numpy as np
 
-from footfall.learning.dataset import FEATURE_SETS
+from footfall.features.family import PAPER_FEATURE_SETS
 from footfall.core.errors import FootfallError
 from footfall.learning.evaluation import expert_values, rank_scores
 from footfall.core.stats import bootstrap_ci
@@ -30,7 +30,7 @@ from footfall.learning.ranker import LEARNERS
 from footfall.learning.model import FootholdModel
 from footfall.plots.maps import save_kept_templates, save_score_maps
 from footfall.plots.relief import save_relief
-from footfall.features.scoring import score_grid
+from footfall.features.dense import score_grid
 from footfall.data.store import DemoStore
 from footfall.terrain import make_board
 from footfall.learning.train import TrainingDemo, learn_model
@@ -48,7 +48,7 @@ class OfflineConfig:
     n_train: int = 100  # demonstrations to learn from (the paper had about 100)
     n_test_modules: int = 40  # demonstrations on unseen modules of the training kinds
     n_test_kind: int = 30  # demonstrations on the unseen kind
-    feature_sets: tuple[str, ...] = FEATURE_SETS
+    feature_sets: tuple[str, ...] = PAPER_FEATURE_SETS
     learners: tuple[str, ...] = LEARNERS
     library_size: int = 1000
     l1_min_ablation: bool = True  # also learn L1 with lambda at the smallest CV error ("l1-min")
@@ -117,7 +117,7 @@ def run_offline(out: Path, config: OfflineConfig = OfflineConfig(),
             # The bandwidths are chosen once per feature set, by the L1 learner's
             # cross-validation, and reused by the comparison learners.
             if rms is None and feature_set != "terrain":
-                rms = tuple(np.mean([f.info["bandwidth_rms_m"] for f in model.functions.values()],
+                rms = tuple(np.mean([f.info.get("bandwidth_rms_m") for f in model.functions.values()],
                                     axis=0))
             models[(feature_set, label)] = model
             model.save(out / "models" / f"{feature_set}-{label}.npz")

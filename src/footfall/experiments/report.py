@@ -36,7 +36,7 @@ def _figures(out: Path, results: dict, maps: dict, models: dict, config, log) ->
 
     from footfall.plots.maps import save_kept_templates, save_score_maps
     from footfall.plots.relief import save_relief
-    from footfall.features.scoring import score_grid
+    from footfall.features.dense import score_grid
 
     figs = []
     save_relief(maps["test"], out / "test-board.png", title="the test board (never trained on)")

@@ -45,7 +45,7 @@ from typing import Callable
 
 import numpy as np
 
-from footfall.learning.dataset import FEATURE_SETS
+from footfall.features.family import PAPER_FEATURE_SETS
 from footfall.core.errors import FootfallError
 from footfall.expert.synthetic import ExpertConfig, walking_expert
 from footfall.core.heightmap import HeightMap
@@ -391,21 +391,21 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = Reproduce
 
         # 3. The three ranking functions, from the same corrections.
         models = {}
-        for fs in FEATURE_SETS:
+        for fs in PAPER_FEATURE_SETS:
             log(f"learning {fs} (L1, lambda at the smallest CV error)")
             models[fs] = _learn(out / "models" / f"{fs}.npz", demos, by_hash, fs, config,
                                 config.final_bandwidth_rms, log)
         results["table1"] = {fs: m.templates_kept() for fs, m in models.items() if fs != "terrain"}
         results["models"] = {fs: {g: {"lambda": f.info["lambda"], "cv_error": f.info["cv_error"],
                                       "n_nonzero": f.info["n_nonzero"],
-                                      "bandwidth_rms_m": f.info["bandwidth_rms_m"]}
+                                      "bandwidth_rms_m": f.info.get("bandwidth_rms_m")}
                                   for g, f in m.functions.items()} for fs, m in models.items()}
 
         # 4. Walking evaluation: the same seeds for every function (paired runs).
         seeds = [1000 * config.seed + 5000 + k for k in range(config.eval_runs)]
-        model_file = {fs: str(out / "models" / f"{fs}.npz") for fs in FEATURE_SETS}
+        model_file = {fs: str(out / "models" / f"{fs}.npz") for fs in PAPER_FEATURE_SETS}
         jobs = [_Job(f"eval/{fs}/s{s}", str(paths["test"]), model_file[fs], s, walk_cfg)
-                for fs in FEATURE_SETS for s in seeds]
+                for fs in PAPER_FEATURE_SETS for s in seeds]
         jobs += [_Job(f"eval/flat/s{s}", str(paths["flat"]), model_file[ROBOT_FEATURE_SET], s,
                       walk_cfg) for s in seeds]
         # References on the same board and seeds: the expert choosing every foothold itself
@@ -414,18 +414,18 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = Reproduce
                       expert=config.expert, judge=True) for s in seeds]
         jobs += [_Job(f"eval/default/s{s}", str(paths["test"]), None, s, walk_cfg) for s in seeds]
         _run_jobs(jobs, store, by_hash, processes, "evaluation runs", on_run, log)
-        table2 = {fs: _summary(store, f"eval/{fs}/") for fs in (*FEATURE_SETS, *TABLE2_REFERENCES)}
+        table2 = {fs: _summary(store, f"eval/{fs}/") for fs in (*PAPER_FEATURE_SETS, *TABLE2_REFERENCES)}
         results["table2"] = table2
         results["slips_mm"] = {fs: _slips(store, f"eval/{fs}/") for fs in table2}
         sweep = {}
-        if all(table2[fs]["successes"] == table2[fs]["runs"] for fs in FEATURE_SETS):
+        if all(table2[fs]["successes"] == table2[fs]["runs"] for fs in PAPER_FEATURE_SETS):
             sseeds = [1000 * config.seed + 7000 + k for k in range(config.sweep_runs)]
             for d in config.sweep_difficulties:
                 jobs = [_Job(f"sweep/{d:g}/{fs}/s{s}", str(paths[f"sweep{d:g}"]), model_file[fs],
-                             s, walk_cfg) for fs in FEATURE_SETS for s in sseeds]
+                             s, walk_cfg) for fs in PAPER_FEATURE_SETS for s in sseeds]
                 _run_jobs(jobs, store, by_hash, processes, f"sweep {d:g} runs", on_run, log)
                 sweep[f"{d:g}"] = {fs: _summary(store, f"sweep/{d:g}/{fs}/")
-                                   for fs in FEATURE_SETS}
+                                   for fs in PAPER_FEATURE_SETS}
         results["sweep"] = sweep
         crossed = [r["key"] for r in store.runs(key_prefix=f"eval/{ROBOT_FEATURE_SET}/")
                    if r["result"]["success"]]
@@ -492,7 +492,7 @@ def _choice_quality(store: DemoStore, maps: dict[str, HeightMap], config: Reprod
     expert = SyntheticExpert(config.expert)
     log("the expert's verdict on the choices of the test-board runs")
     out = {}
-    for k in (*FEATURE_SETS, "expert", "default"):
+    for k in (*PAPER_FEATURE_SETS, "expert", "default"):
         parts = []
         for row in _runs_by_key(store, f"eval/{k}/"):
             run = store.run(row["id"])

@@ -12,11 +12,11 @@ import numpy as np
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.core.kinematics import inverse_kinematics, world_to_body, body_to_world
-from footfall.features.patches import patch_coverage
+from footfall.core.kinematics import body_to_world, inverse_kinematics, world_to_body
 from footfall.core.robot import LITTLEDOG, RobotDescription
-from footfall.features.config import FeatureConfig
 from footfall.core.state import RobotState
+from footfall.features.config import FeatureConfig
+from footfall.features.patches import patch_coverage
 
 DEFAULT_SPACING = 0.005  # [m] distance between neighbouring candidate footholds
 

@@ -11,9 +11,9 @@ import numpy as np
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.features.patches import foothold_patches
 from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.features.config import FeatureConfig
+from footfall.features.patches import foothold_patches
 from footfall.features.terrain_features import feature_names, terrain_features_from_patches
 
 

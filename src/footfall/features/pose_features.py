@@ -16,13 +16,24 @@ for height it does not need. Map cells without data count as no obstacle.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import ClassVar
+
 import numpy as np
 
+from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.core.kinematics import inverse_kinematics, joint_limit_margin, knee_position, \
-    rotation_matrix, world_to_body
+from footfall.core.kinematics import (
+    inverse_kinematics,
+    joint_limit_margin,
+    knee_position,
+    rotation_matrix,
+    world_to_body,
+)
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState
+from footfall.features.config import FeatureConfig
+from footfall.features.family import Candidates, FeatureFamily, register_family
 
 CLEARANCE_CAP = 0.05  # [m] clearances above this count as fully clear
 BODY_CLEARANCE_CAP = 0.10  # [m] body clearances above this count as fully clear
@@ -201,3 +212,24 @@ def pose_features(hmap: HeightMap, state: RobotState, footholds: np.ndarray,
     out["swing_obstacle"] = np.maximum(path_top - np.maximum(f[:, 2], feet[s, 2]), 0.0)
 
     return np.column_stack([out[name] for name in POSE_FEATURE_NAMES])
+
+
+@register_family
+@dataclass(frozen=True, eq=False)
+class PoseFeatures(FeatureFamily):
+    """The 26 pose features as a feature family: they need the robot's state (paper §V)."""
+
+    name: ClassVar[str] = "pose"
+    needs_state: ClassVar[bool] = True
+
+    @classmethod
+    def create(cls, config: FeatureConfig, robot: RobotDescription = LITTLEDOG) -> PoseFeatures:
+        return cls()
+
+    def columns(self) -> tuple[str, ...]:
+        return POSE_FEATURE_NAMES
+
+    def compute(self, c: Candidates) -> np.ndarray:
+        if c.state is None:
+            raise FootfallError("pose features need the robot's state")
+        return pose_features(c.hmap, c.state, c.footholds, c.robot)

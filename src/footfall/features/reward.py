@@ -1,95 +1,161 @@
-"""A linear foothold reward R(f) = w^T x over named features (paper Eq. 1).
+"""A linear foothold reward R(f) = w^T x over the columns of feature families (paper Eq. 1).
 
-The features of a foothold are the 27 terrain features, the template
-features of a library (Eq. 4) and the pose features of the robot's state.
-Learned ranking functions and the hand-tuned default are both a
-:class:`LinearReward`; the standardisation a learner applies is folded into
-the weights, so a reward is always evaluated on raw features.
+A reward holds feature families (terrain features, templates, pose features,
+or any registered family: :mod:`footfall.features.family`) and one weight per
+column of each, on the raw features. Learned ranking functions and the
+hand-tuned default are both a :class:`LinearReward`; the standardisation a
+learner applies is folded into the weights. The *terrain part* sums the
+families that read only the terrain (they can be scored densely over a whole
+board); the *state part* sums those that need the robot's state (pose).
 """
 
 from __future__ import annotations
 
+import hashlib
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Mapping
 
 import numpy as np
 
 from footfall.core.errors import FootfallError
-from footfall.features.patches import FootholdPatches
-from footfall.features.pose_features import POSE_FEATURE_NAMES
 from footfall.features.config import FeatureConfig
-from footfall.features.templates import TemplateLibrary, bandwidth_for_rms
-from footfall.features.terrain_features import feature_names, terrain_features_from_patches
+from footfall.features.family import Candidates, FeatureFamily
+from footfall.features.templates import TemplateFeatures, TemplateLibrary
+from footfall.features.terrain_features import TerrainFeatures
 
 
 @dataclass(frozen=True, eq=False)
 class LinearReward:
-    """Weights over terrain, template and pose features.
+    """Weights over the columns of feature families.
 
-    ``terrain_weights`` follow :func:`footfall.features.terrain_features.feature_names`,
-    ``pose_weights`` follow :data:`footfall.features.pose_features.POSE_FEATURE_NAMES`,
-    ``template_weights[s]`` the templates of scale s in ``library``;
-    ``bandwidths[s]`` is the RBF bandwidth h [1/m^2] of scale s.
+    ``weights[k]`` (len(families[k].columns()),) weighs the columns of
+    ``families[k]``, in their order; a column's full name is
+    ``"<family>.<column>"`` (e.g. ``"terrain.small.std"``, ``"pose.progress"``).
     """
 
+    families: tuple[FeatureFamily, ...] = ()
+    weights: tuple[np.ndarray, ...] = ()  # per family (k_f,) reward per unit of each feature
     config: FeatureConfig = field(default_factory=FeatureConfig)
-    terrain_weights: np.ndarray = field(default_factory=lambda: np.zeros(27))  # (27,)
-    pose_weights: np.ndarray = field(default_factory=lambda: np.zeros(len(POSE_FEATURE_NAMES)))
-    library: TemplateLibrary | None = None
-    template_weights: tuple[np.ndarray, ...] = ()  # per scale (T_s,)
-    bandwidths: tuple[float, ...] = ()  # per scale [1/m^2]
     name: str = "reward"
 
     def __post_init__(self) -> None:
-        n_terrain = len(feature_names(self.config))
-        tw = np.asarray(self.terrain_weights, dtype=np.float64)
-        pw = np.asarray(self.pose_weights, dtype=np.float64)
-        if tw.shape != (n_terrain,):
-            raise FootfallError(f"terrain weights must have shape ({n_terrain},), got {tw.shape}")
-        if pw.shape != (len(POSE_FEATURE_NAMES),):
-            raise FootfallError(f"pose weights must have shape ({len(POSE_FEATURE_NAMES)},)")
-        if self.library is None:
-            object.__setattr__(self, "template_weights", ())
+        families = tuple(self.families)
+        if len(self.weights) != len(families):
+            raise FootfallError("a reward needs one weight vector per feature family")
+        names = [f.name for f in families]
+        if len(set(names)) != len(names):
+            raise FootfallError(f"a reward holds each feature family once, got {names}")
+        weights = []
+        for family, w in zip(families, self.weights):
+            if not isinstance(family, FeatureFamily):
+                raise FootfallError(f"not a feature family: {type(family).__name__}")
+            if getattr(family, "config", self.config) != self.config:
+                raise FootfallError(f"the {family.name} features and the reward use different "
+                                    f"feature settings")
+            try:
+                w = np.array(w, dtype=np.float64)
+            except (TypeError, ValueError):
+                raise FootfallError(f"{family.name} weights must be numbers") from None
+            n = len(family.columns())
+            if w.shape != (n,):
+                raise FootfallError(f"{family.name} weights must have shape ({n},), got {w.shape}")
+            if not np.isfinite(w).all():
+                raise FootfallError("reward weights must be finite")
+            w.setflags(write=False)
+            weights.append(w)
+        object.__setattr__(self, "families", families)
+        object.__setattr__(self, "weights", tuple(weights))
+
+    @classmethod
+    def from_names(cls, families: Sequence[FeatureFamily], weights: Mapping[str, float],
+                   config: FeatureConfig | None = None, name: str = "reward") -> LinearReward:
+        """A reward from weights by full column name (``"family.column"``); others are 0."""
+        config = config or FeatureConfig()
+        vectors = [weights_from_names({k[len(f.name) + 1:]: v for k, v in weights.items()
+                                       if k.startswith(f.name + ".")}, f.columns())
+                   for f in families]
+        known = {f"{f.name}.{c}" for f in families for c in f.columns()}
+        unknown = set(weights) - known
+        if unknown:
+            raise FootfallError(f"unknown feature name(s): {', '.join(sorted(unknown))}")
+        return cls(tuple(families), tuple(vectors), config, name)
+
+    # ------------------------------------------------------------------ parts
+    def parts(self, state: bool | None = None) -> list[tuple[FeatureFamily, np.ndarray]]:
+        """(family, weights) pairs with a non-zero weight; ``state`` picks the state or terrain part."""
+        return [(f, w) for f, w in zip(self.families, self.weights)
+                if np.any(w != 0) and (state is None or f.needs_state == state)]
+
+    def family(self, name: str) -> tuple[FeatureFamily, np.ndarray] | None:
+        """The family called ``name`` with its weights, or None."""
+        for f, w in zip(self.families, self.weights):
+            if f.name == name:
+                return f, w
+        return None
+
+    def with_weights(self, family: FeatureFamily, weights: np.ndarray, name: str | None = None
+                     ) -> LinearReward:
+        """This reward with ``family``'s weights replaced (the family added if it is not here)."""
+        fams, ws = list(self.families), list(self.weights)
+        for k, f in enumerate(fams):
+            if f.name == family.name:
+                fams[k], ws[k] = family, weights
+                break
         else:
-            if self.library.config != self.config:
-                raise FootfallError("template library and reward use different feature settings")
-            tws = tuple(np.asarray(w, dtype=np.float64) for w in self.template_weights)
-            if tuple(w.shape for w in tws) != tuple((c,) for c in self.library.counts):
-                raise FootfallError("template weights must match the library's template counts")
-            if len(self.bandwidths) != len(self.config.scales) or min(self.bandwidths) <= 0:
-                raise FootfallError("need one bandwidth h > 0 per scale")
-            object.__setattr__(self, "template_weights", tws)
-            object.__setattr__(self, "bandwidths", tuple(float(h) for h in self.bandwidths))
-        if not (np.isfinite(tw).all() and np.isfinite(pw).all()
-                and all(np.isfinite(w).all() for w in self.template_weights)):
-            raise FootfallError("reward weights must be finite")
-        object.__setattr__(self, "terrain_weights", tw)
-        object.__setattr__(self, "pose_weights", pw)
+            fams.append(family)
+            ws.append(weights)
+        return LinearReward(tuple(fams), tuple(ws), self.config, name or self.name)
+
+    def scaled(self, factor: float, state: bool | None = None, name: str | None = None
+               ) -> LinearReward:
+        """Every weight (or those of the terrain or the state part) times ``factor``."""
+        ws = tuple(w * factor if state is None or f.needs_state == state else w
+                   for f, w in zip(self.families, self.weights))
+        return LinearReward(self.families, ws, self.config, name or self.name)
+
+    @property
+    def has_state_part(self) -> bool:
+        """Whether a family that needs the robot's state carries weight (pose features)."""
+        return bool(self.parts(state=True))
 
     @property
     def has_templates(self) -> bool:
         """Whether any template carries weight."""
-        return self.library is not None and any(np.any(w != 0) for w in self.template_weights)
+        return any(isinstance(f, TemplateFeatures) for f, _ in self.parts())
 
-    def terrain_reward(self, patches: FootholdPatches) -> np.ndarray:
-        """Terrain part of the reward (terrain features + templates) of footholds, (n,).
+    # ----------------------------------------------------------------- values
+    def terrain_reward(self, c: Candidates) -> np.ndarray:
+        """The terrain part (families that read only the terrain) of candidates, (n,).
 
-        Footholds that are not valid (no data, too little coverage) get -inf.
+        Footholds that are not valid (no data, too little patch coverage) get -inf.
         """
-        r = terrain_features_from_patches(patches.relative, self.config) @ self.terrain_weights
-        if self.library is not None:
-            x = self.library.features(patches.relative, self.bandwidths)
-            r = r + x @ np.concatenate(self.template_weights)
-        return np.where(patches.valid, r, -np.inf)
+        return np.where(c.patches.valid, self._sum(c, state=False), -np.inf)
+
+    def state_reward(self, c: Candidates) -> np.ndarray:
+        """The state part (families that need ``c.state``) of candidates, (n,); 0 without one."""
+        return self._sum(c, state=True)
+
+    def _sum(self, c: Candidates, state: bool) -> np.ndarray:
+        values = [family.compute(c) @ w for family, w in self.parts(state=state)]
+        return sum(values[1:], values[0]) if values else np.zeros(c.n)
 
     def named_weights(self) -> dict[str, float]:
-        """Every non-zero weight by feature name."""
-        names = list(feature_names(self.config)) + list(POSE_FEATURE_NAMES)
-        values = list(self.terrain_weights) + list(self.pose_weights)
-        if self.library is not None:
-            names += list(self.library.names())
-            values += list(np.concatenate(self.template_weights))
-        return {n: float(v) for n, v in zip(names, values) if v != 0}
+        """Every non-zero weight by full column name."""
+        return {f"{f.name}.{n}": float(v) for f, w in zip(self.families, self.weights)
+                for n, v in zip(f.columns(), w) if v != 0}
+
+    def key(self, state: bool) -> str:
+        """Digest of the terrain part (``state`` False) or the state part: equal parts, equal keys.
+
+        Families without weight do not count, so a reward with zero pose
+        weights has the state key of one without pose features.
+        """
+        digest = hashlib.sha256(repr(self.config.to_dict()).encode())
+        for family, w in self.parts(state=state):
+            digest.update(family.name.encode())
+            digest.update(family.digest().encode())
+            digest.update(np.ascontiguousarray(w).tobytes())
+        return digest.hexdigest()
 
 
 def weights_from_names(weights: Mapping[str, float], names: tuple[str, ...]) -> np.ndarray:
@@ -135,19 +201,22 @@ _DEFAULT_TERRAIN_WEIGHTS = {
 }
 _DEFAULT_TEMPLATE_WEIGHTS = {"flat": 0.0, "mild_hollow": 1.0, "deep_hole": -3.0}
 _DEFAULT_TEMPLATE_RMS = 0.004  # [m] RMS height difference at which a template match is exp(-1)
-_DEFAULT_POSE_WEIGHTS: dict[str, float] = {}
 
 
 def default_reward(config: FeatureConfig | None = None) -> LinearReward:
-    """The hand-tuned foothold reward footfall walks with before it has learned one."""
+    """The hand-tuned foothold reward footfall walks with before it has learned one.
+
+    Terrain features and the Fig. 2 templates; no pose features (the footstep
+    planner's path bias does their job).
+    """
     config = config or FeatureConfig()
     library, names = analytic_templates(config)
     per_template = np.array([_DEFAULT_TEMPLATE_WEIGHTS[n] for n in names])
+    terrain = TerrainFeatures(config)
+    templates = TemplateFeatures(config, library).with_rms(
+        (_DEFAULT_TEMPLATE_RMS,) * len(config.scales))
     return LinearReward(
-        config=config,
-        terrain_weights=weights_from_names(_DEFAULT_TERRAIN_WEIGHTS, feature_names(config)),
-        pose_weights=weights_from_names(_DEFAULT_POSE_WEIGHTS, POSE_FEATURE_NAMES),
-        library=library,
-        template_weights=tuple(per_template.copy() for _ in config.scales),
-        bandwidths=tuple(bandwidth_for_rms(_DEFAULT_TEMPLATE_RMS, g) for g in config.grids),
-        name="hand-tuned default")
+        families=(templates, terrain),
+        weights=(np.concatenate([per_template for _ in config.scales]),
+                 weights_from_names(_DEFAULT_TERRAIN_WEIGHTS, terrain.columns())),
+        config=config, name="hand-tuned default")

@@ -19,16 +19,20 @@ neither zeroes nor NaNs the feature; a candidate whose coverage is below
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
-from typing import Any
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any, ClassVar
 
 import numpy as np
 
 from footfall.core.errors import FootfallError
 from footfall.core.files import load_npz, save_npz
 from footfall.core.heightmap import HeightMap, PatchGrid
-from footfall.features.patches import foothold_patches
+from footfall.core.robot import LITTLEDOG, RobotDescription
+from footfall.core.state import RobotState
 from footfall.features.config import FeatureConfig
+from footfall.features.family import Candidates, DenseTerms, FeatureFamily, register_family
+from footfall.features.patches import foothold_patches
 
 FORMAT = "footfall.templates"
 VERSION = 1
@@ -191,3 +195,213 @@ def merge_libraries(libraries: list[TemplateLibrary]) -> TemplateLibrary:
         tuple(np.concatenate([lib.templates[s] for lib in libraries]) for s in range(len(config.scales))),
         tuple(np.concatenate([lib.sources[s] for lib in libraries]) for s in range(len(config.scales))),
         hashes)
+
+
+DEFAULT_LIBRARY_SIZE = 1000  # templates over the three scales before L1 selection (the paper had 946)
+BANDWIDTH_RMS_GRID = (0.002, 0.004, 0.008, 0.016)  # [m] shared RMS differences the search tries first
+
+
+def library_from_demonstrations(maps: Sequence[HeightMap], states: Sequence[RobotState],
+                                candidates: Sequence[np.ndarray], chosen: Sequence[int],
+                                config: FeatureConfig, rng: np.random.Generator,
+                                size: int = DEFAULT_LIBRARY_SIZE,
+                                robot: RobotDescription = LITTLEDOG) -> TemplateLibrary:
+    """A template library from training demonstrations (paper §III-A).
+
+    Every chosen foothold, then a random sample of the other reachable ones
+    up to ``size / 3`` per scale (so more than ``size`` templates when there
+    are more demonstrations than that); right-leg footholds are mirrored.
+    Footholds whose patch on a scale is incomplete give no template there.
+    ``maps[k]`` is the terrain of demonstration k.
+    """
+    if not states:
+        raise FootfallError("no demonstrations to build a template library from")
+    per_scale = max(1, size // len(config.scales))
+    n_demo = len(states)
+    chosen_rows = [(k, int(chosen[k])) for k in range(n_demo)]
+    sizes = np.array([c.shape[0] for c in candidates])
+    extra = max(0, per_scale - n_demo)
+    # Sample "other" candidates uniformly over all demonstrations, without a
+    # Python loop over candidates: draw flat indices and map them back.
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    flat = rng.choice(offsets[-1], size=min(offsets[-1], extra + n_demo), replace=False)
+    demo = np.searchsorted(offsets, flat, side="right") - 1
+    row = flat - offsets[demo]
+    keep = row != np.asarray(chosen)[demo]
+    picks = chosen_rows + list(zip(demo[keep][:extra].tolist(), row[keep][:extra].tolist()))
+    libraries = []
+    by_map: dict[int, list[tuple[int, int]]] = {}
+    for k, j in picks:
+        by_map.setdefault(id(maps[k]), []).append((k, j))
+    for group in by_map.values():  # one extraction per terrain map
+        k0 = group[0][0]
+        pos = np.array([candidates[k][j, :2] for k, j in group])
+        yaw = np.array([states[k].yaw for k, _ in group])
+        mirror = np.array([robot.leg(states[k].swing_leg).mirrored for k, _ in group])
+        libraries.append(extract_templates(maps[k0], pos, yaw, mirror, config))
+    return merge_libraries(libraries)
+
+
+@register_family
+@dataclass(frozen=True, eq=False)
+class TemplateFeatures(FeatureFamily):
+    """Terrain templates as a feature family: one column per template, Eq. 4 of the paper.
+
+    Before learning the family has no library; :meth:`fit` builds one from
+    the training demonstrations, :meth:`tune` chooses the bandwidth of each
+    scale by cross-validation (the paper tuned it by hand), and :meth:`select`
+    keeps the templates the L1 learner gave a weight (§III-B).
+    """
+
+    name: ClassVar[str] = "templates"
+    config: FeatureConfig = field(default_factory=FeatureConfig)
+    library: TemplateLibrary | None = None  # None until fitted
+    bandwidths: tuple[float, ...] = ()  # [1/m^2] per scale; () until chosen
+    rms: tuple[float, ...] | None = None  # [m] per scale: the RMS height differences the
+    # bandwidths were set from (bandwidth_for_rms); None when only the bandwidths are known
+    library_counts: tuple[int, ...] = ()  # templates per scale of the library selected from
+    search: tuple[dict, ...] = ()  # the bandwidth search's record: [{"rms_m", "cv_error"}]
+
+    def __post_init__(self) -> None:
+        if self.library is not None:
+            if self.library.config != self.config:
+                raise FootfallError("template library and feature family use different "
+                                    "feature settings")
+            if self.bandwidths and (len(self.bandwidths) != len(self.config.scales)
+                                    or not all(np.isfinite(h) and h > 0 for h in self.bandwidths)):
+                raise FootfallError("need one finite bandwidth h > 0 per scale")
+        object.__setattr__(self, "bandwidths", tuple(float(h) for h in self.bandwidths))
+
+    @classmethod
+    def create(cls, config: FeatureConfig, robot: RobotDescription = LITTLEDOG) -> TemplateFeatures:
+        return cls(config)
+
+    def _fitted(self) -> TemplateLibrary:
+        if self.library is None or not self.bandwidths:
+            raise FootfallError("the template family has no library or bandwidths yet (fit it)")
+        return self.library
+
+    def with_rms(self, rms: Sequence[float]) -> TemplateFeatures:
+        """The family with bandwidths set from RMS height differences [m] per scale."""
+        rms = tuple(float(r) for r in rms)
+        return replace(self, rms=rms, bandwidths=tuple(
+            bandwidth_for_rms(r, g) for r, g in zip(rms, self.config.grids)))
+
+    # ---------------------------------------------------------------- features
+    def columns(self) -> tuple[str, ...]:
+        return self._fitted().names()
+
+    def compute(self, c: Candidates) -> np.ndarray:
+        return self._fitted().features(c.patches.relative, self.bandwidths)
+
+    def dense(self, scale: int, weights: np.ndarray, dtype: np.dtype) -> DenseTerms:
+        library = self._fitted()
+        grid = self.config.grids[scale]
+        start = sum(library.counts[:scale])
+        ttw = np.asarray(weights, dtype=np.float64)[start:start + library.counts[scale]]
+        t = library.templates[scale]
+        hs = self.bandwidths[scale]
+        hs_tt = (hs * (t ** 2).sum(axis=1)).astype(dtype)
+        ttw_d = ttw.astype(dtype)
+
+        def add_full(g: np.ndarray, cc: np.ndarray, total: np.ndarray, r: np.ndarray) -> None:
+            if ttw.size:
+                # Eq. 4: -h sum (t - c)^2 = 2h c.t - h t.t - h c.c, never above 0.
+                arg = g - hs_tt[:, None]
+                arg -= (hs * cc).astype(dtype, copy=False)
+                np.minimum(arg, 0.0, out=arg)
+                np.exp(arg, out=arg)
+                r += ttw_d @ arg
+
+        def masked(zt: np.ndarray, mt: np.ndarray, zz: np.ndarray, count: np.ndarray) -> np.ndarray:
+            if not ttw.size:
+                return np.zeros(np.shape(zz)[0])
+            d = mt.astype(np.float64) + zz - 2.0 * zt  # sum over the samples with data
+            d = np.maximum(d, 0.0) * (grid.size / count.astype(np.float64))
+            return ttw @ np.exp(-hs * d)
+
+        return DenseTerms(full_columns=t.T * (2.0 * hs), masked_z=t.T, masked_m=(t ** 2).T,
+                          add_full=add_full, masked=masked)
+
+    # ------------------------------------------------------------------- files
+    def params(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        library = self._fitted()
+        return library.arrays(), {"library": library.meta(), "bandwidths": list(self.bandwidths)}
+
+    @classmethod
+    def from_params(cls, config: FeatureConfig, robot: RobotDescription,
+                    arrays: Mapping[str, np.ndarray], meta: Mapping[str, Any]) -> TemplateFeatures:
+        library = TemplateLibrary.from_arrays(dict(arrays), meta["library"])
+        if library.config != config:
+            raise FootfallError("the template library was built with other feature settings")
+        bandwidths = tuple(meta["bandwidths"])
+        if not all(isinstance(h, (int, float)) and not isinstance(h, bool) for h in bandwidths):
+            raise FootfallError("template bandwidths must be numbers")
+        return cls(config, library, bandwidths)
+
+    # ---------------------------------------------------------------- learning
+    def fit(self, maps, states, candidates, chosen, rng: np.random.Generator, *,
+            library_size: int = DEFAULT_LIBRARY_SIZE, bandwidth_rms: Sequence[float] | None = None,
+            robot: RobotDescription = LITTLEDOG, log: Callable[[str], None] = lambda s: None,
+            **_: Any) -> TemplateFeatures:
+        """A library from the training demonstrations; bandwidths fixed if ``bandwidth_rms``."""
+        library = library_from_demonstrations(maps, states, candidates, chosen, self.config, rng,
+                                              size=library_size, robot=robot)
+        log(f"template library: {sum(library.counts)} templates {library.counts}")
+        fitted = replace(self, library=library, library_counts=library.counts)
+        return fitted if bandwidth_rms is None else fitted.with_rms(bandwidth_rms)
+
+    def prepare(self, c: Candidates) -> tuple[np.ndarray, ...]:
+        """Squared patch distances to every template (n, T_s) [m^2] per scale: free of h."""
+        library = self.library
+        if library is None:
+            raise FootfallError("the template family has no library yet (fit it)")
+        return tuple(squared_distances(rel, t) for rel, t in zip(c.patches.relative,
+                                                                 library.templates))
+
+    def from_prepared(self, prepared: tuple[np.ndarray, ...]) -> np.ndarray:
+        return np.concatenate([np.exp(-h * d) for h, d in zip(self.bandwidths, prepared)], axis=1)
+
+    def tune(self, error: Callable[[FeatureFamily], float],
+             log: Callable[[str], None] = lambda s: None) -> TemplateFeatures:
+        """Bandwidths by cross-validation: one shared RMS difference first, then each scale alone.
+
+        Tries :data:`BANDWIDTH_RMS_GRID` for all scales at once, then halves and
+        doubles each scale's in turn, keeping a change that lowers the error.
+        A family whose bandwidths are set already is returned as it is.
+        """
+        if self.bandwidths:
+            return self
+        n_scales = len(self.config.scales)
+        tried: dict[tuple, float] = {}
+
+        def err(rms: tuple) -> float:
+            if rms not in tried:
+                tried[rms] = error(self.with_rms(rms))
+                log(f"  bandwidth rms {tuple(round(r * 1000, 1) for r in rms)} mm: "
+                    f"cv error {tried[rms]:.4f}")
+            return tried[rms]
+
+        best = min((tuple([r] * n_scales) for r in BANDWIDTH_RMS_GRID), key=err)
+        for s in range(n_scales):  # then each scale on its own, halving and doubling
+            for factor in (0.5, 2.0):
+                trial = tuple(r * factor if k == s else r for k, r in enumerate(best))
+                if err(trial) < err(best):
+                    best = trial
+        record = tuple({"rms_m": list(k), "cv_error": v} for k, v in tried.items())
+        return replace(self.with_rms(best), search=record)
+
+    def select(self, nonzero: np.ndarray) -> tuple[TemplateFeatures, np.ndarray]:
+        library = self._fitted()
+        keep = np.asarray(nonzero, dtype=bool)
+        bounds = np.cumsum((0,) + library.counts)
+        per_scale = tuple(np.flatnonzero(keep[a:b]) for a, b in zip(bounds[:-1], bounds[1:]))
+        return replace(self, library=library.subset(per_scale),
+                       library_counts=self.library_counts or library.counts), keep
+
+    def info(self) -> dict[str, Any]:
+        library = self._fitted()
+        return {"library_counts": list(self.library_counts or library.counts),
+                "kept_counts": list(library.counts),
+                "bandwidth_rms_m": None if self.rms is None else list(self.rms),
+                "bandwidth_search": [dict(r) for r in self.search]}

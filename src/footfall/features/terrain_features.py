@@ -16,12 +16,16 @@ over the samples that have data only.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from functools import lru_cache
+from typing import ClassVar
 
 import numpy as np
 
 from footfall.core.heightmap import PatchGrid
+from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.features.config import FeatureConfig
+from footfall.features.family import Candidates, DenseTerms, FeatureFamily, register_family
 
 RAW_NAMES = ("slope_x", "slope_y", "curv_x", "curv_y")  # linear in the heights
 QUANTITIES = ("slope_x_pos", "slope_x_neg", "slope_y_pos", "slope_y_neg",
@@ -239,3 +243,53 @@ def terrain_features_from_patches(rel_patches: tuple[np.ndarray, ...],
     """The 27 features from per-scale patches ((n, taps_s) each) -> (n, 27)."""
     return np.concatenate([split_signed(raw_features(p, g))
                            for p, g in zip(rel_patches, config.grids)], axis=1)
+
+
+@register_family
+@dataclass(frozen=True, eq=False)
+class TerrainFeatures(FeatureFamily):
+    """The multi-scale terrain features as a feature family: 9 per scale (see the module).
+
+    Linear in the patch heights up to the sign split and the square root of
+    the variance, so the dense scorer evaluates them from a handful of matrix
+    products (:meth:`dense`).
+    """
+
+    name: ClassVar[str] = "terrain"
+    config: FeatureConfig = field(default_factory=FeatureConfig)
+
+    @classmethod
+    def create(cls, config: FeatureConfig, robot: RobotDescription = LITTLEDOG) -> TerrainFeatures:
+        return cls(config)
+
+    @classmethod
+    def from_params(cls, config: FeatureConfig, robot: RobotDescription, arrays, meta
+                    ) -> TerrainFeatures:
+        return cls(config)
+
+    def columns(self) -> tuple[str, ...]:
+        return feature_names(self.config)
+
+    def compute(self, c: Candidates) -> np.ndarray:
+        return terrain_features_from_patches(c.patches.relative, self.config)
+
+    def dense(self, scale: int, weights: np.ndarray, dtype: np.dtype) -> DenseTerms:
+        grid = self.config.grids[scale]
+        k = len(QUANTITIES)
+        tw = np.asarray(weights, dtype=np.float64)[k * scale:k * (scale + 1)]
+        basis = moment_basis(grid)
+
+        def add_full(g: np.ndarray, cc: np.ndarray, total: np.ndarray, r: np.ndarray) -> None:
+            fits = g.astype(np.float64)  # slope_x, slope_y, curv_x, curv_y of every window
+            r += tw[0:8:2] @ np.maximum(fits, 0.0) - tw[1:8:2] @ np.minimum(fits, 0.0)
+            mean = total.astype(np.float64) / grid.size
+            r += tw[8] * np.sqrt(np.maximum(cc / grid.size - mean * mean, 0.0))
+
+        def masked(zt: np.ndarray, mt: np.ndarray, zz: np.ndarray, count: np.ndarray) -> np.ndarray:
+            moments = np.asarray(mt).T
+            raw = masked_fits(moments, np.asarray(zt).T, zz, grid)
+            raw[np.asarray(count) < 6] = np.nan  # a quadric needs 6 samples: no guess
+            return split_signed(raw) @ tw
+
+        return DenseTerms(full_columns=fit_kernels(grid), masked_z=basis[:, QUAD_COLUMNS],
+                          masked_m=basis, add_full=add_full, masked=masked)

@@ -1,34 +1,41 @@
-"""Learning a foothold model from stored demonstrations, end to end.
+"""Learning a foothold model from demonstrations, end to end (paper §II-C, §III-B).
 
-Builds the template library from the training demonstrations, computes
-bandwidth-free features once, and for the front and the hind legs chooses
-the RBF bandwidth of each scale and the regularisation lambda by the same
-cross-validation (folds grouped by demonstration), then fits the ranking
-function and keeps only templates with non-zero weight (paper §III-B).
-The paper tuned the bandwidths by hand; here they are searched: first one
-shared RMS height difference for all scales, then each scale on its own.
+For a feature set, each feature family is fitted to the training
+demonstrations (the template library is built from them), the families'
+bandwidth-free data are computed once, and for the front and the hind legs
+the families tune their own hyperparameters (each scale's RBF bandwidth,
+which the paper tuned by hand) by the same grouped cross-validation that
+chooses lambda. The ranking function is then fitted, and families drop the
+columns the L1 learner left at zero (templates without weight).
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Callable, Sequence
+from typing import Any
 
 import numpy as np
 
-from footfall.learning.dataset import (DEFAULT_LIBRARY_SIZE, DEFAULT_TRAINING_CANDIDATES, Example,
-                              build_library, check_feature_set, column_names, make_example,
-                              stack, training_rows)
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.learning.ranker import LEARNERS, FootholdRanker
-from footfall.learning.model import LEG_GROUPS, FootholdModel, RankingFunction
 from footfall.core.robot import LITTLEDOG, RobotDescription
+from footfall.core.state import RobotState
 from footfall.features.config import FeatureConfig
-from footfall.features.templates import TemplateLibrary, bandwidth_for_rms
-
-BANDWIDTH_RMS_GRID = (0.002, 0.004, 0.008, 0.016)  # [m] shared RMS differences tried first
+from footfall.features.family import FeatureFamily
+from footfall.features.templates import DEFAULT_LIBRARY_SIZE
+from footfall.learning.dataset import (
+    DEFAULT_TRAINING_CANDIDATES,
+    Example,
+    check_feature_set,
+    create_families,
+    make_example,
+    stack,
+    training_rows,
+)
+from footfall.learning.model import LEG_GROUPS, FootholdModel, RankingFunction
+from footfall.learning.ranker import LEARNERS, FootholdRanker
 
 
 @dataclass(frozen=True)
@@ -36,45 +43,47 @@ class TrainingDemo:
     """What the learner sees of a demonstration: terrain, state, candidates, choice."""
 
     hmap: HeightMap
-    state: object  # RobotState
+    state: RobotState
     candidates: np.ndarray  # (n, 3) [m]
     chosen: int
 
 
-def _bandwidths(rms: Sequence[float], config: FeatureConfig) -> tuple[float, ...]:
-    return tuple(bandwidth_for_rms(r, g) for r, g in zip(rms, config.grids))
-
-
-def _fit(examples: list[Example], feature_set: str, rms: Sequence[float] | None,
-         config: FeatureConfig, learner: str, Cs, cv: int, selection: str = "1se"
-         ) -> FootholdRanker:
-    bw = None if rms is None else _bandwidths(rms, config)
-    X, y, groups = stack(examples, feature_set, bw)
+def _fit(examples: list[Example], families: Sequence[FeatureFamily], learner: str, Cs, cv: int,
+         selection: str = "1se") -> FootholdRanker:
+    X, y, groups = stack(examples, families)
     return FootholdRanker(learner=learner, Cs=Cs, cv=cv, selection=selection).fit(X, y, groups)
 
 
-def select_bandwidths(examples: list[Example], feature_set: str, config: FeatureConfig,
-                      learner: str, Cs, cv: int, log: Callable[[str], None] = lambda s: None
-                      ) -> tuple[tuple[float, ...], list[dict]]:
-    """RMS height differences [m] per scale with the smallest cross-validation error."""
-    n_scales = len(config.scales)
-    tried: dict[tuple, float] = {}
+def _tune(examples: list[Example], families: tuple[FeatureFamily, ...], learner: str, Cs,
+          cv: int, log: Callable[[str], None]) -> tuple[FeatureFamily, ...]:
+    """Each family's hyperparameters by the cross-validation error of the whole model."""
+    tuned = list(families)
+    for k, family in enumerate(families):
+        def error(variant: FeatureFamily, k: int = k) -> float:
+            trial = tuple(tuned[:k]) + (variant,) + tuple(tuned[k + 1:])
+            return _fit(examples, trial, learner, Cs, cv).cv_error_
+        tuned[k] = family.tune(error, log)
+    return tuple(tuned)
 
-    def error(rms: tuple) -> float:
-        if rms not in tried:
-            tried[rms] = _fit(examples, feature_set, rms, config, learner, Cs, cv).cv_error_
-            log(f"  bandwidth rms {tuple(round(r * 1000, 1) for r in rms)} mm: "
-                f"cv error {tried[rms]:.4f}")
-        return tried[rms]
 
-    best = min((tuple([r] * n_scales) for r in BANDWIDTH_RMS_GRID), key=error)
-    for s in range(n_scales):  # then each scale on its own, halving and doubling
-        for factor in (0.5, 2.0):
-            trial = tuple(r * factor if k == s else r for k, r in enumerate(best))
-            if error(trial) < error(best):
-                best = trial
-    record = [{"rms_m": list(k), "cv_error": v} for k, v in tried.items()]
-    return best, record
+def _function(ranker: FootholdRanker, families: tuple[FeatureFamily, ...], n_demos: int
+              ) -> RankingFunction:
+    """The fitted ranker as a ranking function: per family its kept columns and weights."""
+    kept, coef, scale, family_info = [], [], [], {}
+    start = 0
+    for family in families:
+        stop = start + len(family.columns())
+        w, s = ranker.coef_[start:stop], ranker.scale_[start:stop]
+        reduced, keep = family.select(w != 0)
+        kept.append(reduced)
+        coef.append(w[keep])
+        scale.append(s[keep])
+        family_info.update(reduced.info())
+        start = stop
+    info = {"lambda": ranker.lambda_, "C": ranker.C_, "cv_error": ranker.cv_error_,
+            "path": [vars(p) for p in ranker.path_], "n_demonstrations": n_demos,
+            **family_info, "n_nonzero": int(np.count_nonzero(ranker.coef_))}
+    return RankingFunction(tuple(kept), tuple(coef), tuple(scale), info)
 
 
 def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = "l1", *,
@@ -82,13 +91,17 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
                 library_size: int = DEFAULT_LIBRARY_SIZE,
                 training_candidates: int = DEFAULT_TRAINING_CANDIDATES,
                 bandwidth_rms: Sequence[float] | None = None, Cs=10, cv: int = 5, seed: int = 0,
-                selection: str = "1se",
+                selection: str = "1se", family_options: dict[str, dict[str, Any]] | None = None,
                 log: Callable[[str], None] = lambda s: None) -> FootholdModel:
     """Learn front- and hind-leg ranking functions from demonstrations.
 
-    ``bandwidth_rms`` fixes the RBF bandwidths (as RMS height differences [m]
-    per scale) instead of choosing them by cross-validation. ``selection``
-    picks lambda on the path (see :class:`footfall.learning.ranker.FootholdRanker`).
+    ``feature_set`` names a registered feature set (``terrain``, ``templates``,
+    ``both``) or joins family names with ``+``. ``library_size`` and
+    ``bandwidth_rms`` (fixed RBF bandwidths, as RMS height differences [m]
+    per scale, instead of choosing them by cross-validation) are the template
+    family's options; ``family_options`` passes any family's own options by
+    family name. ``selection`` picks lambda on the path (see
+    :class:`footfall.learning.ranker.FootholdRanker`).
     """
     feature_set = check_feature_set(feature_set)
     if learner not in LEARNERS:
@@ -99,19 +112,18 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     resolutions = {d.hmap.resolution for d in demos}
     started = time.perf_counter()
     rng = np.random.default_rng(seed)
-    uses_templates = feature_set in ("templates", "both")
-    library: TemplateLibrary | None = None
-    if uses_templates:
-        library = build_library([d.hmap for d in demos], [d.state for d in demos],
-                                [d.candidates for d in demos], [d.chosen for d in demos],
-                                config, rng, size=library_size, robot=robot)
-        log(f"template library: {sum(library.counts)} templates {library.counts}")
+    options = {"templates": {"library_size": library_size, "bandwidth_rms": bandwidth_rms}}
+    for name, opts in (family_options or {}).items():
+        options[name] = {**options.get(name, {}), **opts}
+    families = tuple(
+        f.fit([d.hmap for d in demos], [d.state for d in demos], [d.candidates for d in demos],
+              [d.chosen for d in demos], rng, robot=robot, log=log, **options.get(f.name, {}))
+        for f in create_families(feature_set, config, robot))
     examples = []
     for d in demos:  # one demonstration at a time: each is vectorised over its candidates
         rows = training_rows(d.candidates.shape[0], d.chosen, training_candidates, rng)
-        examples.append(make_example(d.hmap, d.state, d.candidates, d.chosen, library, config,
+        examples.append(make_example(d.hmap, d.state, d.candidates, d.chosen, families, config,
                                      rows, robot))
-    names = column_names(feature_set, library, config)
     functions = {}
     for group in LEG_GROUPS:
         chosen = [e for e in examples if e.front == (group == "front")]
@@ -119,43 +131,13 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
             raise FootfallError(f"{group} legs have {len(chosen)} demonstrations; "
                                 f"{cv}-fold cross-validation needs at least {cv}")
         log(f"{group} legs: {len(chosen)} demonstrations")
-        search: list[dict] = []
-        rms = None
-        if uses_templates:
-            if bandwidth_rms is not None:
-                rms = tuple(float(r) for r in bandwidth_rms)
-            else:
-                rms, search = select_bandwidths(chosen, feature_set, config, learner, Cs, cv, log)
-        ranker = _fit(chosen, feature_set, rms, config, learner, Cs, cv, selection)
-        coef, scale = ranker.coef_, ranker.scale_
-        keep = np.ones(len(names), dtype=bool)
-        kept_library = None
-        bandwidths: tuple[float, ...] = ()
-        if uses_templates:
-            start = 27 if feature_set == "both" else 0
-            per_scale = []
-            for c in library.counts:
-                nz = np.flatnonzero(coef[start:start + c] != 0)
-                per_scale.append(nz)
-                keep[start:start + c] = coef[start:start + c] != 0
-                start += c
-            kept_library = library.subset(tuple(per_scale))
-            bandwidths = _bandwidths(rms, config)
-        info = {"lambda": ranker.lambda_, "C": ranker.C_, "cv_error": ranker.cv_error_,
-                "path": [vars(p) for p in ranker.path_], "n_demonstrations": len(chosen),
-                "library_counts": list(library.counts) if library is not None else [0, 0, 0],
-                "kept_counts": list(kept_library.counts) if kept_library is not None else [0, 0, 0],
-                "bandwidth_rms_m": list(rms) if rms is not None else None,
-                "bandwidth_search": search, "n_nonzero": int(np.count_nonzero(coef))}
-        kept_names = tuple(n for n, k in zip(names, keep) if k)
-        if kept_library is not None:  # the kept templates are renumbered within their library
-            n_terrain = 27 if feature_set == "both" else 0
-            kept_names = (kept_names[:n_terrain] + kept_library.names()
-                          + kept_names[n_terrain + sum(kept_library.counts):])
-        functions[group] = RankingFunction(kept_names, coef[keep], scale[keep], kept_library,
-                                           bandwidths, info)
+        tuned = _tune(chosen, families, learner, Cs, cv, log)
+        ranker = _fit(chosen, tuned, learner, Cs, cv, selection)
+        functions[group] = _function(ranker, tuned, len(chosen))
+        info = functions[group].info
         log(f"  lambda {ranker.lambda_:.4g}, cv error {ranker.cv_error_:.4f}, "
-            f"{info['n_nonzero']} non-zero weights, templates kept {info['kept_counts']}")
+            f"{info['n_nonzero']} non-zero weights, templates kept "
+            f"{info.get('kept_counts', [0] * len(config.scales))}")
     return FootholdModel(feature_set, learner, functions, config, robot,
                          map_resolution=max(resolutions),
                          info={"n_demonstrations": len(demos), "seed": seed,

@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 
 from footfall.core.files import atomic_path
 from footfall.core.heightmap import PatchGrid
-from footfall.features.scoring import ScoreGrid
+from footfall.features.dense import ScoreGrid
 
 DPI = 130  # [dots/inch]
 INVALID_RGBA = (0.6, 0.6, 0.62, 1.0)  # grey: not a valid foothold
@@ -109,20 +109,19 @@ def save_kept_templates(model, path: str | os.PathLike, group: str = "front", ro
     kept fewer). Returns False (and writes nothing) if no template was kept.
     """
     f = model.functions[group]
-    if f.library is None or max(f.library.counts, default=0) == 0:
+    library = f.library
+    if library is None or max(library.counts, default=0) == 0:
         return False
-    w = dict(zip(f.names, f.coef))
-    names, by_scale, start = list(f.library.names()), [], 0
-    for c in f.library.counts:
-        by_scale.append(names[start:start + c])
-        start += c
+    w = f.coef[[fam.name for fam in f.families].index("templates")]
+    bounds = np.cumsum((0,) + library.counts)
+    by_scale = [w[a:b] for a, b in zip(bounds[:-1], bounds[1:])]  # weights of each scale
     patches, titles = [], []
-    for rank in range(min(rows, max(f.library.counts))):
+    for rank in range(min(rows, max(library.counts))):
         row = []
-        for s, scale_names in enumerate(by_scale):
-            if rank < len(scale_names):
-                order = np.argsort([-abs(w[n]) for n in scale_names], kind="stable")
-                row.append(f.library.templates[s][order[rank]])
+        for s, weights in enumerate(by_scale):
+            if rank < weights.size:
+                order = np.argsort(-np.abs(weights), kind="stable")
+                row.append(library.templates[s][order[rank]])
             else:  # fewer templates kept on this scale: an empty (NaN) panel
                 row.append(np.full(model.config.grids[s].size, np.nan))
         patches.append(row)

@@ -16,14 +16,14 @@ import numpy as np
 
 from footfall.core.errors import FootfallError
 from footfall.core.files import write_text_atomic
+from footfall.features.config import FeatureConfig
+from footfall.features.dense import score_grid
+from footfall.features.reward import LinearReward, analytic_templates, default_reward
+from footfall.features.templates import extract_templates
+from footfall.features.terrain_features import TerrainFeatures
 from footfall.plots.maps import save_score_maps, save_template_figure
 from footfall.plots.relief import save_relief
-from footfall.features.reward import LinearReward, analytic_templates, default_reward
-from footfall.features.config import FeatureConfig
-from footfall.features.scoring import score_grid
-from footfall.features.templates import extract_templates
 from footfall.terrain import make_board
-from footfall.features.terrain_features import feature_names
 
 DEMO_BOARD = [("rocky", 0.4), ("rocky", 0.9)]  # between the flat start and end modules
 FEATURE_MAPS = ("medium.slope_x_neg", "medium.std", "small.curv_x_pos", "large.std")
@@ -31,11 +31,9 @@ FEATURE_MAPS = ("medium.slope_x_neg", "medium.std", "small.curv_x_pos", "large.s
 
 def feature_map(board, name: str, config: FeatureConfig, **kwargs):
     """Dense map of one terrain feature: a reward with weight 1 on it and 0 elsewhere."""
-    names = feature_names(config)
-    weights = np.zeros(len(names))
-    weights[names.index(name)] = 1.0
-    return score_grid(board, LinearReward(config=config, terrain_weights=weights, name=name),
-                      **kwargs)
+    terrain = TerrainFeatures(config)
+    reward = LinearReward.from_names((terrain,), {f"terrain.{name}": 1.0}, config, name)
+    return score_grid(board, reward, **kwargs)
 
 
 def run_demo(out: Path, seed: int = 0) -> dict:

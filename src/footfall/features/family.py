@@ -1,0 +1,270 @@
+"""Feature families: the extension point through which foothold features plug in.
+
+A family computes a block of named feature columns for a candidate set F: the
+27 terrain features, the templates of a library (Eq. 4), the 26 pose
+features, or one of your own. Everything downstream -- the reward, the
+learner, the model file, the dense scorer -- finds a family's columns by its
+name and its column names, never by position. To add a family, subclass
+:class:`FeatureFamily` in one module and decorate it with
+:func:`register_family`; a feature set (:data:`FEATURE_SETS`) is a named tuple
+of family names. The shared suite ``tests/test_feature_families.py`` checks
+every registered family.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any, ClassVar
+
+import numpy as np
+
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.robot import LITTLEDOG, RobotDescription
+from footfall.core.state import RobotState
+from footfall.features.config import FeatureConfig
+from footfall.features.patches import FootholdPatches, foothold_patches
+
+
+@dataclass(frozen=True, eq=False)
+class Candidates:
+    """What a feature family may read about a candidate set F.
+
+    The patches around the footholds are computed on first use and shared by
+    every family that reads them.
+    """
+
+    hmap: HeightMap  # the terrain
+    footholds: np.ndarray  # (n, 3) [m] candidate contact points x, y, terrain height
+    yaw: Any  # [rad] body heading that orients the patches: a float or (n,)
+    mirror: Any  # mirror the patches in y (right legs): a bool or (n,)
+    config: FeatureConfig  # patch scales and resolution
+    state: RobotState | None = None  # the robot's state; state families (pose) need it
+    robot: RobotDescription = LITTLEDOG
+    given_patches: FootholdPatches | None = None  # patches already extracted, if any
+
+    @classmethod
+    def of_state(cls, hmap: HeightMap, state: RobotState, footholds: np.ndarray,
+                 config: FeatureConfig, robot: RobotDescription = LITTLEDOG) -> Candidates:
+        """The swing leg's candidates in ``state``: heading and mirroring from the state."""
+        f = np.asarray(footholds, dtype=np.float64).reshape(-1, 3)
+        return cls(hmap, f, state.yaw, robot.leg(state.swing_leg).mirrored, config, state, robot)
+
+    @property
+    def n(self) -> int:
+        """Number of candidates."""
+        return int(np.shape(self.footholds)[0])
+
+    @cached_property
+    def patches(self) -> FootholdPatches:
+        """Relative patches of every scale around the footholds (computed once)."""
+        if self.given_patches is not None:
+            return self.given_patches
+        return foothold_patches(self.hmap, self.footholds, self.yaw, self.mirror, self.config)
+
+
+@dataclass(frozen=True)
+class DenseTerms:
+    """What the dense scorer needs of a family that is linear in the patch heights, on one scale.
+
+    The scorer gathers the relative heights ``c`` (taps, n) of every lattice
+    window of the scale and hands the family products of ``c`` with the
+    columns it declares here, in the scale's patch sample order:
+
+    * complete windows: ``g = full_columns.T @ c`` (a, n), the sum of squares
+      ``cc`` (n,) and the sum ``total`` (n,) of the heights; :attr:`add_full`
+      adds the family's weighted reward to a running sum;
+    * windows with no-data samples (holes, the map's border), ``z`` the heights
+      with 0 where there is no data and ``m`` the data mask:
+      ``zt = masked_z.T @ z`` (b, nd), ``mt = masked_m.T @ m`` (e, nd),
+      ``zz`` (nd,) and the sample count ``count`` (nd,); :attr:`masked`
+      returns the family's weighted reward of those windows.
+    """
+
+    full_columns: np.ndarray  # (taps, a) columns applied to complete windows
+    masked_z: np.ndarray  # (taps, b) columns applied to the zero-filled heights of a gappy window
+    masked_m: np.ndarray  # (taps, e) columns applied to the data mask of a gappy window
+    add_full: Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], None]
+    # (g (a, n) in the scorer's dtype, cc (n,), total (n,), r (n,) float64 to add to) -> None
+    masked: Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+    # (zt (b, nd), mt (e, nd), zz (nd,), count (nd,)) -> reward (nd,) float64; NaN: no fit
+
+
+class FeatureFamily(ABC):
+    """A block of named foothold features (the interface every family implements).
+
+    Subclasses are frozen dataclasses holding their parameters (a template
+    library, bandwidths; none for the terrain and pose features). Required:
+    :attr:`name`, :meth:`columns`, :meth:`compute` and :meth:`create`.
+    Optional, with defaults that suit a parameter-free family: the dense form
+    (:meth:`dense`), file I/O of parameters (:meth:`params`,
+    :meth:`from_params`), and the learning hooks (:meth:`fit`, :meth:`prepare`,
+    :meth:`from_prepared`, :meth:`tune`, :meth:`select`, :meth:`info`).
+    """
+
+    name: ClassVar[str]  # registry key; prefixes the family's columns in a reward ("pose.progress")
+    needs_state: ClassVar[bool] = False  # True: a function of the robot's state, not only the terrain
+
+    # ------------------------------------------------------------ required
+    @classmethod
+    @abstractmethod
+    def create(cls, config: FeatureConfig, robot: RobotDescription = LITTLEDOG) -> FeatureFamily:
+        """The family before learning (a learned family fills its parameters in :meth:`fit`)."""
+
+    @abstractmethod
+    def columns(self) -> tuple[str, ...]:
+        """Column names, unique within the family, in column order."""
+
+    @abstractmethod
+    def compute(self, c: Candidates) -> np.ndarray:
+        """The feature matrix (n, len(columns())) of the candidates."""
+
+    # ------------------------------------------------------------ optional
+    def dense(self, scale: int, weights: np.ndarray, dtype: np.dtype) -> DenseTerms | None:
+        """The family's dense form on scale ``scale`` with its reward weights (k,) folded in.
+
+        None (the default): the family is not linear in the patch heights, and
+        the dense scorer evaluates :meth:`compute` on every lattice point
+        instead (exact, but slower).
+        """
+        return None
+
+    def params(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """Learned parameters as named arrays and JSON metadata (for model files)."""
+        return {}, {}
+
+    @classmethod
+    def from_params(cls, config: FeatureConfig, robot: RobotDescription,
+                    arrays: Mapping[str, np.ndarray], meta: Mapping[str, Any]) -> FeatureFamily:
+        """Inverse of :meth:`params`."""
+        return cls.create(config, robot)
+
+    def digest(self) -> str:
+        """Digest of the family's parameters: equal digests compute equal features."""
+        arrays, meta = self.params()
+        h = hashlib.sha256(json.dumps([self.name, meta], sort_keys=True).encode())
+        for key in sorted(arrays):
+            h.update(key.encode())
+            h.update(np.ascontiguousarray(arrays[key], dtype=np.float64).tobytes())
+        return h.hexdigest()
+
+    def fit(self, maps: list[HeightMap], states: list[RobotState], candidates: list[np.ndarray],
+            chosen: list[int], rng: np.random.Generator, **options: Any) -> FeatureFamily:
+        """The family with parameters built from training demonstrations (default: itself).
+
+        ``options`` are the family's own settings (e.g. ``library_size``);
+        a family ignores options it does not know.
+        """
+        return self
+
+    def prepare(self, c: Candidates) -> Any:
+        """What training keeps of the candidates (default: the features themselves).
+
+        A family with tunable parameters keeps what does not depend on them
+        (templates keep squared patch distances, free of the bandwidth).
+        """
+        return self.compute(c)
+
+    def from_prepared(self, prepared: Any) -> np.ndarray:
+        """The feature matrix from :meth:`prepare`'s result (default: it is the matrix)."""
+        return prepared
+
+    def tune(self, error: Callable[[FeatureFamily], float],
+             log: Callable[[str], None] = lambda s: None) -> FeatureFamily:
+        """The family with its hyperparameters chosen by ``error(variant)``, the cross-validation
+        error of the whole model with ``variant`` in its place (by default nothing to tune)."""
+        return self
+
+    def select(self, nonzero: np.ndarray) -> tuple[FeatureFamily, np.ndarray]:
+        """Drop columns a sparse learner left at zero: the reduced family and the kept mask.
+
+        ``nonzero`` (k,) bool marks the columns with a non-zero weight. By
+        default every column is kept (zero weights cost nothing); a template
+        library keeps only the templates that carry weight (paper §III-B).
+        """
+        return self, np.ones(len(self.columns()), dtype=bool)
+
+    def info(self) -> dict[str, Any]:
+        """JSON facts about the family for a model's record (e.g. library sizes)."""
+        return {}
+
+
+# ---------------------------------------------------------------- registries
+_FAMILIES: dict[str, type[FeatureFamily]] = {}  # every registered family, by name
+
+FEATURE_SETS: dict[str, tuple[str, ...]] = {}
+"""Named feature sets: the families a ranking function is learned on, in column order."""
+
+
+def register_family(cls: type[FeatureFamily]) -> type[FeatureFamily]:
+    """Class decorator: make a feature family available by its ``name``."""
+    name = getattr(cls, "name", None)
+    if not isinstance(name, str) or not name or "." in name:
+        raise ValueError(f"a feature family needs a name without dots, got {name!r}")
+    if name in _FAMILIES and _FAMILIES[name] is not cls:
+        raise ValueError(f"feature family {name!r} is already registered")
+    _FAMILIES[name] = cls
+    return cls
+
+
+def unregister_family(name: str) -> None:
+    """Forget a family (for tests that register one of their own)."""
+    _FAMILIES.pop(name, None)
+    for key in [k for k, v in FEATURE_SETS.items() if name in v and k not in _BUILTIN_SETS]:
+        del FEATURE_SETS[key]
+
+
+def families() -> dict[str, type[FeatureFamily]]:
+    """Every registered feature family by name, the built-in ones first."""
+    _load_builtin()
+    return dict(_FAMILIES)
+
+
+def register_feature_set(name: str, families: tuple[str, ...]) -> None:
+    """Name a feature set: the families it uses, in column order."""
+    if not families or len(set(families)) != len(families):
+        raise ValueError(f"feature set {name!r} needs distinct families, got {families!r}")
+    FEATURE_SETS[name] = tuple(families)
+
+
+def family_class(name: str) -> type[FeatureFamily]:
+    """The registered family called ``name``."""
+    known = families()
+    if name not in known:
+        raise FootfallError(f"unknown feature family {name!r}; families are {', '.join(known)}")
+    return known[name]
+
+
+def feature_set_families(feature_set: str) -> tuple[str, ...]:
+    """The families of a feature set: a registered name, or family names joined by ``+``.
+
+    ``"both"`` is the paper's templates + terrain features + pose; ``"terrain+pose"`` spells
+    a set out, so a newly registered family is usable without naming a set for it.
+    """
+    known = families()
+    if isinstance(feature_set, str) and feature_set in FEATURE_SETS:
+        return FEATURE_SETS[feature_set]
+    parts = tuple(str(feature_set).split("+"))
+    if len(parts) > 1 and all(p in known for p in parts) and len(set(parts)) == len(parts):
+        return parts
+    raise FootfallError(f"unknown feature set {feature_set!r}; use one of "
+                        f"{', '.join(FEATURE_SETS)}, or family names joined by '+' "
+                        f"({', '.join(known)})")
+
+
+# The paper's three feature sets (§V), each with the pose features.
+_BUILTIN_SETS = {"terrain": ("terrain", "pose"), "templates": ("templates", "pose"),
+                 "both": ("terrain", "templates", "pose")}
+for _name, _families in _BUILTIN_SETS.items():
+    register_feature_set(_name, _families)
+PAPER_FEATURE_SETS = tuple(_BUILTIN_SETS)  # the sets the paper's tables compare: (a), (b), (c)
+
+
+def _load_builtin() -> None:
+    """Import the built-in families so that they register (they import this module)."""
+    from footfall.features import terrain_features, templates, pose_features  # noqa: F401, I001

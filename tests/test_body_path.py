@@ -1,20 +1,26 @@
 """The approximate body path planner: cell rewards, Dijkstra path, BodyPath geometry."""
 
-import dataclasses
 import math
 
 import numpy as np
 import pytest
 
-from footfall.features.candidates import lattice
-from footfall.control.body_path import (BodyPath, BodyPathConfig, cell_rewards, evaluate_cells,
-                                        nominal_knees, plan_body_path, terrain_grids)
+from footfall.control.body_path import (
+    BodyPath,
+    BodyPathConfig,
+    cell_rewards,
+    evaluate_cells,
+    nominal_knees,
+    plan_body_path,
+    terrain_grids,
+)
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.features.reward import default_reward
 from footfall.core.robot import LEG_NAMES, LITTLEDOG
-from footfall.features.scoring import score_footholds
 from footfall.core.state import RobotState
+from footfall.features.candidates import lattice
+from footfall.features.reward import default_reward
+from footfall.features.scoring import score_footholds
 from footfall.terrain.modules import make_module
 
 REWARD = default_reward()

@@ -12,8 +12,6 @@ from footfall.cli import main
 from footfall.core.heightmap import HeightMap
 
 
-
-
 @pytest.fixture(scope="module")
 def board(tmp_path_factory):
     path = tmp_path_factory.mktemp("cli") / "board.npz"

@@ -2,11 +2,11 @@
 
 import numpy as np
 import pytest
+from scipy.spatial import ConvexHull
 
-from footfall.control.cog import CogConfig, GRAVITY, incircle, plan_cog, support_margin
+from footfall.control.cog import GRAVITY, CogConfig, incircle, plan_cog, support_margin
 from footfall.core.errors import FootfallError
 from footfall.core.robot import LEG_NAMES, LITTLEDOG
-from scipy.spatial import ConvexHull
 
 
 def nominal_feet():

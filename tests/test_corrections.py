@@ -3,14 +3,17 @@
 import numpy as np
 import pytest
 
-from footfall.expert.corrections import corrections_to_demonstrations, inspect_run, source_of, \
-    step_verdicts
 from footfall.core.errors import FootfallError
-from footfall.experiments.reproduce import _worst
-from footfall.data.runlog import RunRecord, RunStep
 from footfall.core.state import nominal_state
+from footfall.data.runlog import RunRecord, RunStep
 from footfall.data.store import DemoStore
-
+from footfall.experiments.reproduce import _worst
+from footfall.expert.corrections import (
+    corrections_to_demonstrations,
+    inspect_run,
+    source_of,
+    step_verdicts,
+)
 from test_store import terrain
 
 

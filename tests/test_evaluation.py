@@ -5,8 +5,8 @@ import pytest
 
 from footfall.core.errors import FootfallError
 from footfall.core.stats import bootstrap_ci, wilson_interval
-from footfall.learning.ranker import L2_LOG_C, FootholdRanker
 from footfall.experiments.offline import compare_feature_sets
+from footfall.learning.ranker import L2_LOG_C, FootholdRanker
 
 
 def test_bootstrap_interval_brackets_the_mean_and_shrinks_with_more_data():

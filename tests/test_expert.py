@@ -5,14 +5,20 @@ import math
 import numpy as np
 import pytest
 
-from footfall.features.candidates import reachable_footholds
 from footfall.core.errors import FootfallError
-from footfall.expert.synthetic import EXPERT_TERM_NAMES, EXPERT_TERMS, ExpertConfig, SyntheticExpert, \
-    _sphere_surface, walking_expert
 from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import body_to_world, inverse_kinematics, knee_position, world_to_body
 from footfall.core.robot import LITTLEDOG
 from footfall.core.state import RobotState, nominal_state
+from footfall.expert.synthetic import (
+    EXPERT_TERM_NAMES,
+    EXPERT_TERMS,
+    ExpertConfig,
+    SyntheticExpert,
+    _sphere_surface,
+    walking_expert,
+)
+from footfall.features.candidates import reachable_footholds
 from footfall.terrain.modules import make_board
 
 RES = 0.001  # [m] the scan resolution

@@ -1,22 +1,20 @@
 """The footstep planner: path-biased foothold choice with a five-step look-ahead."""
 
-import dataclasses
 
 import numpy as np
 import pytest
 
-from footfall.features.candidates import reachable_footholds
 from footfall.control.body_path import BodyPath, terrain_grids
-from footfall.control.footstep import (FootstepConfig, FootstepPlan, FootstepPlanner,
-                                       NoFootholdError)
+from footfall.control.footstep import FootstepConfig, FootstepPlan, FootstepPlanner, NoFootholdError
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
+from footfall.core.robot import LEG_NAMES, LITTLEDOG
+from footfall.core.state import RobotState, feet_pitch, nominal_state
+from footfall.features.candidates import reachable_footholds
 from footfall.features.pose_features import POSE_FEATURE_NAMES, PoseFeatures
 from footfall.features.reward import LinearReward, default_reward, weights_from_names
-from footfall.core.robot import LEG_NAMES, LITTLEDOG
 from footfall.features.scoring import score_footholds
 from footfall.features.spread import reward_spread
-from footfall.core.state import RobotState, feet_pitch, nominal_state
 from footfall.terrain.modules import make_module
 
 REWARD = default_reward()

@@ -9,14 +9,14 @@ import pytest
 
 from footfall.cli import main
 from footfall.core.errors import FootfallError
-from footfall.expert.synthetic import SyntheticExpert
-from footfall.learning.model import FootholdModel
 from footfall.core.robot import RobotDescription
-from footfall.features.config import FeatureConfig
 from footfall.data.store import DemoStore
-from footfall.terrain import make_board
-from footfall.learning.train import TrainingDemo, learn_model
 from footfall.expert.collect import collect_demonstrations
+from footfall.expert.synthetic import SyntheticExpert
+from footfall.features.config import FeatureConfig
+from footfall.learning.model import FootholdModel
+from footfall.learning.train import TrainingDemo, learn_model
+from footfall.terrain import make_board
 
 
 @pytest.fixture(scope="module")

@@ -3,15 +3,20 @@
 import numpy as np
 import pytest
 
-from footfall.features.candidates import lattice, reachable_footholds
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import inverse_kinematics, world_to_body
-from footfall.features.pose_features import POSE_FEATURE_DOCS, POSE_FEATURE_NAMES, hull_area, \
-    triangle_margins, pose_features
 from footfall.core.robot import LEG_NAMES, LITTLEDOG
-from footfall.features.config import FeatureConfig
 from footfall.core.state import RobotState, nominal_state
+from footfall.features.candidates import lattice, reachable_footholds
+from footfall.features.config import FeatureConfig
+from footfall.features.pose_features import (
+    POSE_FEATURE_DOCS,
+    POSE_FEATURE_NAMES,
+    hull_area,
+    pose_features,
+    triangle_margins,
+)
 
 
 def flat(size=(800, 600), origin=(-0.4, -0.3), z=0.0):

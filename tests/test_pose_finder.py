@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from footfall.control.pose_finder import PoseConfig, TERMS, find_pose, preferred_pose
+from footfall.control.pose_finder import TERMS, PoseConfig, find_pose, preferred_pose
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import body_to_world, inverse_kinematics, knee_position, world_to_body

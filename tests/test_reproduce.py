@@ -5,9 +5,9 @@ import json
 import pytest
 
 from footfall.core.errors import FootfallError
-from footfall.expert.synthetic import ExpertConfig
-from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
 from footfall.data.store import DemoStore
+from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
+from footfall.expert.synthetic import ExpertConfig
 from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig
 
 TINY = ReproduceConfig(
@@ -111,8 +111,8 @@ def test_a_round_learns_only_when_both_leg_groups_have_enough_corrections():
 
 
 def test_the_default_reproduction_walks_with_the_walking_expert_and_a_local_f():
-    from footfall.expert.synthetic import walking_expert
     from footfall.experiments.reproduce import REPRODUCTION_SEARCH_RADIUS
+    from footfall.expert.synthetic import walking_expert
 
     config = ReproduceConfig()
     assert config.expert == walking_expert(config.walk.footstep.lead)

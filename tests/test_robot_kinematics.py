@@ -4,10 +4,18 @@ import numpy as np
 import pytest
 
 from footfall.core.errors import FootfallError
-from footfall.core.kinematics import (body_to_world, forward_kinematics, inverse_kinematics,
-                                 joint_limit_margin, knee_position, legs_inverse_kinematics,
-                                 legs_joint_limit_margin, legs_knee_position, rotation_matrix,
-                                 world_to_body)
+from footfall.core.kinematics import (
+    body_to_world,
+    forward_kinematics,
+    inverse_kinematics,
+    joint_limit_margin,
+    knee_position,
+    legs_inverse_kinematics,
+    legs_joint_limit_margin,
+    legs_knee_position,
+    rotation_matrix,
+    world_to_body,
+)
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 
 

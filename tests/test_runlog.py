@@ -7,10 +7,9 @@ import numpy as np
 import pytest
 
 from footfall.core.errors import FootfallError
-from footfall.data.runlog import RunRecord, RunStep
 from footfall.core.state import nominal_state
+from footfall.data.runlog import RunRecord, RunStep
 from footfall.data.store import SCHEMA_VERSION, DemoStore
-
 from test_store import demo, terrain
 
 

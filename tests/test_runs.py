@@ -6,11 +6,10 @@ import numpy as np
 import pytest
 
 from footfall.core.errors import FootfallError
-from footfall.data.runlog import RunRecord, RunStep
-from footfall.experiments.batch import summarise
 from footfall.core.state import nominal_state
 from footfall.core.stats import wilson_interval
-
+from footfall.data.runlog import RunRecord, RunStep
+from footfall.experiments.batch import summarise
 from test_store import terrain
 
 

@@ -20,6 +20,7 @@ from footfall.core.kinematics import (
     rotation_matrix,
 )
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
+from footfall.core.state import nominal_state
 from footfall.sim.mjcf import (
     TERRAIN_GEOM_GROUP,
     build_mjcf,
@@ -33,7 +34,6 @@ from footfall.sim.simulation import (
     Simulation,
     bench_stepping,
 )
-from footfall.core.state import nominal_state
 from footfall.terrain.modules import make_module
 
 R = LITTLEDOG

@@ -12,7 +12,7 @@ import pytest
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.state import nominal_state
-from footfall.data.store import FORMAT, SCHEMA_VERSION, DemoStore, Demonstration
+from footfall.data.store import FORMAT, SCHEMA_VERSION, Demonstration, DemoStore
 
 
 def terrain(seed=0, shape=(120, 80)):

@@ -5,10 +5,16 @@ import pytest
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.features.reward import analytic_templates
 from footfall.features.config import FeatureConfig
-from footfall.features.templates import (TemplateLibrary, bandwidth_for_rms, extract_templates,
-                                merge_libraries, rbf_features, squared_distances)
+from footfall.features.reward import analytic_templates
+from footfall.features.templates import (
+    TemplateLibrary,
+    bandwidth_for_rms,
+    extract_templates,
+    merge_libraries,
+    rbf_features,
+    squared_distances,
+)
 
 CONFIG = FeatureConfig()
 

@@ -4,10 +4,15 @@ import numpy as np
 import pytest
 
 from footfall.core.heightmap import HeightMap, PatchGrid
-from footfall.features.patches import foothold_patches
 from footfall.features.config import FeatureConfig
-from footfall.features.terrain_features import (QUANTITIES, TERRAIN_FEATURE_NAMES, fit_kernels,
-                                       raw_features, terrain_features_from_patches)
+from footfall.features.patches import foothold_patches
+from footfall.features.terrain_features import (
+    QUANTITIES,
+    TERRAIN_FEATURE_NAMES,
+    fit_kernels,
+    raw_features,
+    terrain_features_from_patches,
+)
 
 RES = 0.001
 CONFIG = FeatureConfig()

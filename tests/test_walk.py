@@ -4,9 +4,9 @@ import math
 
 import numpy as np
 import pytest
-from cli_helpers import assert_user_error, run
 from scipy.spatial.transform import Rotation
 
+from cli_helpers import assert_user_error, run
 from footfall.control.lowlevel import (
     BodyCorrection,
     LowLevelConfig,
@@ -25,11 +25,11 @@ from footfall.core.kinematics import (
     knee_position,
     rotation_matrix,
 )
-from footfall.learning.model import FootholdModel, RankingFunction
-from footfall.features.reward import default_reward
 from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.features.config import FeatureConfig
+from footfall.features.reward import default_reward
 from footfall.features.terrain_features import TerrainFeatures
+from footfall.learning.model import FootholdModel, RankingFunction
 from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig, foot_slip, walk
 
 R = LITTLEDOG

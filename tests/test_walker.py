@@ -12,16 +12,22 @@ import pytest
 from scipy.ndimage import gaussian_filter
 
 from cli_helpers import assert_user_error, run
-from footfall.features.candidates import reachable_footholds
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.core.robot import LEG_NAMES, LITTLEDOG
-from footfall.features.config import FeatureConfig
+from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG
 from footfall.data.store import DemoStore
-from footfall.core.robot import DEFAULT_STRIDE
-from footfall.expert.collect import (EDGE_MARGIN, PATH_OFFSETS, collect_demonstrations,
-                                    estimated_steps, expert_settings, lateral_paths, rough_x_range,
-                             walk_demonstrations)
+from footfall.expert.collect import (
+    EDGE_MARGIN,
+    PATH_OFFSETS,
+    collect_demonstrations,
+    estimated_steps,
+    expert_settings,
+    lateral_paths,
+    rough_x_range,
+    walk_demonstrations,
+)
+from footfall.features.candidates import reachable_footholds
+from footfall.features.config import FeatureConfig
 
 SPACING = 0.01  # [m] a coarse candidate lattice keeps the walks fast
 

@@ -151,9 +151,9 @@ def terrain_show(source: str, output: str, as_json: bool) -> None:
 def features(source: str, at: tuple[float, float], yaw: float, leg: str,
              template_resolution: float | None, as_json: bool) -> None:
     """The 27 terrain features and three template patches of a foothold."""
-    from footfall.features.describe import describe_foothold
     from footfall.core.heightmap import HeightMap
     from footfall.features.config import FeatureConfig
+    from footfall.features.describe import describe_foothold
 
     hmap = HeightMap.load(source)
     config = FeatureConfig() if template_resolution is None else FeatureConfig(template_resolution)
@@ -407,10 +407,9 @@ def learn(store_path: str, feature_set: str, learner: str, library_size: int,
 def rank_eval(model_path: str, store_path: str, no_expert: bool, source: str | None,
               as_json: bool) -> None:
     """Top-1 agreement, mean percentile rank and mean reward loss of a model on demonstrations."""
+    from footfall.core.robot import LITTLEDOG
     from footfall.learning.evaluation import rank_scores
     from footfall.learning.model import FootholdModel
-
-    from footfall.core.robot import LITTLEDOG
 
     model = FootholdModel.load(model_path)
     model.check_compatible(robot=LITTLEDOG)  # the robot whose states the store holds

@@ -9,12 +9,14 @@ half-written file. Array files are ``.npz`` archives read with
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
+import math
 import os
 import tempfile
 import zipfile
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Iterator, Literal
 
 import numpy as np
 
@@ -101,3 +103,51 @@ def load_npz(path: str | os.PathLike, fmt: str, max_version: int
         raise FootfallError(f"{p}: {fmt} version {version} is not supported "
                             f"(this footfall reads versions 1..{max_version})")
     return version, arrays, meta
+
+
+def plain_json(value: Any, nonfinite: Literal["keep", "null", "error"] = "error",
+               other: Literal["error", "repr"] = "error") -> Any:
+    """A copy of ``value`` built of JSON types only: dict (str keys), list, str, int, float, bool, None.
+
+    NumPy scalars and arrays become Python numbers and lists, tuples become
+    lists, dataclass instances dicts. A non-finite float is kept as it is
+    (``"keep"``), becomes None (``"null"``) or fails (``"error"``). Any other
+    object fails, or becomes its ``repr`` (``other="repr"``). Failures raise
+    :class:`FootfallError`.
+    """
+    if isinstance(value, dict):
+        return {str(k): plain_json(v, nonfinite, other) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [plain_json(v, nonfinite, other) for v in value]
+    if isinstance(value, np.ndarray):
+        return plain_json(value.tolist(), nonfinite, other)
+    if isinstance(value, np.generic):
+        value = value.item()
+    if value is None or isinstance(value, (str, bool, int)):
+        return value
+    if isinstance(value, float):
+        if math.isfinite(value) or nonfinite == "keep":
+            return value
+        if nonfinite == "null":
+            return None
+        raise FootfallError(f"not a finite number: {value!r}")
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return plain_json(dataclasses.asdict(value), nonfinite, other)
+    if other == "repr":
+        return repr(value)
+    raise FootfallError(f"not JSON-serialisable: {type(value).__name__}")
+
+
+def checked_json(value: Any, what: str, object_only: bool = False) -> Any:
+    """A private copy of JSON data, checked: only JSON types, no NaN or infinity, keys sorted.
+
+    Raises :class:`FootfallError` naming ``what`` if ``value`` is not such
+    data (or, with ``object_only``, not a JSON object).
+    """
+    try:
+        out = json.loads(json.dumps(value, sort_keys=True, allow_nan=False))
+    except (TypeError, ValueError, RecursionError) as exc:
+        raise FootfallError(f"{what} must be JSON-serialisable without NaN ({exc})") from None
+    if object_only and not isinstance(out, dict):
+        raise FootfallError(f"{what} must be a JSON object")
+    return out

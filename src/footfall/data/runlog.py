@@ -12,27 +12,15 @@ demonstrations in the same file; and so that a run can be replayed.
 
 from __future__ import annotations
 
-import json
 import math
 import numbers
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
 from footfall.core.errors import FootfallError
+from footfall.core.files import checked_json
 from footfall.core.state import RobotState
-
-
-def _json_object(value: Any, what: str) -> dict:
-    try:
-        text = json.dumps(value, sort_keys=True, allow_nan=False)
-    except (TypeError, ValueError) as exc:
-        raise FootfallError(f"{what} must be JSON-serialisable without NaN ({exc})") from None
-    out = json.loads(text)
-    if not isinstance(out, dict):
-        raise FootfallError(f"{what} must be a JSON object")
-    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -106,8 +94,8 @@ class RunRecord:
             raise FootfallError("a run needs the terrain's 64-hex-digit content hash")
         if isinstance(self.seed, bool) or not isinstance(self.seed, numbers.Integral):
             raise FootfallError(f"a run's seed is an integer, got {self.seed!r}")
-        object.__setattr__(self, "settings", _json_object(self.settings, "run settings"))
-        object.__setattr__(self, "result", _json_object(self.result, "run result"))
+        object.__setattr__(self, "settings", checked_json(self.settings, "run settings", object_only=True))
+        object.__setattr__(self, "result", checked_json(self.result, "run result", object_only=True))
         steps = tuple(self.steps)
         for s in steps:
             if not isinstance(s, RunStep):

@@ -16,18 +16,19 @@ import numbers
 import os
 import re
 import sqlite3
-from dataclasses import dataclass, field
 from collections.abc import Iterable, Iterator, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from footfall.core.errors import FootfallError
+from footfall.core.files import checked_json
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LEG_NAMES
-from footfall.data.runlog import RunRecord, RunStep
 from footfall.core.state import RobotState
+from footfall.data.runlog import RunRecord, RunStep
 
 FORMAT = "footfall.demostore"
 SCHEMA_VERSION = 2  # 1: terrains and demonstrations; 2: + runs and run_steps
@@ -113,13 +114,6 @@ CREATE TABLE run_steps (
 )
 
 
-def _json_copy(value: Any, what: str) -> Any:
-    try:
-        return json.loads(json.dumps(value, sort_keys=True, allow_nan=False))
-    except (TypeError, ValueError) as exc:
-        raise FootfallError(f"{what} must be JSON-serialisable ({exc})") from None
-
-
 @dataclass(frozen=True, eq=False)
 class Demonstration:
     """One demonstrated foothold: in ``state`` on terrain ``terrain_hash``, ``chosen`` of F.
@@ -180,7 +174,7 @@ class Demonstration:
         cand.setflags(write=False)
         object.__setattr__(self, "candidates", cand)
         object.__setattr__(self, "chosen", int(chosen))
-        object.__setattr__(self, "expert", _json_copy(self.expert, "expert settings"))
+        object.__setattr__(self, "expert", checked_json(self.expert, "expert settings"))
         object.__setattr__(self, "id", None if self.id is None else int(self.id))
 
     @property

@@ -17,11 +17,12 @@ from typing import Callable
 
 import numpy as np
 
+from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LITTLEDOG
-from footfall.data.runlog import RunRecord
 from footfall.core.stats import wilson_interval
+from footfall.data.runlog import RunRecord
 from footfall.sim.episode import WalkConfig, walk
 
 
@@ -64,11 +65,6 @@ def _one_run(terrain_path: str, model_path: str | None, seed: int, config: WalkC
                     judge=expert_judge(config) if expert else None)
 
 
-def workers() -> int:
-    """Processes to use: the cores this process may run on."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-
-
 def walk_many(terrain_path: str | os.PathLike, model_path: str | os.PathLike | None, runs: int,
               seed: int, config: WalkConfig = WalkConfig(), processes: int | None = None,
               progress: Callable[[RunRecord], None] | None = None,
@@ -85,7 +81,7 @@ def walk_many(terrain_path: str | os.PathLike, model_path: str | os.PathLike | N
         raise FootfallError(f"runs must be an integer >= 1, got {runs!r}")
     hmap = HeightMap.load(terrain_path)
     reward_source(model_path, hmap)  # fail early, in this process, on a bad model
-    n = min(processes or workers(), runs)
+    n = min(processes or usable_cores(), runs)
     seeds = [seed + i for i in range(runs)]
     out: dict[int, RunRecord] = {}
     if n == 1:

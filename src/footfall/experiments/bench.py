@@ -16,6 +16,7 @@ import tracemalloc
 
 import numpy as np
 
+from footfall.core.compute import usable_cores
 from footfall.features.config import FeatureConfig
 from footfall.features.dense import score_grid
 from footfall.features.family import Candidates
@@ -115,7 +116,7 @@ def bench_scoring(repeats: int = 7, baseline_sample: int = 300, seed: int = 0) -
         "gflop": flops / 1e9,
         "gflop_per_second": flops / dense / 1e9,
         "peak_memory_mib": peak / 2 ** 20,
-        "cores": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count(),
+        "cores": usable_cores(),
         "machine": f"{platform.machine()} {platform.processor() or ''}".strip(),
         "numpy": np.__version__,
     }

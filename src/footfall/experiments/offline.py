@@ -20,21 +20,21 @@ from typing import Callable
 
 import numpy as np
 
-from footfall.features.family import PAPER_FEATURE_SETS
 from footfall.core.errors import FootfallError
-from footfall.learning.evaluation import expert_values, rank_scores
-from footfall.core.stats import bootstrap_ci
-from footfall.expert.synthetic import SyntheticExpert
 from footfall.core.files import write_text_atomic
-from footfall.learning.ranker import LEARNERS
+from footfall.core.stats import bootstrap_ci
+from footfall.data.store import DemoStore
+from footfall.expert.collect import collect_demonstrations
+from footfall.expert.synthetic import SyntheticExpert
+from footfall.features.dense import score_grid
+from footfall.features.family import PAPER_FEATURE_SETS
+from footfall.learning.evaluation import expert_values, rank_scores
 from footfall.learning.model import FootholdModel
+from footfall.learning.ranker import LEARNERS
+from footfall.learning.train import TrainingDemo, learn_model
 from footfall.plots.maps import save_kept_templates, save_score_maps
 from footfall.plots.relief import save_relief
-from footfall.features.dense import score_grid
-from footfall.data.store import DemoStore
 from footfall.terrain import make_board
-from footfall.learning.train import TrainingDemo, learn_model
-from footfall.expert.collect import collect_demonstrations
 
 
 @dataclass(frozen=True)

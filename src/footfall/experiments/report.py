@@ -13,9 +13,7 @@ import re
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
-
-from footfall.core.files import atomic_path, write_text_atomic
+from footfall.core.files import atomic_path, plain_json, write_text_atomic
 
 PAPER_TABLE2 = {"terrain": (47.6, 24.8, 5.9), "templates": (76.2, 20.2, 5.1),
                 "both": (100.0, 17.3, 3.3), "flat": (100.0, 13.4, 0.4)}
@@ -34,9 +32,9 @@ def _figures(out: Path, results: dict, maps: dict, models: dict, config, log) ->
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
 
+    from footfall.features.dense import score_grid
     from footfall.plots.maps import save_kept_templates, save_score_maps
     from footfall.plots.relief import save_relief
-    from footfall.features.dense import score_grid
 
     figs = []
     save_relief(maps["test"], out / "test-board.png", title="the test board (never trained on)")
@@ -237,14 +235,7 @@ def write_report(out: Path, results: dict, maps: dict, models: dict, config,
     """Write results.json, report.md and report.html (pictures embedded) into ``out``."""
     figs = _figures(out, results, maps, models, config, log)
     md = _markdown(results, figs)
-    write_text_atomic(out / "results.json", json.dumps(results, indent=1, default=_plain))
+    write_text_atomic(out / "results.json", json.dumps(plain_json(results, nonfinite="keep"), indent=1))
     write_text_atomic(out / "report.md", md)
     write_text_atomic(out / "report.html", _html(md, out))
 
-
-def _plain(value):
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, tuple):
-        return list(value)
-    raise TypeError(f"not JSON-serialisable: {type(value).__name__}")

@@ -45,17 +45,18 @@ from typing import Callable
 
 import numpy as np
 
-from footfall.features.family import PAPER_FEATURE_SETS
+from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
-from footfall.expert.synthetic import ExpertConfig, walking_expert
 from footfall.core.heightmap import HeightMap
-from footfall.learning.model import LEG_GROUPS, FootholdModel
 from footfall.core.robot import LITTLEDOG
 from footfall.data.runlog import RunRecord
-from footfall.experiments.batch import summarise, workers
 from footfall.data.store import DemoStore
-from footfall.terrain import make_board
+from footfall.experiments.batch import summarise
+from footfall.expert.synthetic import ExpertConfig, walking_expert
+from footfall.features.family import PAPER_FEATURE_SETS
+from footfall.learning.model import LEG_GROUPS, FootholdModel
 from footfall.sim.episode import WalkConfig
+from footfall.terrain import make_board
 
 STORE_NAME = "reproduce.sqlite"
 ROBOT_FEATURE_SET = "both"  # the function the robot walks with between correction rounds
@@ -192,9 +193,9 @@ def _execute(job: _Job) -> tuple[RunRecord, list]:
     """One run (in a worker process): walk, and the expert's corrections if asked for."""
     from threadpoolctl import threadpool_limits
 
+    from footfall.experiments.batch import reward_source
     from footfall.expert.corrections import corrections_to_demonstrations, inspect_run
     from footfall.expert.synthetic import SyntheticExpert
-    from footfall.experiments.batch import reward_source
     from footfall.sim.episode import walk
 
     hmap = HeightMap.load(job.terrain)
@@ -343,7 +344,7 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = Reproduce
     from footfall.core.files import write_text_atomic
 
     write_text_atomic(settings_path, mine)
-    processes = processes or workers()
+    processes = processes or usable_cores()
     started = time.perf_counter()
     paths = _make_terrain(out, config)
     maps = {name: HeightMap.load(p) for name, p in paths.items()}
@@ -509,9 +510,9 @@ def _choice_quality(store: DemoStore, maps: dict[str, HeightMap], config: Reprod
 
 def _ranking(store: DemoStore, test: HeightMap, models: dict, config: ReproduceConfig,
              log: Callable[[str], None]) -> dict:
-    from footfall.learning.evaluation import expert_values, rank_scores
-    from footfall.expert.synthetic import SyntheticExpert
     from footfall.expert.collect import collect_demonstrations
+    from footfall.expert.synthetic import SyntheticExpert
+    from footfall.learning.evaluation import expert_values, rank_scores
 
     expert = SyntheticExpert(config.expert)
     demos = store.demonstrations(source_prefix="walker:test")

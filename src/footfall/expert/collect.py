@@ -7,8 +7,6 @@ decision is a :class:`~footfall.data.store.Demonstration`. No dynamics, no balan
 
 from __future__ import annotations
 
-import dataclasses
-import json
 import math
 import numbers
 from collections.abc import Callable, Sequence
@@ -16,13 +14,14 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from footfall.features.candidates import DEFAULT_SPACING, reachable_footholds
 from footfall.core.errors import FootfallError
+from footfall.core.files import plain_json
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG, RobotDescription
-from footfall.features.config import FeatureConfig
 from footfall.core.state import RobotState, nominal_state
 from footfall.data.store import Demonstration
+from footfall.features.candidates import DEFAULT_SPACING, reachable_footholds
+from footfall.features.config import FeatureConfig
 
 APPROACH = 0.12  # [m] flat approach walked before the recorded x range begins
 EDGE_MARGIN = 0.15  # [m] the hips stay this far inside the board's x ends (start and stop)
@@ -42,14 +41,6 @@ class Expert(Protocol):
         """Noiseless value of each candidate, shape (n,), higher is better."""
 
 
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, np.generic | np.ndarray):
-        return value.tolist()
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return dataclasses.asdict(value)
-    return repr(value)
-
-
 def expert_settings(expert: Any) -> dict:
     """JSON settings of an expert, recorded with each demonstration it makes.
 
@@ -66,7 +57,7 @@ def expert_settings(expert: Any) -> dict:
     elif config is not None:
         config_to_dict = getattr(config, "to_dict", None)
         settings["config"] = config_to_dict() if callable(config_to_dict) else config
-    return json.loads(json.dumps(settings, default=_jsonable, sort_keys=True))
+    return plain_json(settings, nonfinite="keep", other="repr")
 
 
 def _check_rng(rng: Any) -> np.random.Generator:

@@ -35,11 +35,16 @@ from scipy import ndimage
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.core.kinematics import body_to_world, inverse_kinematics, joint_limit_margin, \
-    knee_position, world_to_body
-from footfall.features.pose_features import triangle_margins
+from footfall.core.kinematics import (
+    body_to_world,
+    inverse_kinematics,
+    joint_limit_margin,
+    knee_position,
+    world_to_body,
+)
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState
+from footfall.features.pose_features import triangle_margins
 
 EXPERT_TERMS: dict[str, str] = {
     "slip_margin": "[rad] friction margin of the ball in its weakest direction: "

@@ -19,7 +19,6 @@ blocks. Both give the same numbers as the per-candidate definitions.
 
 from __future__ import annotations
 
-import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -28,6 +27,7 @@ from functools import lru_cache
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
+from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap, PatchGrid
 from footfall.features.candidates import lattice
@@ -44,10 +44,6 @@ _BLOCK_BYTES = 8 << 20  # patches per block of the strided path: two blocks stay
 def _blas() -> ThreadpoolController:
     """The BLAS libraries, inspected once: limiting their threads per call is then cheap."""
     return ThreadpoolController()
-
-
-def _workers() -> int:
-    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
 
 
 @dataclass(frozen=True)
@@ -465,7 +461,7 @@ def _dense_aligned(hmap: HeightMap, config: FeatureConfig, terms: list[list[Dens
     tasks = [(p, a0) for p in reversed(plans) for a0 in range(0, board.na, p.rows)]
     # NumPy and BLAS release the GIL: blocks run on all cores, BLAS itself on one.
     with _blas().limit(limits=1, user_api="blas"):
-        workers = min(_workers(), len(tasks))
+        workers = min(usable_cores(), len(tasks))
         if workers > 1:
             with ThreadPoolExecutor(max_workers=workers) as pool:
                 list(pool.map(block, tasks))

@@ -20,8 +20,8 @@ from typing import Callable, Sequence
 import numpy as np
 
 from footfall.core.errors import FootfallError
-from footfall.features.scoring import score_footholds
 from footfall.core.stats import bootstrap_ci
+from footfall.features.scoring import score_footholds
 
 NEAR = 0.01  # [m] a pick this close (horizontally) to the expert's choice counts as "near"
 

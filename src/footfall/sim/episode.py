@@ -42,8 +42,13 @@ from threadpoolctl import threadpool_limits
 
 from footfall.control.body_path import BodyPath, BodyPathConfig, plan_body_path
 from footfall.control.cog import CogConfig, plan_cog, support_margin
-from footfall.control.footstep import FootstepConfig, FootstepPlanner, Judge, \
-    JudgedFootstepPlanner, NoFootholdError
+from footfall.control.footstep import (
+    FootstepConfig,
+    FootstepPlanner,
+    Judge,
+    JudgedFootstepPlanner,
+    NoFootholdError,
+)
 from footfall.control.lowlevel import (
     BodyCorrection,
     LowLevelConfig,
@@ -56,12 +61,13 @@ from footfall.control.lowlevel import (
 from footfall.control.pose_finder import PoseConfig, find_pose
 from footfall.control.swing import SwingConfig, swing_trajectory
 from footfall.core.errors import FootfallError
+from footfall.core.files import plain_json
 from footfall.core.heightmap import HeightMap
-from footfall.features.reward import LinearReward
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
-from footfall.data.runlog import RunRecord, RunStep
-from footfall.sim.simulation import PerturbationConfig, Simulation
 from footfall.core.state import RobotState, nominal_state
+from footfall.data.runlog import RunRecord, RunStep
+from footfall.features.reward import LinearReward
+from footfall.sim.simulation import PerturbationConfig, Simulation
 
 RewardFor = Callable[[str], LinearReward]
 _OTHER_LEGS = np.array([[j for j in range(4) if j != k] for k in range(4)])  # stance legs while
@@ -470,25 +476,13 @@ class Walk:
                                   s["t_liftoff"] if np.isfinite(s["t_liftoff"]) else sim_time,
                                   s["t_touchdown"], s["touchdown"], s["slip"])
                           for s in steps)
-        settings = {"walk": _jsonable(self.config.to_dict()),
+        settings = {"walk": plain_json(self.config.to_dict(), nonfinite="null"),
                     "perturbation": sim.perturbation.to_dict(), "robot": robot.name}
         if self.judge_name is not None:  # the footholds were chosen by a judge, not a reward
             settings["judge"] = self.judge_name
         self.sim.close()
-        return RunRecord(self.hmap.content_hash(), self.seed, settings, _jsonable(outcome),
+        return RunRecord(self.hmap.content_hash(), self.seed, settings, plain_json(outcome, nonfinite="null"),
                          run_steps)
-
-
-def _jsonable(value):
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, (np.floating, float)):
-        return float(value) if math.isfinite(value) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    return value
 
 
 def walk(hmap: HeightMap, reward_for: RewardFor, seed: int, config: WalkConfig = WalkConfig(),

@@ -30,7 +30,7 @@ from footfall.features.dense import score_grid
 from footfall.features.family import PAPER_FEATURE_SETS
 from footfall.learning.evaluation import expert_values, rank_scores
 from footfall.learning.model import FootholdModel
-from footfall.learning.ranker import LEARNERS
+from footfall.learning.ranker import BUILTIN_LEARNERS
 from footfall.learning.train import TrainingDemo, learn_model
 from footfall.plots.maps import save_kept_templates, save_score_maps
 from footfall.plots.relief import save_relief
@@ -49,7 +49,7 @@ class OfflineConfig:
     n_test_modules: int = 40  # demonstrations on unseen modules of the training kinds
     n_test_kind: int = 30  # demonstrations on the unseen kind
     feature_sets: tuple[str, ...] = PAPER_FEATURE_SETS
-    learners: tuple[str, ...] = LEARNERS
+    learners: tuple[str, ...] = BUILTIN_LEARNERS
     library_size: int = 1000
     l1_min_ablation: bool = True  # also learn L1 with lambda at the smallest CV error ("l1-min")
     seed: int = 0

@@ -14,6 +14,7 @@ cross-validation with folds grouped by demonstration.
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,9 +27,78 @@ from sklearn.utils.validation import check_is_fitted
 
 from footfall.core.errors import FootfallError
 
-LEARNERS = ("l1", "l2", "svm")
 SELECTIONS = ("1se", "min")  # lambda: one-standard-error rule, or the smallest CV error
 L2_LOG_C = (-6.0, 0.0)  # log10 of the smallest and largest C on the L2 / SVM path
+L1_LOG_SPAN = (0.3, 4.0)  # log10 of the L1 path's ends relative to the smallest C with a weight
+
+
+# ---------------------------------------------------------------- learners
+@dataclass(frozen=True)
+class Learner:
+    """A linear classifier the ranker can fit on pairwise differences: the registry's entry.
+
+    ``make(C, tol, max_iter)`` returns an unfitted scikit-learn classifier
+    *without intercept* whose fitted ``coef_`` is the weight vector (a
+    pairwise model has no intercept: x_c - x_i is symmetric around 0), with
+    any randomness fixed so that a fit is reproducible. ``path(pairs,
+    labels, n)`` gives ``n`` increasing values of C = 1 / lambda to
+    cross-validate, for standardised pairs (m, d) and labels (m,) of +-1.
+    """
+
+    name: str  # registry key, e.g. "l1"
+    description: str  # one line for --help and reports
+    make: Callable[[float, float, int], object]  # (C, tol, max_iter) -> classifier
+    path: Callable[[np.ndarray, np.ndarray, int], np.ndarray]  # -> (n,) C values, increasing
+    logistic: bool = True  # the loss is the logistic loss (its held-out value is reported)
+
+
+LEARNERS: dict[str, Learner] = {}  # every registered learner, by name
+
+
+def register_learner(learner: Learner) -> Learner:
+    """Make a learner available by its name (the CLI's ``--learner`` choices come from here)."""
+    if not learner.name or learner.name in LEARNERS and LEARNERS[learner.name] is not learner:
+        raise ValueError(f"learner {learner.name!r} has no name or is already registered")
+    LEARNERS[learner.name] = learner
+    return learner
+
+
+def get_learner(name: str) -> Learner:
+    """The registered learner called ``name``."""
+    if name not in LEARNERS:
+        raise FootfallError(f"unknown learner {name!r}; use one of {', '.join(LEARNERS)}")
+    return LEARNERS[name]
+
+
+def _l1_path(pairs: np.ndarray, labels: np.ndarray, n: int) -> np.ndarray:
+    # The smallest C at which a weight leaves zero: 1 / max |X^T y| / 2 (logistic loss).
+    c_min = 2.0 / np.max(np.abs(pairs.T @ labels))
+    return c_min * np.logspace(L1_LOG_SPAN[0], L1_LOG_SPAN[1], n)
+
+
+def _l2_path(pairs: np.ndarray, labels: np.ndarray, n: int) -> np.ndarray:
+    # L2 and the SVM have no such end: as C -> 0 their weights shrink toward
+    # the direction of the mean pairwise difference, whose ranking no longer
+    # changes with C. Six decades reach from that limit to weak regularisation.
+    return np.logspace(L2_LOG_C[0], L2_LOG_C[1], n)
+
+
+def _logistic(l1_ratio: float) -> Callable[[float, float, int], object]:
+    # liblinear shuffles the data: a fixed seed makes every fit reproducible.
+    return lambda C, tol, max_iter: LogisticRegression(
+        C=C, l1_ratio=l1_ratio, solver="liblinear", fit_intercept=False, tol=tol,
+        max_iter=max_iter, random_state=0)
+
+
+register_learner(Learner("l1", "L1-regularised logistic regression (paper Eq. 5): sparse, "
+                               "selects templates", _logistic(1.0), _l1_path))
+register_learner(Learner("l2", "L2-regularised logistic regression", _logistic(0.0), _l2_path))
+register_learner(Learner(
+    "svm", "linear SVM (hinge loss, L2)",
+    lambda C, tol, max_iter: LinearSVC(C=C, fit_intercept=False, tol=tol, max_iter=max_iter,
+                                       dual=True, random_state=0),
+    _l2_path, logistic=False))
+BUILTIN_LEARNERS = tuple(LEARNERS)  # the three the offline experiment compares
 
 
 def pairwise_transform(X: np.ndarray, y: np.ndarray, groups: np.ndarray,
@@ -103,19 +173,9 @@ def grouped_folds(pair_groups: np.ndarray, n_splits: int) -> list[tuple[np.ndarr
     return list(GroupKFold(n_splits=n_splits).split(pair_groups, groups=pair_groups))
 
 
-def _classifier(learner: str, C: float, tol: float, max_iter: int):
-    if learner == "svm":
-        return LinearSVC(C=C, fit_intercept=False, tol=tol, max_iter=max_iter, dual=True,
-                         random_state=0)
-    # liblinear shuffles the data: a fixed seed makes every fit reproducible.
-    return LogisticRegression(C=C, l1_ratio=1.0 if learner == "l1" else 0.0,
-                              solver="liblinear", fit_intercept=False, tol=tol,
-                              max_iter=max_iter, random_state=0)
-
-
-def _fit_coef(learner: str, C: float, X: np.ndarray, y: np.ndarray, tol: float,
+def _fit_coef(learner: Learner, C: float, X: np.ndarray, y: np.ndarray, tol: float,
               max_iter: int) -> np.ndarray:
-    clf = _classifier(learner, C, tol, max_iter)
+    clf = learner.make(C, tol, max_iter)
     with warnings.catch_warnings():
         # On separable folds liblinear may stop at max_iter: the path goes on.
         warnings.simplefilter("ignore", ConvergenceWarning)
@@ -123,7 +183,7 @@ def _fit_coef(learner: str, C: float, X: np.ndarray, y: np.ndarray, tol: float,
     return clf.coef_.ravel().copy()
 
 
-def _cross_validate(learner: str, Cs: np.ndarray, X: np.ndarray, y: np.ndarray, folds: list,
+def _cross_validate(learner: Learner, Cs: np.ndarray, X: np.ndarray, y: np.ndarray, folds: list,
                     tol: float, max_iter: int) -> list["PathPoint"]:
     """Held-out errors along the path, the folds of one C fitted one after another.
 
@@ -150,7 +210,7 @@ def _cross_validate(learner: str, Cs: np.ndarray, X: np.ndarray, y: np.ndarray, 
         res = [one(C, *f) for f in folds]
         errors = np.array([r[0] for r in res])
         path.append(PathPoint(float(C), float(errors.mean()), float(errors.std()),
-                              float(np.mean([r[1] for r in res])) if learner != "svm"
+                              float(np.mean([r[1] for r in res])) if learner.logistic
                               else float("nan"), float(np.mean([r[2] for r in res]))))
         errs = [p.error for p in path]
         k = int(np.argmin(errs))
@@ -175,14 +235,15 @@ class FootholdRanker(BaseEstimator):
 
     Parameters
     ----------
-    learner : {"l1", "l2", "svm"}
-        L1- or L2-regularised logistic regression, or a linear SVM (hinge
+    learner : str
+        A registered learner (:data:`LEARNERS`): ``"l1"`` or ``"l2"``
+        regularised logistic regression, or ``"svm"``, a linear SVM (hinge
         loss, L2), all without intercept, on pairwise differences.
     Cs : int or array-like
         The regularisation path: values of C = 1 / lambda, or how many
-        log-spaced values to try (for L1 from just above the smallest C that
-        keeps a weight non-zero, upward over 3.7 decades; for L2 and the SVM
-        over ``L2_LOG_C``).
+        log-spaced values the learner's path rule gives (L1: from just above
+        the smallest C that keeps a weight non-zero, upward over 3.7 decades;
+        L2 and the SVM: over ``L2_LOG_C``).
     cv : int
         Number of folds, grouped by demonstration.
     selection : {"1se", "min"}
@@ -202,6 +263,9 @@ class FootholdRanker(BaseEstimator):
         The chosen C (``lambda_ = 1 / C_``).
     path_ : list of PathPoint
         Cross-validation results along the path.
+    fold_groups_ : list of (train, test) arrays
+        The demonstrations (``groups`` values) in each fold's training and
+        held-out part: a demonstration is never split between them.
     """
 
     def __init__(self, learner: str = "l1", Cs: int | np.ndarray = 10, cv: int = 5,
@@ -213,7 +277,7 @@ class FootholdRanker(BaseEstimator):
         self.tol = tol
         self.max_iter = max_iter
 
-    def _path(self, pairs: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    def _path(self, learner: Learner, pairs: np.ndarray, labels: np.ndarray) -> np.ndarray:
         if not np.isscalar(self.Cs):
             Cs = np.sort(np.asarray(self.Cs, dtype=np.float64))
             if Cs.size == 0 or not (Cs > 0).all():
@@ -222,14 +286,7 @@ class FootholdRanker(BaseEstimator):
         n = int(self.Cs)
         if n < 1:
             raise FootfallError("Cs must be at least 1")
-        if self.learner == "l1":
-            # The smallest C at which a weight leaves zero: 1 / max |X^T y| / 2 (logistic loss).
-            c_min = 2.0 / np.max(np.abs(pairs.T @ labels))
-            return c_min * np.logspace(0.3, 4.0, n)
-        # L2 and the SVM have no such end: as C -> 0 their weights shrink toward
-        # the direction of the mean pairwise difference, whose ranking no longer
-        # changes with C. Six decades reach from that limit to weak regularisation.
-        return np.logspace(L2_LOG_C[0], L2_LOG_C[1], n)
+        return learner.path(pairs, labels, n)
 
     def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray) -> "FootholdRanker":
         """Learn from stacked candidate features of demonstrations (see :func:`pairwise_transform`).
@@ -240,8 +297,7 @@ class FootholdRanker(BaseEstimator):
         at twice the C; that is what is solved (half the work, the same
         weights). Pairs alternate in sign so that the solver sees two classes.
         """
-        if self.learner not in LEARNERS:
-            raise FootfallError(f"unknown learner {self.learner!r}; use one of {', '.join(LEARNERS)}")
+        learner = get_learner(self.learner)
         if int(self.cv) < 2:
             raise FootfallError("cv needs at least 2 folds")
         if self.selection not in SELECTIONS:
@@ -253,9 +309,11 @@ class FootholdRanker(BaseEstimator):
         signs = np.where(np.arange(pairs.shape[0]) % 2 == 0, 1.0, -1.0)
         Xs = pairs / scale * signs[:, None]
         labels = signs
-        Cs = self._path(Xs, labels)
+        Cs = self._path(learner, Xs, labels)
         folds = grouped_folds(pair_groups, int(self.cv))
-        self.path_ = _cross_validate(self.learner, 2.0 * Cs, Xs, labels, folds, self.tol,
+        self.fold_groups_ = [(np.unique(pair_groups[tr]), np.unique(pair_groups[te]))
+                             for tr, te in folds]
+        self.path_ = _cross_validate(learner, 2.0 * Cs, Xs, labels, folds, self.tol,
                                      self.max_iter)
         for point, C in zip(self.path_, Cs):
             point.C = float(C)  # report the C of the mirrored problem
@@ -270,7 +328,7 @@ class FootholdRanker(BaseEstimator):
         self.C_ = float(Cs[best])
         self.lambda_ = 1.0 / self.C_
         self.cv_error_ = self.path_[best].error
-        w = _fit_coef(self.learner, 2.0 * self.C_, Xs, labels, self.tol, self.max_iter)
+        w = _fit_coef(learner, 2.0 * self.C_, Xs, labels, self.tol, self.max_iter)
         self.scale_ = scale
         self.coef_ = w / scale
         self.n_features_in_ = X.shape[1]

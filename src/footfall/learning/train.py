@@ -35,7 +35,7 @@ from footfall.learning.dataset import (
     training_rows,
 )
 from footfall.learning.model import LEG_GROUPS, FootholdModel, RankingFunction
-from footfall.learning.ranker import LEARNERS, FootholdRanker
+from footfall.learning.ranker import FootholdRanker, get_learner
 
 
 @dataclass(frozen=True)
@@ -104,8 +104,7 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     :class:`footfall.learning.ranker.FootholdRanker`).
     """
     feature_set = check_feature_set(feature_set)
-    if learner not in LEARNERS:
-        raise FootfallError(f"unknown learner {learner!r}; use one of {', '.join(LEARNERS)}")
+    get_learner(learner)  # a registered learner, or a clear error
     config = config or FeatureConfig()
     if not demos:
         raise FootfallError("no demonstrations to learn from")

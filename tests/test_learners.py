@@ -1,0 +1,135 @@
+"""One suite of checks over every registered learner (footfall.learning.ranker.LEARNERS).
+
+Like scikit-learn's shared estimator checks: a learner is tested the moment it
+registers. ``ridge`` below is a learner of the test's own, registered here
+without touching any other module.
+"""
+
+import numpy as np
+import pytest
+from sklearn.base import clone
+from sklearn.linear_model import RidgeClassifier
+
+from footfall.core.errors import FootfallError
+from footfall.core.state import nominal_state
+from footfall.features.candidates import reachable_footholds
+from footfall.features.family import Candidates
+from footfall.features.terrain_features import TerrainFeatures
+from footfall.learning.model import FootholdModel
+from footfall.learning.ranker import (
+    LEARNERS,
+    FootholdRanker,
+    Learner,
+    get_learner,
+    register_learner,
+)
+from footfall.learning.train import TrainingDemo, learn_model
+from maps import rough_map
+
+RIDGE = Learner("ridge", "ridge classifier (squared loss, L2), for the suite's own check",
+                lambda C, tol, max_iter: RidgeClassifier(alpha=1.0 / C, fit_intercept=False,
+                                                         tol=tol, max_iter=max_iter),
+                lambda pairs, labels, n: np.logspace(-3.0, 1.0, n), logistic=False)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def ridge_registered():
+    register_learner(RIDGE)
+    yield
+    LEARNERS.pop("ridge", None)
+
+
+NAMES = ("l1", "l2", "svm", "ridge")
+
+
+def test_the_suite_covers_every_registered_learner():
+    assert set(LEARNERS) == set(NAMES)
+
+
+def _toy(seed: int = 0, n_demos: int = 24, n: int = 15, d: int = 6):
+    """Demonstrations whose choice maximises a known sparse score, with noise in the features."""
+    rng = np.random.default_rng(seed)
+    w = np.zeros(d)
+    w[:2] = (2.0, -1.0)
+    X = rng.normal(size=(n_demos * n, d))
+    groups = np.repeat(np.arange(n_demos), n)
+    y = np.zeros(n_demos * n, dtype=int)
+    score = (X @ w).reshape(n_demos, n)
+    y[np.arange(n_demos) * n + np.argmax(score, axis=1)] = 1
+    return X, y, groups
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_fit_returns_the_estimator_and_its_learned_state(name):
+    X, y, groups = _toy()
+    ranker = FootholdRanker(learner=name, Cs=5, cv=4)
+    assert ranker.fit(X, y, groups) is ranker
+    assert ranker.coef_.shape == (X.shape[1],) and np.isfinite(ranker.coef_).all()
+    assert ranker.scale_.shape == (X.shape[1],) and len(ranker.path_) >= 1
+    assert ranker.C_ > 0 and ranker.lambda_ == pytest.approx(1 / ranker.C_)
+    assert ranker.score(X, y, groups) > 0.5  # the known score is learned
+    assert clone(ranker).get_params() == ranker.get_params()
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_the_same_data_gives_the_same_weights(name):
+    X, y, groups = _toy(1)
+    a = FootholdRanker(learner=name, Cs=5, cv=3).fit(X, y, groups)
+    b = FootholdRanker(learner=name, Cs=5, cv=3).fit(X, y, groups)
+    np.testing.assert_array_equal(a.coef_, b.coef_)
+    np.testing.assert_array_equal([list(vars(p).values()) for p in a.path_],
+                                  [list(vars(p).values()) for p in b.path_])  # NaN == NaN here
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_demonstration_is_never_split_across_folds(name):
+    X, y, groups = _toy(2)
+    ranker = FootholdRanker(learner=name, Cs=4, cv=4).fit(X, y, groups)
+    assert len(ranker.fold_groups_) == 4
+    held_out = np.concatenate([test for _, test in ranker.fold_groups_])
+    assert np.array_equal(np.sort(held_out), np.unique(groups))  # each demonstration once
+    for train, test in ranker.fold_groups_:
+        assert np.intersect1d(train, test).size == 0
+        assert np.union1d(train, test).size == np.unique(groups).size
+
+
+@pytest.fixture(scope="module")
+def demos():
+    """Sixteen demonstrations on a rough map: the choice is the lowest foothold."""
+    board = rough_map(seed=5)
+    out = []
+    for k, leg in enumerate(("LF", "RF", "LH", "RH") * 4):
+        state = nominal_state(board, (-0.06 + 0.04 * (k // 4), 0.0), 0.0, leg)
+        cand = reachable_footholds(board, state)[::4]
+        out.append(TrainingDemo(board, state, cand, int(np.argmin(cand[:, 2]))))
+    return out
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_learned_model_round_trips_through_its_file_and_the_seed_fixes_it(name, demos,
+                                                                            tmp_path):
+    kw = dict(cv=3, Cs=4, training_candidates=30, seed=7)
+    model = learn_model(demos, "terrain", name, **kw)
+    again = learn_model(demos, "terrain", name, **kw)
+    path = tmp_path / f"{name}.npz"
+    model.save(path)
+    back = FootholdModel.load(path)
+    assert back.learner == name
+    d = demos[0]
+    c = Candidates.of_state(d.hmap, d.state, d.candidates, model.config)
+    for leg in ("LF", "LH"):
+        np.testing.assert_array_equal(back.reward_for(leg).terrain_reward(c),
+                                      model.reward_for(leg).terrain_reward(c))
+        np.testing.assert_array_equal(again.reward_for(leg).terrain_reward(c),
+                                      model.reward_for(leg).terrain_reward(c))
+    assert isinstance(model.functions["front"].families[0], TerrainFeatures)
+
+
+def test_an_unknown_learner_is_refused_with_the_registered_names():
+    with pytest.raises(FootfallError, match="unknown learner 'lasso'; use one of l1, l2, svm"):
+        get_learner("lasso")
+    X, y, groups = _toy()
+    with pytest.raises(FootfallError, match="unknown learner"):
+        FootholdRanker(learner="lasso").fit(X, y, groups)
+    with pytest.raises(ValueError, match="already registered"):
+        register_learner(Learner("l1", "another", RIDGE.make, RIDGE.path))

@@ -6,7 +6,7 @@ import pytest
 
 from footfall.core.errors import FootfallError
 from footfall.data.store import DemoStore
-from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
+from footfall.experiments.reproduce import ReproduceConfig, planned_seeds, run_reproduction
 from footfall.expert.synthetic import ExpertConfig
 from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig
 
@@ -74,6 +74,12 @@ def test_the_reproduction_has_every_table(uninterrupted):
         judged = [store.run(x["id"]) for x in store.runs(key_prefix="eval/expert/")]
         plain = [store.run(x["id"]) for x in store.runs(key_prefix="eval/default/")]
     assert judged and all(run.settings["judge"] == "SyntheticExpert.values" for run in judged)
+    planned = planned_seeds(TINY)  # every run drew its seed from the stream of its purpose
+    with DemoStore(uninterrupted / "reproduce.sqlite") as store:
+        for prefix, purpose in (("correct/", "correction runs"), ("eval/", "evaluation runs")):
+            seeds = {store.run(x["id"]).seed for x in store.runs(key_prefix=prefix)}
+            assert seeds and seeds <= set(planned[purpose])
+    assert r["boards"]["test"]["seed"] in planned["boards"]
     assert plain and all("judge" not in run.settings for run in plain)
     assert set(r["table1"]) == {"templates", "both"}
     assert r["demonstrations"]["n"] > 0

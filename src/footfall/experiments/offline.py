@@ -22,6 +22,7 @@ import numpy as np
 
 from footfall.core.errors import FootfallError
 from footfall.core.files import write_text_atomic
+from footfall.core.seeds import SeedStreams
 from footfall.core.stats import bootstrap_ci
 from footfall.data.store import DemoStore
 from footfall.expert.collect import collect_demonstrations
@@ -55,16 +56,21 @@ class OfflineConfig:
     seed: int = 0
     extra_rocky_train: int = 2  # more rocky boards in training: the kind that matters most
 
+    @property
+    def streams(self) -> SeedStreams:
+        """The experiment's named seed streams (boards, demonstrations, learning)."""
+        return SeedStreams("offline", self.seed)
+
     def boards(self) -> dict[str, list[tuple[str, float, int]]]:
-        """(kind, difficulty, seed) of the boards of each split."""
-        s = self.seed * 1000
-        train = [(k, d, s + 10 * i + j) for i, k in enumerate(self.train_kinds)
+        """(kind, difficulty, seed) of the boards of each split; seeds from the "boards" stream."""
+        seed = self.streams.seed_for
+        train = [(k, d, seed("boards", 0, i, j)) for i, k in enumerate(self.train_kinds)
                  for j, d in enumerate(self.train_difficulties)]
-        train += [("rocky", d, s + 500 + j) for j, d in
+        train += [("rocky", d, seed("boards", 1, j)) for j, d in
                   enumerate(np.linspace(0.4, 0.8, self.extra_rocky_train).round(2))]
-        test = [(k, d, s + 100 + 10 * i + j) for i, k in enumerate(self.train_kinds)
+        test = [(k, d, seed("boards", 2, i, j)) for i, k in enumerate(self.train_kinds)
                 for j, d in enumerate(self.test_difficulties)]
-        kind = [(self.unseen_kind, d, s + 200 + j) for j, d in
+        kind = [(self.unseen_kind, d, seed("boards", 3, j)) for j, d in
                 enumerate(self.train_difficulties)]
         return {"train": train, "test-modules": test, "test-kind": kind}
 
@@ -90,7 +96,8 @@ def run_offline(out: Path, config: OfflineConfig = OfflineConfig(),
             boards = [make_board([(kind, d)], seed) for kind, d, seed in specs]
             for b in boards:
                 maps[b.content_hash()] = b
-            demos = collect_demonstrations(boards, expert, wanted[split], seed=config.seed + k,
+            demos = collect_demonstrations(boards, expert, wanted[split],
+                                           seed=config.streams.seed_for("demonstrations", k),
                                            source=f"walker:{split}")
             store.add_demonstrations(demos, terrains=boards)
             splits[split] = store.demonstrations(source_prefix=f"walker:{split}")
@@ -112,7 +119,8 @@ def run_offline(out: Path, config: OfflineConfig = OfflineConfig(),
             t0 = time.perf_counter()
             log(f"learning {feature_set}/{label}")
             model = learn_model(training, feature_set, learner, library_size=config.library_size,
-                                seed=config.seed, bandwidth_rms=rms, selection=selection,
+                                seed=config.streams.seed_for("learning"), bandwidth_rms=rms,
+                                selection=selection,
                                 log=lambda s: log("  " + s))
             # The bandwidths are chosen once per feature set, by the L1 learner's
             # cross-validation, and reused by the comparison learners.

@@ -28,7 +28,15 @@ written with its corrections in one transaction under a unique key, so a
 reproduction stopped at any point and started again with the same arguments
 skips what is stored and loses nothing. Runs are seeded and independent of
 the order in which parallel workers finish; demonstrations are used in the
-order of their source (run key, step), never of their arrival.
+order of their source (run key, step), never of their arrival. Every seed --
+of a board, a run, the expert's inspection, its demonstrations, the learner
+-- comes from a named stream of :class:`footfall.core.seeds.SeedStreams`, so
+two reproduction seeds share no randomness.
+
+Each stage is a function with a typed result: :func:`open_workspace` (1),
+:func:`correction_rounds` (2), :func:`learn_functions` (3),
+:func:`evaluate` and :func:`sweep_difficulties` (4); :func:`run_reproduction`
+runs them in order and writes the report (5).
 """
 
 from __future__ import annotations
@@ -47,8 +55,10 @@ import numpy as np
 
 from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
+from footfall.core.files import write_text_atomic
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LITTLEDOG
+from footfall.core.seeds import SeedStreams
 from footfall.data.runlog import RunRecord
 from footfall.data.store import DemoStore
 from footfall.experiments.batch import summarise
@@ -147,19 +157,51 @@ def reproduction_walk() -> WalkConfig:
 
 
 # ------------------------------------------------------------------ boards
-def _board_name(prefix: str, spec: Spec) -> str:
-    return prefix + "-" + "-".join(f"{k}{d:g}" for k, d in spec)
+def seed_streams(config: ReproduceConfig) -> SeedStreams:
+    """The reproduction's named seed streams (boards, runs, inspection, demonstrations, learning)."""
+    return SeedStreams("reproduce", config.seed)
 
 
 def boards(config: ReproduceConfig) -> dict[str, tuple[Spec, int]]:
-    """Every board of the experiment: name -> (spec, board seed). Seeds never repeat."""
-    s = 1000 * config.seed
-    out = {f"train{i:02d}": (spec, s + 10 + i) for i, spec in enumerate(config.train_boards)}
-    out["test"] = (config.test_board, s + 500)
-    out["flat"] = ((("flat", 0.0),) * 3, s + 900)
+    """Every board of the experiment: name -> (spec, board seed), seeds from the "boards" stream."""
+    streams = seed_streams(config)
+    out = {f"train{i:02d}": (spec, streams.seed_for("boards", 0, i))
+           for i, spec in enumerate(config.train_boards)}
+    out["test"] = (config.test_board, streams.seed_for("boards", 1))
+    out["flat"] = ((("flat", 0.0),) * 3, streams.seed_for("boards", 2))
     for j, d in enumerate(config.sweep_difficulties):
-        out[f"sweep{d:g}"] = (tuple((k, d) for k, _ in config.test_board), s + 600 + j)
+        out[f"sweep{d:g}"] = (tuple((k, d) for k, _ in config.test_board),
+                              streams.seed_for("boards", 3, j))
     return out
+
+
+def correction_seeds(config: ReproduceConfig, r: int) -> list[tuple[int, int]]:
+    """Round ``r``'s (run seed, inspection seed) on each training board."""
+    streams = seed_streams(config)
+    return [(streams.seed_for("correction runs", r, i), streams.seed_for("inspection", r, i))
+            for i in range(len(config.train_boards))]
+
+
+def evaluation_seeds(config: ReproduceConfig) -> list[int]:
+    """The run seeds of Table II: every function and reference walks these (paired runs)."""
+    return seed_streams(config).seeds("evaluation runs", config.eval_runs)
+
+
+def sweep_seeds(config: ReproduceConfig) -> list[int]:
+    """The run seeds of the sweep: the same at every difficulty."""
+    return seed_streams(config).seeds("sweep runs", config.sweep_runs)
+
+
+def planned_seeds(config: ReproduceConfig) -> dict[str, list[int]]:
+    """Every seed the reproduction may use, by purpose (what the stages draw, listed up front)."""
+    streams = seed_streams(config)
+    rounds = range(config.rounds + config.extra_rounds)
+    return {"boards": [seed for _, seed in boards(config).values()],
+            "correction runs": [a for r in rounds for a, _ in correction_seeds(config, r)],
+            "inspection": [b for r in rounds for _, b in correction_seeds(config, r)],
+            "evaluation runs": evaluation_seeds(config), "sweep runs": sweep_seeds(config),
+            "demonstrations": [streams.seed_for("demonstrations", 0)],
+            "learning": [streams.seed_for("learning")]}
 
 
 def _make_terrain(out: Path, config: ReproduceConfig) -> dict[str, Path]:
@@ -174,19 +216,57 @@ def _make_terrain(out: Path, config: ReproduceConfig) -> dict[str, Path]:
     return paths
 
 
+@dataclass(frozen=True)
+class Workspace:
+    """A reproduction's folder: its settings, boards and seed streams (stage 1)."""
+
+    out: Path  # the report folder
+    config: ReproduceConfig
+    paths: dict[str, Path]  # board name -> height map file
+    maps: dict[str, HeightMap]  # board name -> height map
+    streams: SeedStreams
+
+    @property
+    def by_hash(self) -> dict[str, HeightMap]:
+        """The boards by content hash (how runs and demonstrations name their terrain)."""
+        return {m.content_hash(): m for m in self.maps.values()}
+
+    def model_path(self, name: str) -> Path:
+        """Where the model ``name`` (a round's or a final function's) is kept."""
+        return self.out / "models" / f"{name}.npz"
+
+
+def open_workspace(out: str | os.PathLike, config: ReproduceConfig) -> Workspace:
+    """The folder ``out`` made ready: refused if it holds other settings; boards made once."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise FootfallError(f"output path is not a directory: {out}")
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "models").mkdir(exist_ok=True)
+    settings_path = out / "config.json"
+    mine = json.dumps(config.to_dict(), sort_keys=True, indent=1)
+    if settings_path.exists() and settings_path.read_text() != mine:
+        raise FootfallError(f"{out} holds a reproduction with other settings; use another --out")
+    write_text_atomic(settings_path, mine)
+    paths = _make_terrain(out, config)
+    return Workspace(out, config, paths, {n: HeightMap.load(p) for n, p in paths.items()},
+                     seed_streams(config))
+
+
 # ---------------------------------------------------------------- the runs
 @dataclass(frozen=True)
 class _Job:
     key: str  # unique run key in the store
     terrain: str  # board file
     model: str | None  # model file (None: the hand-tuned default reward)
-    seed: int
+    seed: int  # the run's seed (start pose, registration, friction, sensors)
     walk: WalkConfig
     correct: bool = False  # the expert inspects the run
     margin: float = 0.0
     cap: int | None = None
     expert: ExpertConfig = field(default_factory=ExpertConfig)
     judge: bool = False  # the expert chooses every foothold itself (model unused)
+    inspect_seed: int = 0  # the expert's randomness while it inspects the run
 
 
 def _execute(job: _Job) -> tuple[RunRecord, list]:
@@ -206,7 +286,7 @@ def _execute(job: _Job) -> tuple[RunRecord, list]:
         demos = []
         if job.correct:
             expert = SyntheticExpert(job.expert)
-            found = inspect_run(record, hmap, expert, job.margin, rng=job.seed)
+            found = inspect_run(record, hmap, expert, job.margin, rng=job.inspect_seed)
             found = _worst(found, job.margin, job.cap)
             demos = corrections_to_demonstrations(record, job.key, found, expert)
     return record, demos
@@ -221,40 +301,47 @@ def _worst(corrections: list, margin: float, cap: int | None) -> list:
     return [c if c.k in keep else replace(c, label=None) for c in corrections]
 
 
-def _run_jobs(jobs: list[_Job], store: DemoStore, terrains: dict[str, HeightMap],
-              processes: int, desc: str, on_run: Callable[[str], None] | None,
-              log: Callable[[str], None]) -> None:
-    """Run the jobs not yet in the store, in parallel; each stored with its demos on arrival."""
-    from tqdm import tqdm
+@dataclass
+class _Runner:
+    """Runs jobs not yet in the store, in parallel; each run is stored with its demos on arrival."""
 
-    done = {r["key"] for r in store.runs()}
-    todo = [j for j in jobs if j.key not in done]
-    if len(todo) < len(jobs):
-        log(f"{desc}: {len(jobs) - len(todo)} of {len(jobs)} runs already stored")
-    if not todo:
-        return
+    store: DemoStore
+    terrains: dict[str, HeightMap]  # content hash -> board
+    processes: int
+    on_run: Callable[[str], None] | None
+    log: Callable[[str], None]
 
-    def keep(record: RunRecord, demos: list) -> None:
-        store.add_run(record, terrains=[terrains[record.terrain_hash]], demonstrations=demos)
-        bar.update(1)
-        if on_run is not None:
-            on_run(record.key)
+    def run(self, jobs: list[_Job], desc: str) -> None:
+        from tqdm import tqdm
 
-    with tqdm(total=len(todo), desc=desc, unit="run", disable=None, dynamic_ncols=True) as bar:
-        if processes <= 1 or len(todo) == 1:
-            for job in todo:
-                keep(*_execute(job))
+        done = {r["key"] for r in self.store.runs()}
+        todo = [j for j in jobs if j.key not in done]
+        if len(todo) < len(jobs):
+            self.log(f"{desc}: {len(jobs) - len(todo)} of {len(jobs)} runs already stored")
+        if not todo:
             return
-        with ProcessPoolExecutor(max_workers=min(processes, len(todo)),
-                                 mp_context=get_context("spawn")) as pool:
-            futures = [pool.submit(_execute, job) for job in todo]
-            try:
-                for f in as_completed(futures):
-                    keep(*f.result())
-            except BaseException:
-                for f in futures:
-                    f.cancel()
-                raise
+        with tqdm(total=len(todo), desc=desc, unit="run", disable=None, dynamic_ncols=True) as bar:
+            if self.processes <= 1 or len(todo) == 1:
+                for job in todo:
+                    self._keep(*_execute(job), bar)
+                return
+            with ProcessPoolExecutor(max_workers=min(self.processes, len(todo)),
+                                     mp_context=get_context("spawn")) as pool:
+                futures = [pool.submit(_execute, job) for job in todo]
+                try:
+                    for f in as_completed(futures):
+                        self._keep(*f.result(), bar)
+                except BaseException:
+                    for f in futures:
+                        f.cancel()
+                    raise
+
+    def _keep(self, record: RunRecord, demos: list, bar) -> None:
+        self.store.add_run(record, terrains=[self.terrains[record.terrain_hash]],
+                           demonstrations=demos)
+        bar.update(1)
+        if self.on_run is not None:
+            self.on_run(record.key)
 
 
 # ---------------------------------------------------------------- learning
@@ -266,13 +353,15 @@ def _training_key(demos: list, feature_set: str, settings: dict) -> str:
     return h.hexdigest()
 
 
-def _learn(path: Path, demos: list, terrains: dict[str, HeightMap], feature_set: str,
-           config: ReproduceConfig, rms: float | None, log: Callable[[str], None]) -> FootholdModel:
-    """The model learned from ``demos`` (ordered by source), reused from ``path`` if it matches."""
+def _learn(ws: Workspace, name: str, demos: list, feature_set: str, rms: float | None,
+           log: Callable[[str], None]) -> FootholdModel:
+    """The model learned from ``demos`` (ordered by source), reused from its file if it matches."""
     from footfall.learning.train import TrainingDemo, learn_model
 
+    config, path = ws.config, ws.model_path(name)
+    seed = ws.streams.seed_for("learning")
     settings = {"library_size": config.library_size, "selection": config.selection,
-                "cv": config.cv, "rms": rms, "seed": config.seed,
+                "cv": config.cv, "rms": rms, "seed": seed,
                 "training_candidates": config.training_candidates}
     key = _training_key(demos, feature_set, settings)
     if path.exists():
@@ -282,14 +371,14 @@ def _learn(path: Path, demos: list, terrains: dict[str, HeightMap], feature_set:
                 return model
         except FootfallError:
             pass  # unreadable or stale: learn again
+    terrains = ws.by_hash
     training = [TrainingDemo(terrains[d.terrain_hash], d.state, d.candidates, d.chosen)
                 for d in demos]
     t0 = time.perf_counter()
     model = learn_model(training, feature_set, "l1", library_size=config.library_size,
                         training_candidates=config.training_candidates,
                         bandwidth_rms=None if rms is None else (rms,) * 3, cv=config.cv,
-                        seed=config.seed, selection=config.selection,
-                        log=lambda s: log("    " + s))
+                        seed=seed, selection=config.selection, log=lambda s: log("    " + s))
     model = replace(model, info={**model.info, "training_key": key,
                                  "sources": [d.source for d in demos]})
     model.save(path)
@@ -322,124 +411,177 @@ def _source_order(source: str) -> tuple:
     return head, int(k)
 
 
+# ---------------------------------------------------------------- stage 2
+@dataclass(frozen=True)
+class Corrections:
+    """What the correction rounds gave (paper §II-B): the rounds and every correction."""
+
+    rounds: list[dict]  # per round: its reward, runs, crossings, corrections so far
+    demos: list  # the corrections of every round, in source order (run key, step)
+
+
+def correction_rounds(ws: Workspace, runner: _Runner) -> Corrections:
+    """Walk, correct, learn, for up to ``rounds + extra_rounds`` rounds (see the module)."""
+    config, log = ws.config, runner.log
+    train = [n for n in ws.paths if n.startswith("train")]
+    model_path: str | None = None
+    rounds: list[dict] = []
+    short: list[str] = []
+    for r in range(config.rounds + config.extra_rounds):
+        jobs = [_Job(f"correct/r{r}/{name}", str(ws.paths[name]), model_path, seed, config.walk,
+                     True, config.margin, config.corrections_per_run, config.expert,
+                     inspect_seed=inspect)
+                for name, (seed, inspect) in zip(train, correction_seeds(config, r))]
+        runner.run(jobs, f"round {r} runs")
+        demos = _corrections(runner.store, r + 1)
+        runs = [runner.store.runs(key_prefix=j.key)[0] for j in jobs]
+        rounds.append({"round": r, "reward": (f"models/{Path(model_path).name}" if model_path
+                                              else "hand-tuned default"),
+                       "runs": len(runs), "successes": sum(x["result"]["success"] for x in runs),
+                       "demonstrations_total": len(demos)})
+        log(f"round {r}: {rounds[-1]['successes']} / {len(runs)} crossings, "
+            f"{len(demos)} corrections so far")
+        short = _short_groups(demos, config.cv)
+        if (len(demos) >= config.target_demos or r >= config.rounds - 1) and not short:
+            break
+        if short:  # too few to learn from: walk the next round with the same reward
+            log(f"  too few corrections of the {' and '.join(short)} legs to learn from "
+                f"({config.cv}-fold CV); the next round walks with the same reward"
+                + (" (an extra round)" if r + 1 >= config.rounds else ""))
+            continue
+        _learn(ws, f"round{r + 1}", demos, ROBOT_FEATURE_SET, config.round_bandwidth_rms, log)
+        model_path = str(ws.model_path(f"round{r + 1}"))
+    if short:
+        raise FootfallError(
+            f"after {len(rounds)} correction rounds the {' and '.join(short)} legs have fewer "
+            f"than {config.cv} corrections, too few to learn from: the robot's choices seldom "
+            f"fell short of the expert's by the margin ({config.margin:g} units)")
+    return Corrections(rounds, _corrections(runner.store, len(rounds)))
+
+
+# ---------------------------------------------------------------- stage 3
+@dataclass(frozen=True)
+class Functions:
+    """The paper's three ranking functions, learned from the same corrections (Table I)."""
+
+    models: dict[str, FootholdModel]  # feature set -> model
+
+    def table1(self) -> dict:
+        """Templates kept per scale and leg group, for the sets with templates."""
+        return {fs: m.templates_kept() for fs, m in self.models.items() if fs != "terrain"}
+
+    def summary(self) -> dict:
+        """Per set and leg group: lambda, CV error, non-zero weights, template bandwidths."""
+        return {fs: {g: {"lambda": f.info["lambda"], "cv_error": f.info["cv_error"],
+                         "n_nonzero": f.info["n_nonzero"],
+                         "bandwidth_rms_m": f.info.get("bandwidth_rms_m")}
+                     for g, f in m.functions.items()} for fs, m in self.models.items()}
+
+
+def learn_functions(ws: Workspace, demos: list, log: Callable[[str], None]) -> Functions:
+    """Terrain features, templates, templates + features: L1, lambda at the smallest CV error."""
+    models = {}
+    for fs in PAPER_FEATURE_SETS:
+        log(f"learning {fs} (L1, lambda at the smallest CV error)")
+        models[fs] = _learn(ws, fs, demos, fs, ws.config.final_bandwidth_rms, log)
+    return Functions(models)
+
+
+# ---------------------------------------------------------------- stage 4
+@dataclass(frozen=True)
+class Evaluation:
+    """Table II: every function and reference walked with the same run seeds (paired runs)."""
+
+    seeds: list[int]  # the run seeds, from the "evaluation runs" stream
+    table2: dict  # row -> success, Wilson interval, slip, speed (batch.summarise)
+    slips_mm: dict  # row -> slip [mm] of every foothold of its successful runs
+    strip_seed: int  # the report's Fig. 4: the first templates + features run that crossed
+
+    @property
+    def all_succeed(self) -> bool:
+        """Whether every learned function crossed in every run (then the sweep separates them)."""
+        return all(self.table2[fs]["successes"] == self.table2[fs]["runs"]
+                   for fs in PAPER_FEATURE_SETS)
+
+
+def evaluate(ws: Workspace, runner: _Runner) -> Evaluation:
+    """The three functions, the flat baseline and the two references on the test board."""
+    config, walk_cfg = ws.config, ws.config.walk
+    seeds = evaluation_seeds(config)
+    model = {fs: str(ws.model_path(fs)) for fs in PAPER_FEATURE_SETS}
+    test = str(ws.paths["test"])
+    jobs = [_Job(f"eval/{fs}/s{s}", test, model[fs], s, walk_cfg)
+            for fs in PAPER_FEATURE_SETS for s in seeds]
+    jobs += [_Job(f"eval/flat/s{s}", str(ws.paths["flat"]), model[ROBOT_FEATURE_SET], s,
+                  walk_cfg) for s in seeds]
+    # References on the same board and seeds: the expert choosing every foothold itself
+    # (the best a function learned from it can hope for) and the hand-tuned default.
+    jobs += [_Job(f"eval/expert/s{s}", test, None, s, walk_cfg, expert=config.expert,
+                  judge=True) for s in seeds]
+    jobs += [_Job(f"eval/default/s{s}", test, None, s, walk_cfg) for s in seeds]
+    runner.run(jobs, "evaluation runs")
+    store = runner.store
+    rows = (*PAPER_FEATURE_SETS, *TABLE2_REFERENCES)
+    table2 = {fs: _summary(store, f"eval/{fs}/") for fs in rows}
+    crossed = {int(r["key"].rsplit("/s", 1)[1])
+               for r in store.runs(key_prefix=f"eval/{ROBOT_FEATURE_SET}/")
+               if r["result"]["success"]}
+    strip = next((s for s in seeds if s in crossed), seeds[0])  # a crossing, if any
+    return Evaluation(seeds, table2, {fs: _slips(store, f"eval/{fs}/") for fs in rows}, strip)
+
+
+def sweep_difficulties(ws: Workspace, runner: _Runner, evaluation: Evaluation) -> dict:
+    """Harder test boards, walked only if every function crossed every time on the test board."""
+    if not evaluation.all_succeed:
+        return {}
+    seeds = sweep_seeds(ws.config)  # paired over difficulties too
+    sweep = {}
+    for d in ws.config.sweep_difficulties:
+        board = str(ws.paths[f"sweep{d:g}"])
+        jobs = [_Job(f"sweep/{d:g}/{fs}/s{s}", board, str(ws.model_path(fs)), s, ws.config.walk)
+                for fs in PAPER_FEATURE_SETS for s in seeds]
+        runner.run(jobs, f"sweep {d:g} runs")
+        sweep[f"{d:g}"] = {fs: _summary(runner.store, f"sweep/{d:g}/{fs}/")
+                           for fs in PAPER_FEATURE_SETS}
+    return sweep
+
+
 # ------------------------------------------------------------------ the job
 def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = ReproduceConfig(),
                      processes: int | None = None, log: Callable[[str], None] = print,
                      on_run: Callable[[str], None] | None = None) -> dict:
     """Run (or resume) the whole experiment into ``out``; return the results (also results.json).
 
-    ``on_run(key)`` is called after each run is stored (e.g. to show progress).
+    The stages of the module's docstring, one function each. ``on_run(key)``
+    is called after each run is stored (e.g. to show progress).
     """
     from footfall.experiments.report import write_report
 
-    out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise FootfallError(f"output path is not a directory: {out}")
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "models").mkdir(exist_ok=True)
-    settings_path = out / "config.json"
-    mine = json.dumps(config.to_dict(), sort_keys=True, indent=1)
-    if settings_path.exists() and settings_path.read_text() != mine:
-        raise FootfallError(f"{out} holds a reproduction with other settings; use another --out")
-    from footfall.core.files import write_text_atomic
-
-    write_text_atomic(settings_path, mine)
-    processes = processes or usable_cores()
     started = time.perf_counter()
-    paths = _make_terrain(out, config)
-    maps = {name: HeightMap.load(p) for name, p in paths.items()}
-    by_hash = {m.content_hash(): m for m in maps.values()}
-    walk_cfg = config.walk
-    results: dict = {"config": config.to_dict()}
-    with DemoStore(out / STORE_NAME, create=True) as store:
-        # 2. Corrections, round by round.
-        model_path: str | None = None
-        rounds = []
-        short: list[str] = []
-        for r in range(config.rounds + config.extra_rounds):
-            jobs = [_Job(f"correct/r{r}/{name}", str(paths[name]), model_path,
-                         1000 * config.seed + 100 * r + i, walk_cfg, True, config.margin,
-                         config.corrections_per_run, config.expert)
-                    for i, name in enumerate(n for n in paths if n.startswith("train"))]
-            _run_jobs(jobs, store, by_hash, processes, f"round {r} runs", on_run, log)
-            demos = _corrections(store, r + 1)
-            runs = [store.runs(key_prefix=j.key)[0] for j in jobs]
-            rounds.append({"round": r, "reward": (f"models/{Path(model_path).name}" if model_path
-                                                  else "hand-tuned default"),
-                           "runs": len(runs), "successes": sum(x["result"]["success"] for x in runs),
-                           "demonstrations_total": len(demos)})
-            log(f"round {r}: {rounds[-1]['successes']} / {len(runs)} crossings, "
-                f"{len(demos)} corrections so far")
-            short = _short_groups(demos, config.cv)
-            if (len(demos) >= config.target_demos or r >= config.rounds - 1) and not short:
-                break
-            if short:  # too few to learn from: walk the next round with the same reward
-                log(f"  too few corrections of the {' and '.join(short)} legs to learn from "
-                    f"({config.cv}-fold CV); the next round walks with the same reward"
-                    + (" (an extra round)" if r + 1 >= config.rounds else ""))
-                continue
-            _learn(out / "models" / f"round{r + 1}.npz", demos, by_hash,
-                   ROBOT_FEATURE_SET, config, config.round_bandwidth_rms, log)
-            model_path = str(out / "models" / f"round{r + 1}.npz")
-        if short:
-            raise FootfallError(
-                f"after {len(rounds)} correction rounds the {' and '.join(short)} legs have fewer "
-                f"than {config.cv} corrections, too few to learn from: the robot's choices seldom "
-                f"fell short of the expert's by the margin ({config.margin:g} units)")
-        results["rounds"] = rounds
-        demos = _corrections(store, len(rounds))
-        results["demonstrations"] = _demo_summary(demos, by_hash)
-
-        # 3. The three ranking functions, from the same corrections.
-        models = {}
-        for fs in PAPER_FEATURE_SETS:
-            log(f"learning {fs} (L1, lambda at the smallest CV error)")
-            models[fs] = _learn(out / "models" / f"{fs}.npz", demos, by_hash, fs, config,
-                                config.final_bandwidth_rms, log)
-        results["table1"] = {fs: m.templates_kept() for fs, m in models.items() if fs != "terrain"}
-        results["models"] = {fs: {g: {"lambda": f.info["lambda"], "cv_error": f.info["cv_error"],
-                                      "n_nonzero": f.info["n_nonzero"],
-                                      "bandwidth_rms_m": f.info.get("bandwidth_rms_m")}
-                                  for g, f in m.functions.items()} for fs, m in models.items()}
-
-        # 4. Walking evaluation: the same seeds for every function (paired runs).
-        seeds = [1000 * config.seed + 5000 + k for k in range(config.eval_runs)]
-        model_file = {fs: str(out / "models" / f"{fs}.npz") for fs in PAPER_FEATURE_SETS}
-        jobs = [_Job(f"eval/{fs}/s{s}", str(paths["test"]), model_file[fs], s, walk_cfg)
-                for fs in PAPER_FEATURE_SETS for s in seeds]
-        jobs += [_Job(f"eval/flat/s{s}", str(paths["flat"]), model_file[ROBOT_FEATURE_SET], s,
-                      walk_cfg) for s in seeds]
-        # References on the same board and seeds: the expert choosing every foothold itself
-        # (the best a function learned from it can hope for) and the hand-tuned default.
-        jobs += [_Job(f"eval/expert/s{s}", str(paths["test"]), None, s, walk_cfg,
-                      expert=config.expert, judge=True) for s in seeds]
-        jobs += [_Job(f"eval/default/s{s}", str(paths["test"]), None, s, walk_cfg) for s in seeds]
-        _run_jobs(jobs, store, by_hash, processes, "evaluation runs", on_run, log)
-        table2 = {fs: _summary(store, f"eval/{fs}/") for fs in (*PAPER_FEATURE_SETS, *TABLE2_REFERENCES)}
-        results["table2"] = table2
-        results["slips_mm"] = {fs: _slips(store, f"eval/{fs}/") for fs in table2}
-        sweep = {}
-        if all(table2[fs]["successes"] == table2[fs]["runs"] for fs in PAPER_FEATURE_SETS):
-            sseeds = [1000 * config.seed + 7000 + k for k in range(config.sweep_runs)]
-            for d in config.sweep_difficulties:
-                jobs = [_Job(f"sweep/{d:g}/{fs}/s{s}", str(paths[f"sweep{d:g}"]), model_file[fs],
-                             s, walk_cfg) for fs in PAPER_FEATURE_SETS for s in sseeds]
-                _run_jobs(jobs, store, by_hash, processes, f"sweep {d:g} runs", on_run, log)
-                sweep[f"{d:g}"] = {fs: _summary(store, f"sweep/{d:g}/{fs}/")
-                                   for fs in PAPER_FEATURE_SETS}
-        results["sweep"] = sweep
-        crossed = [r["key"] for r in store.runs(key_prefix=f"eval/{ROBOT_FEATURE_SET}/")
-                   if r["result"]["success"]]
-        results["strip_seed"] = (min(int(k.rsplit("/s", 1)[1]) for k in crossed) if crossed
-                                 else seeds[0])  # the report's Fig. 4: a crossing, if any
+    ws = open_workspace(out, config)
+    results: dict = {"config": config.to_dict(),
+                     "boards": {name: {"modules": [list(m) for m in spec], "seed": seed}
+                                for name, (spec, seed) in boards(config).items()}}
+    with DemoStore(ws.out / STORE_NAME, create=True) as store:
+        runner = _Runner(store, ws.by_hash, processes or usable_cores(), on_run, log)
+        corrections = correction_rounds(ws, runner)
+        results["rounds"] = corrections.rounds
+        results["demonstrations"] = _demo_summary(corrections.demos, ws.by_hash)
+        functions = learn_functions(ws, corrections.demos, log)
+        results["table1"] = functions.table1()
+        results["models"] = functions.summary()
+        evaluation = evaluate(ws, runner)
+        results["table2"] = evaluation.table2
+        results["slips_mm"] = evaluation.slips_mm
+        results["sweep"] = sweep_difficulties(ws, runner, evaluation)
+        results["strip_seed"] = evaluation.strip_seed
         results["test_difficulty"] = max(d for _, d in config.test_board)
-
         # The offline ranking of the three functions on the expert's demonstrations, and the
         # expert's verdict on every choice the robot made in the test-board runs.
-        results["ranking"] = _ranking(store, maps["test"], models, config, log)
-        results["choices"] = _choice_quality(store, by_hash, config, log)
+        results["ranking"] = _ranking(ws, store, functions.models, log)
+        results["choices"] = _choice_quality(store, ws.by_hash, config, log)
         results["seconds_this_session"] = time.perf_counter() - started
-    write_report(out, results, maps, models, config, log)
+    write_report(ws.out, results, ws.maps, functions.models, config, log)
     return results
 
 
@@ -508,17 +650,19 @@ def _choice_quality(store: DemoStore, maps: dict[str, HeightMap], config: Reprod
     return out
 
 
-def _ranking(store: DemoStore, test: HeightMap, models: dict, config: ReproduceConfig,
-             log: Callable[[str], None]) -> dict:
+def _ranking(ws: Workspace, store: DemoStore, models: dict, log: Callable[[str], None]) -> dict:
+    """Rank-eval of the three functions on the expert's demonstrations over the test board."""
     from footfall.expert.collect import collect_demonstrations
     from footfall.expert.synthetic import SyntheticExpert
     from footfall.learning.evaluation import expert_values, rank_scores
 
+    config, test = ws.config, ws.maps["test"]
     expert = SyntheticExpert(config.expert)
     demos = store.demonstrations(source_prefix="walker:test")
     if len(demos) < config.offline_demos:  # collected and stored in one transaction: all or none
         made = collect_demonstrations([test], expert, config.offline_demos,
-                                      seed=1000 * config.seed + 3, source="walker:test")
+                                      seed=ws.streams.seed_for("demonstrations", 0),
+                                      source="walker:test")
         store.add_demonstrations(made, terrains=[test])
         demos = store.demonstrations(source_prefix="walker:test")
     log(f"ranking on {len(demos)} expert demonstrations over the test board")

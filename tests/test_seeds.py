@@ -1,0 +1,64 @@
+"""Named seed streams: the same name gives the same seed, and no two purposes or seeds collide."""
+
+from itertools import combinations
+
+import numpy as np
+import pytest
+
+from footfall.core.errors import FootfallError
+from footfall.core.seeds import PURPOSES, SeedStreams
+from footfall.experiments.offline import OfflineConfig
+from footfall.experiments.reproduce import ReproduceConfig, planned_seeds
+
+
+def test_a_stream_gives_the_same_seed_for_the_same_name_and_index():
+    a, b = SeedStreams("reproduce", 3), SeedStreams("reproduce", 3)
+    assert a.seed_for("evaluation runs", 4) == b.seed_for("evaluation runs", 4)
+    assert a.seeds("sweep runs", 5) == [a.seed_for("sweep runs", k) for k in range(5)]
+    x = a.generator("learning").random(3)
+    np.testing.assert_array_equal(x, b.generator("learning").random(3))
+    assert all(0 <= s < 2 ** 63 for s in a.seeds("boards", 50))
+
+
+def test_experiments_seeds_purposes_and_indices_are_independent_streams():
+    seeds = {
+        (experiment, seed, purpose, index): SeedStreams(experiment, seed).seed_for(purpose, *index)
+        for experiment in ("reproduce", "offline") for seed in (0, 1, 1000)
+        for purpose in PURPOSES for index in ((), (0,), (1,), (0, 1), (1, 0))}
+    assert len(set(seeds.values())) == len(seeds)  # arithmetic offsets would collide here
+
+
+def test_bad_names_and_seeds_are_refused():
+    with pytest.raises(FootfallError, match="unknown seed purpose 'runs'"):
+        SeedStreams("reproduce", 0).seed_for("runs")
+    with pytest.raises(FootfallError, match="unknown experiment"):
+        SeedStreams("walk", 0)
+    for bad in (-1, 1.5, True, "0"):
+        with pytest.raises(FootfallError, match="integer >= 0"):
+            SeedStreams("reproduce", bad)
+    with pytest.raises(FootfallError, match="indices"):
+        SeedStreams("reproduce", 0).seed_for("boards", -1)
+
+
+@pytest.mark.parametrize("make", [ReproduceConfig, ReproduceConfig.quick])
+def test_two_reproduction_seeds_share_no_board_seed_and_no_run_seed(make):
+    planned = {seed: planned_seeds(make(seed=seed)) for seed in (0, 1, 2, 5)}
+    for seed, by_purpose in planned.items():
+        every = [s for seeds in by_purpose.values() for s in seeds]
+        assert len(every) == len(set(every)), f"seed {seed}: two purposes share a seed"
+        assert len(by_purpose["boards"]) == len(make(seed=seed).train_boards) + 2 + \
+            len(make(seed=seed).sweep_difficulties)
+    for (a, pa), (b, pb) in combinations(planned.items(), 2):
+        for purpose in pa:
+            assert not set(pa[purpose]) & set(pb[purpose]), \
+                f"reproduction seeds {a} and {b} share {purpose} seeds"
+        runs_a = {s for p in ("correction runs", "evaluation runs", "sweep runs") for s in pa[p]}
+        runs_b = {s for p in ("correction runs", "evaluation runs", "sweep runs") for s in pb[p]}
+        assert not runs_a & runs_b  # not even across purposes (seed 5's corrections, 0's eval)
+
+
+def test_two_offline_seeds_share_no_board():
+    a, b = OfflineConfig(seed=0).boards(), OfflineConfig(seed=1).boards()
+    seeds_a = [s for split in a.values() for _, _, s in split]
+    seeds_b = [s for split in b.values() for _, _, s in split]
+    assert len(set(seeds_a)) == len(seeds_a) and not set(seeds_a) & set(seeds_b)

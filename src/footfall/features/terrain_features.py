@@ -30,6 +30,9 @@ from footfall.features.family import Candidates, DenseTerms, FeatureFamily, regi
 RAW_NAMES = ("slope_x", "slope_y", "curv_x", "curv_y")  # linear in the heights
 QUANTITIES = ("slope_x_pos", "slope_x_neg", "slope_y_pos", "slope_y_neg",
               "curv_x_pos", "curv_x_neg", "curv_y_pos", "curv_y_neg", "std")
+_POS = [QUANTITIES.index(f"{r}_pos") for r in RAW_NAMES]  # each raw fit's positive part
+_NEG = [QUANTITIES.index(f"{r}_neg") for r in RAW_NAMES]  # and its negative part
+_STD = QUANTITIES.index("std")
 
 
 def feature_names(config: FeatureConfig | None = None) -> tuple[str, ...]:
@@ -281,9 +284,9 @@ class TerrainFeatures(FeatureFamily):
 
         def add_full(g: np.ndarray, cc: np.ndarray, total: np.ndarray, r: np.ndarray) -> None:
             fits = g.astype(np.float64)  # slope_x, slope_y, curv_x, curv_y of every window
-            r += tw[0:8:2] @ np.maximum(fits, 0.0) - tw[1:8:2] @ np.minimum(fits, 0.0)
+            r += tw[_POS] @ np.maximum(fits, 0.0) - tw[_NEG] @ np.minimum(fits, 0.0)
             mean = total.astype(np.float64) / grid.size
-            r += tw[8] * np.sqrt(np.maximum(cc / grid.size - mean * mean, 0.0))
+            r += tw[_STD] * np.sqrt(np.maximum(cc / grid.size - mean * mean, 0.0))
 
         def masked(zt: np.ndarray, mt: np.ndarray, zz: np.ndarray, count: np.ndarray) -> np.ndarray:
             moments = np.asarray(mt).T

@@ -1,5 +1,6 @@
 """The demonstration store: round trips, validation, corruption, atomicity, concurrency."""
 
+import hashlib
 import json
 import sqlite3
 import subprocess
@@ -12,6 +13,7 @@ import pytest
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.state import nominal_state
+from footfall.data import schema
 from footfall.data.store import FORMAT, SCHEMA_VERSION, Demonstration, DemoStore
 
 
@@ -387,3 +389,58 @@ def test_store_file_is_self_describing(filled):
     assert "[m]" in meta["state_layout"]
     assert row[:4] == ("[20]", "<f8", "[5, 3]", "<f8")
     assert json.loads(row[4]) == {"noise": 0.1, "weights": [1.0, 2.5]}
+
+
+# ------------------------------------------------------------ schema, migrations
+def test_schema_text_is_unchanged():
+    # SQLite keeps each CREATE statement's text in the file: a new store is byte-identical to
+    # one written before only while this text is.
+    text = "\n".join(schema.DEMONSTRATION_TABLES + schema.RUN_LOG_TABLES)
+    assert hashlib.sha256(text.encode()).hexdigest() == \
+        "74217367a37c2ccad35441dee48923bfcffa4b1f516c410db105860d4686801f"
+
+
+def test_every_older_version_has_a_migration():
+    assert sorted(schema.MIGRATIONS) == list(range(1, SCHEMA_VERSION))
+
+
+def _objects(path):
+    with raw(path) as con:
+        objects = sorted(con.execute("SELECT type, name, tbl_name, sql FROM sqlite_master"))
+        meta = dict(con.execute("SELECT key, value FROM meta"))
+    con.close()
+    return objects, meta
+
+
+def _as_version_1(path):
+    with raw(path) as con:
+        con.execute("DROP TABLE run_steps")
+        con.execute("DROP TABLE runs")
+        con.execute("UPDATE meta SET value = '1' WHERE key = 'schema_version'")
+    con.close()
+
+
+def test_migrated_store_has_the_schema_of_a_new_one(filled, tmp_path):
+    path, _, _ = filled
+    before = contents(path)
+    with DemoStore(tmp_path / "new.sqlite", create=True):
+        pass
+    _as_version_1(path)
+    assert _objects(path)[1]["schema_version"] == "1"
+    with DemoStore(path) as store:
+        assert store.schema_version == SCHEMA_VERSION
+    assert _objects(path) == _objects(tmp_path / "new.sqlite")
+    assert contents(path) == before  # the demonstrations and terrains are untouched
+
+
+def test_migration_leaves_a_store_another_process_upgraded_alone(filled):
+    path, _, _ = filled
+    with raw(path) as con:
+        before = sorted(con.execute("SELECT type, name, sql FROM sqlite_master"))
+        con.execute("BEGIN IMMEDIATE")
+        schema.migrate(con, 1)  # read as version 1, but version 2 by the time the lock is held
+        con.execute("COMMIT")
+        assert sorted(con.execute("SELECT type, name, sql FROM sqlite_master")) == before
+        assert con.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone() \
+            == (str(SCHEMA_VERSION),)
+    con.close()

@@ -21,6 +21,7 @@ import numpy as np
 from footfall.core.errors import FootfallError
 from footfall.core.files import checked_json
 from footfall.core.state import RobotState
+from footfall.data.frozen import set_fields
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,12 +55,7 @@ class RunStep:
                                 f"the {cand.shape[0]} candidates")
         if td.shape != (3,):
             raise FootfallError(f"run step {self.k}: touch-down must have shape (3,)")
-        for arr in (cand, rew, td):
-            arr.setflags(write=False)
-        object.__setattr__(self, "candidates", cand)
-        object.__setattr__(self, "rewards", rew)
-        object.__setattr__(self, "touchdown", td)
-        object.__setattr__(self, "chosen", int(self.chosen))
+        set_fields(self, candidates=cand, rewards=rew, touchdown=td, chosen=int(self.chosen))
 
     @property
     def swing_leg(self) -> str:

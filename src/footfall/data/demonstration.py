@@ -1,0 +1,106 @@
+"""A demonstration (paper §II-B): the foothold an expert chose among the candidates F, with the
+robot's state at the decision and the terrain it stood on. Stored by
+:class:`footfall.data.store.DemoStore`; made by the walker, corrections and the teacher.
+"""
+
+from __future__ import annotations
+
+import numbers
+import re
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from footfall.core.errors import FootfallError
+from footfall.core.files import checked_json
+from footfall.core.state import RobotState
+from footfall.data.frozen import set_fields
+
+_HASH_RE = re.compile(r"^[0-9a-f]{64}$")
+
+
+@dataclass(frozen=True, eq=False)
+class Demonstration:
+    """One demonstrated foothold: in ``state`` on terrain ``terrain_hash``, ``chosen`` of F.
+
+    Parameters
+    ----------
+    terrain_hash : str
+        :meth:`HeightMap.content_hash` of the terrain (64 hex digits).
+    state : RobotState
+        The robot's state at the decision; ``state.swing_leg`` is the leg that moves.
+    candidates : array of shape (n, 3)
+        The candidate set F: x, y and terrain height z [m] of each reachable
+        foothold, n >= 2, finite.
+    chosen : int
+        Index in ``candidates`` of the foothold the expert chose, in [0, n).
+    source : str
+        Where it came from: ``"walker"``, ``"run:<id>:step:<k>"``, ``"teacher"``.
+    expert : dict
+        JSON-serialisable settings of the expert that chose (a private copy is kept).
+    id : int or None
+        Row id in a :class:`DemoStore` (creation order); None until stored.
+    """
+
+    terrain_hash: str
+    state: RobotState
+    candidates: np.ndarray  # (n, 3) [m] x, y, terrain height
+    chosen: int  # index into candidates
+    source: str = "walker"
+    expert: dict = field(default_factory=dict)
+    id: int | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.terrain_hash, str) or not _HASH_RE.match(self.terrain_hash):
+            raise FootfallError(f"terrain hash must be 64 lowercase hex digits, "
+                                f"got {self.terrain_hash!r}")
+        if not isinstance(self.state, RobotState):
+            raise FootfallError(f"state must be a RobotState, got {type(self.state).__name__}")
+        try:
+            cand = np.array(self.candidates, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise FootfallError("candidates must be an (n, 3) array of numbers") from None
+        if cand.ndim != 2 or cand.shape[1] != 3 or cand.shape[0] < 2:
+            raise FootfallError(f"candidates must have shape (n, 3) with n >= 2, got {cand.shape}")
+        if not np.isfinite(cand).all():
+            raise FootfallError("candidates must be finite")
+        chosen = self.chosen
+        if isinstance(chosen, bool) or not isinstance(chosen, numbers.Integral):
+            raise FootfallError(f"chosen must be an integer index, got {chosen!r}")
+        if not 0 <= int(chosen) < cand.shape[0]:
+            raise FootfallError(f"chosen index {chosen} is outside the {cand.shape[0]} candidates")
+        if not isinstance(self.source, str) or not self.source.strip():
+            raise FootfallError(f"source must be a non-empty string, got {self.source!r}")
+        if not isinstance(self.expert, dict):
+            raise FootfallError(f"expert settings must be a dict, got {type(self.expert).__name__}")
+        if self.id is not None and (isinstance(self.id, bool)
+                                    or not isinstance(self.id, numbers.Integral)):
+            raise FootfallError(f"id must be an integer or None, got {self.id!r}")
+        set_fields(self, candidates=cand, chosen=int(chosen),
+                   expert=checked_json(self.expert, "expert settings"),
+                   id=None if self.id is None else int(self.id))
+
+    @property
+    def swing_leg(self) -> str:
+        """The leg that moves (``state.swing_leg``)."""
+        return self.state.swing_leg
+
+    @property
+    def n_candidates(self) -> int:
+        """Number of candidate footholds n."""
+        return int(self.candidates.shape[0])
+
+    @property
+    def foothold(self) -> np.ndarray:
+        """The chosen foothold, shape (3,): x, y, terrain height [m]."""
+        return self.candidates[self.chosen]
+
+
+def as_demonstrations(items: Iterable) -> list[Demonstration]:
+    """``items`` as a list, each checked to be a :class:`Demonstration` (before a write begins)."""
+    demos = list(items)
+    for d in demos:
+        if not isinstance(d, Demonstration):
+            raise FootfallError(f"expected a Demonstration, got {type(d).__name__}")
+    return demos

@@ -1,0 +1,203 @@
+"""What a demonstration store file is: its SQLite tables, its schema version and the migrations
+between versions, and the checks that tell a footfall store from a foreign or damaged file.
+
+The functions take an open connection and leave transactions to the caller
+(:class:`footfall.data.connection.StoreConnection`), so each change lands whole.
+"""
+
+from __future__ import annotations
+
+import sqlite3
+from collections.abc import Callable
+from pathlib import Path
+
+from footfall.core.errors import FootfallError
+
+FORMAT = "footfall.demostore"
+SCHEMA_VERSION = 2  # 1: terrains and demonstrations; 2: + runs and run_steps
+STATE_LAYOUT = ("feet LF, RF, LH, RH x y z [m] (12), body position x y z [m] (3), "
+                "body roll pitch yaw [rad] (3), goal x y [m] (2)")
+UNITS = "positions [m], angles [rad], resolution [m/cell]"
+_SQLITE_MAGIC = b"SQLite format 3\x00"
+
+# SQLite keeps each CREATE statement's text in the file: changing a character changes every new
+# store. A demonstration and a run step hold the same decision (swing leg, state, candidates F).
+_DECISION = """\
+    swing_leg TEXT NOT NULL,
+    state BLOB NOT NULL,               -- RobotState.to_vector(), see meta state_layout
+    state_shape TEXT NOT NULL,
+    state_dtype TEXT NOT NULL,
+    candidates BLOB NOT NULL,          -- (n, 3) x, y, terrain height z [m]
+    candidates_shape TEXT NOT NULL,
+    candidates_dtype TEXT NOT NULL,"""
+
+DEMONSTRATION_TABLES = (  # one statement each: executescript would COMMIT mid-transaction
+    """
+CREATE TABLE meta (
+    key TEXT PRIMARY KEY,
+    value TEXT NOT NULL
+)""",
+    """
+CREATE TABLE terrains (
+    hash TEXT PRIMARY KEY,             -- HeightMap.content_hash()
+    heights BLOB NOT NULL,             -- raw little-endian array, row-major
+    shape TEXT NOT NULL,               -- JSON [nx, ny] [cells]
+    dtype TEXT NOT NULL,               -- numpy dtype string, '<f8'
+    resolution REAL NOT NULL,          -- [m/cell]
+    origin_x REAL NOT NULL,            -- [m] centre of cell (0, 0)
+    origin_y REAL NOT NULL,            -- [m]
+    frame TEXT NOT NULL,
+    metadata TEXT NOT NULL             -- JSON provenance
+)""",
+    f"""
+CREATE TABLE demonstrations (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,  -- creation order, never reused
+    terrain_hash TEXT NOT NULL REFERENCES terrains(hash),
+{_DECISION}
+    n_candidates INTEGER NOT NULL CHECK (n_candidates >= 2),
+    chosen INTEGER NOT NULL CHECK (chosen >= 0 AND chosen < n_candidates),
+    source TEXT NOT NULL,              -- 'walker', 'run:<id>:step:<k>', 'teacher', ...
+    expert TEXT NOT NULL               -- JSON settings of whoever chose
+)""",
+    "CREATE INDEX demonstrations_terrain ON demonstrations (terrain_hash)",
+    "CREATE INDEX demonstrations_source ON demonstrations (source)",
+)
+
+RUN_LOG_TABLES = (  # schema version 2: the run logs (added to a version-1 store when opened)
+    """
+CREATE TABLE runs (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,  -- creation order, never reused
+    key TEXT UNIQUE,                   -- optional unique name (resuming experiments), or NULL
+    terrain_hash TEXT NOT NULL REFERENCES terrains(hash),
+    seed INTEGER NOT NULL,
+    settings TEXT NOT NULL,            -- JSON: reward, controller, perturbation settings
+    result TEXT NOT NULL,              -- JSON: success, reason, distance [m], time [s], slip [m], ...
+    n_steps INTEGER NOT NULL
+)""",
+    f"""
+CREATE TABLE run_steps (
+    run_id INTEGER NOT NULL REFERENCES runs(id),
+    k INTEGER NOT NULL,                -- step number in the run, from 0
+{_DECISION}
+    rewards BLOB NOT NULL,             -- (n,) reward of each candidate (-inf: invalid)
+    rewards_shape TEXT NOT NULL,
+    rewards_dtype TEXT NOT NULL,
+    chosen INTEGER NOT NULL,           -- index of the planned foothold
+    t_liftoff REAL NOT NULL,           -- [s]
+    t_touchdown REAL,                  -- [s], NULL: never touched down
+    touchdown BLOB NOT NULL,           -- (3,) foot-centre position at touch-down [m] (NaN: none)
+    touchdown_shape TEXT NOT NULL,
+    touchdown_dtype TEXT NOT NULL,
+    slip REAL,                         -- [m], NULL: the foot did not swing again
+    PRIMARY KEY (run_id, k)
+)""",
+)
+
+
+# ---------------------------------------------------------------- a new store
+def create(con: sqlite3.Connection, created_by: str) -> None:
+    """Create every table of the current schema and its ``meta`` rows (inside the caller's write)."""
+    for statement in DEMONSTRATION_TABLES + RUN_LOG_TABLES:
+        con.execute(statement)
+    con.executemany("INSERT INTO meta (key, value) VALUES (?, ?)",
+                    [("format", FORMAT), ("schema_version", str(SCHEMA_VERSION)),
+                     ("created_by", created_by), ("state_layout", STATE_LAYOUT),
+                     ("units", UNITS)])
+
+
+# ----------------------------------------------------------------- migrations
+def _add_run_log(con: sqlite3.Connection) -> None:
+    """Version 1 -> 2: the run-log tables; the demonstrations are untouched."""
+    if not has_table(con, "runs"):
+        for statement in RUN_LOG_TABLES:
+            con.execute(statement)
+
+
+# version v -> the step that makes a version-v store a version-(v + 1) store
+MIGRATIONS: dict[int, Callable[[sqlite3.Connection], None]] = {1: _add_run_log}
+
+
+def migrate(con: sqlite3.Connection, version: int) -> None:
+    """Upgrade a version-``version`` store by one version (inside the caller's write transaction).
+
+    Another process may have upgraded the file since its version was read: the
+    stored version is read again under the write lock, and only a store still
+    at ``version`` is changed.
+    """
+    row = con.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
+    if row is not None and row[0] == str(version):
+        MIGRATIONS[version](con)
+        con.execute("UPDATE meta SET value = ? WHERE key = 'schema_version'", (str(version + 1),))
+
+
+# --------------------------------------------------------------------- checks
+def check_header(path: Path) -> None:
+    """Refuse a file that is not an SQLite database before SQLite touches it.
+
+    Raises
+    ------
+    FootfallError
+        For an unreadable or empty file, or one without the SQLite header.
+    """
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(len(_SQLITE_MAGIC))
+    except OSError as exc:
+        raise FootfallError(f"{path}: cannot read ({exc.strerror})") from None
+    if not head:
+        raise FootfallError(f"{path}: empty file, not a footfall demonstration store")
+    if head != _SQLITE_MAGIC:
+        raise FootfallError(f"{path}: not a footfall demonstration store "
+                            f"(not an SQLite database)")
+
+
+def has_table(con: sqlite3.Connection, name: str) -> bool:
+    """Whether the database holds a table called ``name``."""
+    return con.execute("SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?",
+                       (name,)).fetchone() is not None
+
+
+def is_empty(con: sqlite3.Connection) -> bool:
+    """Whether the database holds no object at all (a new file, or one SQLite just made)."""
+    return not con.execute("SELECT count(*) FROM sqlite_master").fetchone()[0]
+
+
+def stored_version(con: sqlite3.Connection, path: Path) -> int:
+    """The schema version a footfall store declares in its ``meta`` table, checked.
+
+    Raises
+    ------
+    FootfallError
+        For another format, a version that is not a number >= 1, or one newer
+        than :data:`SCHEMA_VERSION` (this footfall cannot read it).
+    """
+    rows = dict(con.execute("SELECT key, value FROM meta").fetchall())
+    if rows.get("format") != FORMAT:
+        raise FootfallError(f"{path}: not a footfall demonstration store "
+                            f"(format {rows.get('format')!r})")
+    try:
+        version = int(rows.get("schema_version", ""))
+    except ValueError:
+        raise FootfallError(f"{path}: corrupt demonstration store "
+                            f"(schema version {rows.get('schema_version')!r})") from None
+    if version > SCHEMA_VERSION:
+        raise FootfallError(f"{path}: demonstration store schema version {version} is "
+                            f"newer than this footfall reads ({SCHEMA_VERSION}); "
+                            f"upgrade footfall")
+    if version < 1:
+        raise FootfallError(f"{path}: corrupt demonstration store "
+                            f"(schema version {version})")
+    return version
+
+
+def check_pages(con: sqlite3.Connection, path: Path) -> None:
+    """SQLite's ``quick_check`` of every page of the file.
+
+    Raises
+    ------
+    FootfallError
+        If SQLite finds the file damaged.
+    """
+    problems = [r[0] for r in con.execute("PRAGMA quick_check")]
+    if problems != ["ok"]:
+        raise FootfallError(f"{path}: corrupt demonstration store ({problems[0]})")

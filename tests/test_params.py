@@ -131,6 +131,16 @@ def test_to_dict_and_from_dict_round_trip_through_json():
     assert OuterConfig.from_dict(json.loads(json.dumps(config.to_dict()))) == config
 
 
+def test_from_dict_turns_json_lists_back_into_tuples_nested_too():
+    @dataclass(frozen=True)
+    class Boards(Params):
+        boards: tuple[tuple[tuple[str, float], ...], ...] = param(
+            ((("rocky", 0.4),), (("steps", 0.5), ("logs", 0.5))), doc="modules of each board")
+
+    config = Boards()
+    assert Boards.from_dict(json.loads(json.dumps(config.to_dict()))) == config
+
+
 def test_from_dict_makes_floats_of_numbers_and_refuses_other_types():
     data = to_dict(ToyConfig())
     back = from_dict(ToyConfig, {**data, "length": 1})

@@ -242,8 +242,13 @@ def _decode(cls: type, spec: _Spec, value: Any) -> Any:
     if spec.kind is float and isinstance(value, numbers.Real) and not isinstance(value, bool):
         return float(value)
     if spec.kind is None and isinstance(value, list):
-        return tuple(value)  # JSON has no tuples
+        return _tuples(value)
     return value
+
+
+def _tuples(value: Any) -> Any:
+    """Lists, nested too, as tuples: JSON has no tuples, and frozen configs hold them."""
+    return tuple(_tuples(v) for v in value) if isinstance(value, list) else value
 
 
 def from_dict(cls: type, data: Any) -> Any:

@@ -2,8 +2,10 @@
 
 from pathlib import Path
 
+from footfall.core.params import markdown_table, refresh_tables
 from footfall.features.pose_features import POSE_FEATURE_NAMES
 from footfall.features.terrain_features import QUANTITIES
+from test_params import CONFIGS
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
 
@@ -18,3 +20,18 @@ def test_feature_docs_name_every_feature():
 
 def test_module_previews_exist():
     assert (DOCS / "modules.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_configuration_tables_are_up_to_date():
+    """Run ``python -m footfall.core.params docs/configuration.md`` when this fails."""
+    text = (DOCS / "configuration.md").read_text()
+    assert refresh_tables(text) == text
+
+
+def test_configuration_docs_have_a_table_and_reasons_for_every_config():
+    text = (DOCS / "configuration.md").read_text()
+    for cls in CONFIGS:
+        marker = f"<!-- params {cls.__module__}.{cls.__qualname__} -->\n"
+        assert marker + markdown_table(cls) in text, cls.__name__
+        section = text.split(marker)[1].split("\n## ")[0]
+        assert "### Why these values" in section, cls.__name__

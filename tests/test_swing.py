@@ -154,7 +154,7 @@ def test_bad_input_raises():
         swing_trajectory(hm, [0, 0, np.nan], [0.1, 0, 0], 0.3)
     with pytest.raises(FootfallError, match="clearance"):
         SwingConfig(clearance=-0.01)
-    with pytest.raises(FootfallError, match="lift height"):
+    with pytest.raises(FootfallError, match="lift_height must be > 0"):
         SwingConfig(lift_height=0.0)
     with pytest.raises(FootfallError, match="timing"):
         SwingConfig(timing="linear")

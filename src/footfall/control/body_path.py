@@ -28,6 +28,7 @@ from scipy.sparse.csgraph import dijkstra
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import inverse_kinematics, knee_position
+from footfall.core.params import Params, above, at_least, param
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.features.dense import ScoreGrid, score_grid
 from footfall.features.reward import LinearReward
@@ -37,8 +38,8 @@ RewardFor = Callable[[str], LinearReward]  # leg name -> the reward its foothold
 
 
 @dataclass(frozen=True)
-class BodyPathConfig:
-    """Every knob of the approximate body path planner.
+class BodyPathConfig(Params):
+    """Every knob of the approximate body path planner (docs/configuration.md).
 
     Rewards of different functions have different scales (a learned ranking
     function has no natural unit), so the planner measures them in a *reward
@@ -48,29 +49,32 @@ class BodyPathConfig:
     the path independent of the reward's scale.
     """
 
-    cell: float = 0.01  # [m] side of a grid cell of the path search (1 cm, as in the paper)
-    spacing: float = 0.005  # [m] lattice spacing of the dense foothold reward grids
-    search_radius: float = 0.025  # [m] footholds within this distance of a default foot position count
-    best_k: int = 5  # [-] best footholds per leg summed into a cell's reward
-    body_margin: float = 0.01  # [m] clearance the trunk's underside should keep above the terrain
-    body_weight: float = 1000.0  # [unit/m] penalty per metre the trunk falls short of body_margin
-    knee_margin: float = 0.01  # [m] clearance each knee (surface) should keep above the terrain
-    knee_radius: float = 0.015  # [m] terrain within this horizontal distance of a knee counts under it
-    knee_weight: float = 500.0  # [unit/m] penalty per metre a knee's clearance falls short, per knee
-    cost_weight: float = 1.0  # [-] extra path cost per reward unit a cell's footholds lose, on average
-    smoothing: float = 0.1  # [m] length of the moving average that smooths the grid path
-
-    def __post_init__(self) -> None:
-        for name in ("cell", "spacing", "search_radius", "knee_radius", "smoothing"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise FootfallError(f"body path config: {name} must be > 0, got {value}")
-        for name in ("body_margin", "body_weight", "knee_margin", "knee_weight", "cost_weight"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0):
-                raise FootfallError(f"body path config: {name} must be >= 0, got {value}")
-        if isinstance(self.best_k, bool) or not isinstance(self.best_k, int) or self.best_k < 1:
-            raise FootfallError(f"body path config: best_k must be an integer >= 1, got {self.best_k!r}")
+    cell: float = param(0.01, unit="m", range=above(0),
+                        doc="side of a grid cell of the path search (1 cm, as in the paper)")
+    spacing: float = param(0.005, unit="m", range=above(0),
+                           doc="lattice spacing of the dense foothold reward grids")
+    search_radius: float = param(0.025, unit="m", range=above(0),
+                                 doc="footholds within this distance of a default foot "
+                                     "position count")
+    best_k: int = param(5, unit="-", range=at_least(1),
+                        doc="best footholds per leg summed into a cell's reward")
+    body_margin: float = param(0.01, unit="m", range=at_least(0),
+                               doc="clearance the trunk's underside should keep above the "
+                                   "terrain")
+    body_weight: float = param(1000.0, unit="unit/m", range=at_least(0),
+                               doc="penalty per metre the trunk falls short of body_margin")
+    knee_margin: float = param(0.01, unit="m", range=at_least(0),
+                               doc="clearance each knee (surface) should keep above the terrain")
+    knee_radius: float = param(0.015, unit="m", range=above(0),
+                               doc="terrain within this horizontal distance of a knee counts "
+                                   "under it")
+    knee_weight: float = param(500.0, unit="unit/m", range=at_least(0),
+                               doc="penalty per metre a knee's clearance falls short, per knee")
+    cost_weight: float = param(1.0, unit="-", range=at_least(0),
+                               doc="extra path cost per reward unit a cell's footholds lose, "
+                                   "on average")
+    smoothing: float = param(0.1, unit="m", range=above(0),
+                             doc="length of the moving average that smooths the grid path")
 
 
 # ------------------------------------------------------------ reward grids

@@ -48,6 +48,7 @@ from scipy.optimize import nnls
 from scipy.spatial import ConvexHull, QhullError
 
 from footfall.core.errors import FootfallError
+from footfall.core.params import Params, above, at_least, param
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 
 GRAVITY = 9.81  # [m/s^2] standard gravity, for the ZMP
@@ -56,31 +57,22 @@ _TIME_TOLERANCE = 1e-9  # [s] how far outside [0, end] a query may be and still 
 
 
 @dataclass(frozen=True)
-class CogConfig:
-    """Every knob of the COG planner."""
+class CogConfig(Params):
+    """Every knob of the COG planner (docs/configuration.md)."""
 
-    margin: float = 0.02  # [m] inset of the support triangles (and shift polygons) the ZMP keeps
-    swing_duration: float = 0.3  # [s] one leg in the air
-    shift_duration: float = 0.15  # [s] four feet down, the COG moving into the next triangle
-    cog_height: float | None = None  # [m] COG height for the ZMP; None: robot.nominal_height
-    centring: float = 10.0  # [1/s^3] weight of the squared distance [m^2] of the COG at each
-    # lift-off and touch-down from the swing triangle's incentre, against the integrated squared
-    # acceleration [m^2/s^3]; small: it breaks ties and keeps the COG off the edges when that is cheap
-    slowdown: float = 2.0  # [-] factor on every shift's duration when the ZMP cannot be kept in
-
-    def __post_init__(self) -> None:
-        for name in ("swing_duration", "shift_duration"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise FootfallError(f"COG config: {name} must be > 0 s, got {value}")
-        if not (np.isfinite(self.margin) and self.margin >= 0):
-            raise FootfallError(f"COG config: margin must be >= 0 m, got {self.margin}")
-        if self.cog_height is not None and not (np.isfinite(self.cog_height) and self.cog_height > 0):
-            raise FootfallError(f"COG config: cog_height must be > 0 m, got {self.cog_height}")
-        if not (np.isfinite(self.centring) and self.centring > 0):
-            raise FootfallError(f"COG config: centring must be > 0, got {self.centring}")
-        if not (np.isfinite(self.slowdown) and self.slowdown >= 1):
-            raise FootfallError(f"COG config: slowdown must be >= 1, got {self.slowdown}")
+    margin: float = param(0.02, unit="m", range=at_least(0),
+                          doc="inset of the support triangles (and shift polygons) the ZMP keeps")
+    swing_duration: float = param(0.3, unit="s", range=above(0), doc="one leg in the air")
+    shift_duration: float = param(0.15, unit="s", range=above(0),
+                                  doc="four feet down, the COG moving into the next triangle")
+    cog_height: float | None = param(None, unit="m", range=above(0),
+                                     doc="COG height for the ZMP; None: robot.nominal_height")
+    centring: float = param(10.0, unit="1/s^3", range=above(0),
+                            doc="weight of the squared distance [m^2] of the COG at each lift-off "
+                                "and touch-down from the swing triangle's incentre, against the "
+                                "integrated squared acceleration [m^2/s^3]")
+    slowdown: float = param(2.0, unit="-", range=at_least(1),
+                            doc="factor on every shift's duration when the ZMP cannot be kept in")
 
 
 def support_margin(triangle: np.ndarray, points: np.ndarray) -> np.ndarray:

@@ -22,6 +22,7 @@ import numpy as np
 from footfall.control.body_path import BodyPath, RewardFor, grid_spacing, grid_values, terrain_grids
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
+from footfall.core.params import Params, above, at_least, param
 from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState, feet_pitch
 from footfall.features.candidates import lattice, reachable_footholds, reaches
@@ -41,62 +42,50 @@ class NoFootholdError(FootfallError):
 
 
 @dataclass(frozen=True)
-class FootstepConfig:
-    """Every knob of the footstep planner."""
+class FootstepConfig(Params):
+    """Every knob of the footstep planner (docs/configuration.md)."""
 
-    lookahead: int = 5  # [steps] steps planned ahead, the current one included (paper: five)
-    step_advance: float = DEFAULT_STRIDE / 4  # [m] body advance along the path per step (stride / 4)
-    foot_lead: float | None = None  # [m] path distance from touch-down to the body pose whose
-    # default stance is the path-nominal foothold; None: half a stride (2 * step_advance), the
-    # middle of the foot's stance, so that it stands as far ahead as behind its hip
-    bias_weight: float = 30.0  # [reward/m] reward lost per metre from the path-nominal position,
-    # in units of the hand-tuned default reward; any other reward's bias is scaled by its spread
-    # relative to the default's (see reward_spread), so a learned reward, whose units are
-    # arbitrary (logits of preference), trades terrain against the path as the default does
-    spacing: float = 0.005  # [m] candidate lattice spacing (and of the reward grids)
-    beam_width: int = 2  # [-] best first steps compared by rolling out the look-ahead
-    root_separation: float = 0.02  # [m] the first steps compared lie at least this far apart (3-D:
-    # a foothold beside a hole and one in it lead to different futures)
-    search_radius: float | None = None  # [m] the candidate set F of a step: the reachable
-    # footholds within this distance of the step's path-nominal position, or every reachable
-    # one where none of those has a finite reward (None: always every reachable one)
-    pose_candidates: int | None = 128  # [-] first step: pose features of this many best by
-    # terrain + bias (None: of every candidate); pose features cost ~10 ms per 1000 candidates
-    lookahead_radius: float = 0.05  # [m] later steps consider footholds this close to their target
-    target_radius: float = 0.02  # [m] a step's body is predicted over the terrain's median height
-    # within this of the swing foot's path-nominal position (where it will most likely land)
-    lookahead_candidates: int = 32  # [-] later steps: pose features of this many best by terrain + bias
-    heading_horizon: float = 0.3  # [m] the body faces the path point this far ahead (about a
-    # body length): a lateral jog of the path shifts the body rather than turning it
-    heading_tolerance: float = 0.25  # [rad] body headings within this of GRID_YAW score footholds
-    # from the grids (patches turned by up to this much); beyond it, exact patches (slow)
-
-    def __post_init__(self) -> None:
-        for name in ("step_advance", "spacing", "lookahead_radius", "target_radius",
-                     "heading_horizon", "heading_tolerance"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise FootfallError(f"footstep config: {name} must be > 0, got {value}")
-        if not (math.isfinite(self.bias_weight) and self.bias_weight >= 0):
-            raise FootfallError(f"footstep config: bias_weight must be >= 0, got {self.bias_weight}")
-        if not (math.isfinite(self.root_separation) and self.root_separation >= 0):
-            raise FootfallError(f"footstep config: root_separation must be >= 0, "
-                                f"got {self.root_separation}")
-        if self.pose_candidates is not None and (
-                isinstance(self.pose_candidates, bool) or not isinstance(self.pose_candidates, int)
-                or self.pose_candidates < 1):
-            raise FootfallError(f"footstep config: pose_candidates must be an integer >= 1 or "
-                                f"None, got {self.pose_candidates!r}")
-        if self.search_radius is not None and not (math.isfinite(self.search_radius)
-                                                   and self.search_radius > 0):
-            raise FootfallError(f"footstep config: search_radius must be > 0 or None, "
-                                f"got {self.search_radius}")
-        if self.foot_lead is not None and not (math.isfinite(self.foot_lead) and self.foot_lead >= 0):
-            raise FootfallError(f"footstep config: foot_lead must be >= 0 or None, got {self.foot_lead}")
-        for name in ("lookahead", "beam_width", "lookahead_candidates"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise FootfallError(f"footstep config: {name} must be an integer >= 1, got {value!r}")
+    lookahead: int = param(5, unit="steps", range=at_least(1),
+                           doc="steps planned ahead, the current one included (paper: five)")
+    step_advance: float = param(DEFAULT_STRIDE / 4, unit="m", range=above(0),
+                                doc="body advance along the path per step (stride / 4)")
+    foot_lead: float | None = param(None, unit="m", range=at_least(0),
+                                    doc="path distance from touch-down to the body pose whose "
+                                        "default stance is the path-nominal foothold; None: "
+                                        "half a stride (2 * step_advance)")
+    bias_weight: float = param(30.0, unit="reward/m", range=at_least(0),
+                               doc="reward lost per metre from the path-nominal position, in "
+                                   "units of the hand-tuned default reward")
+    spacing: float = param(0.005, unit="m", range=above(0),
+                           doc="candidate lattice spacing (and of the reward grids)")
+    beam_width: int = param(2, unit="-", range=at_least(1),
+                            doc="best first steps compared by rolling out the look-ahead")
+    root_separation: float = param(0.02, unit="m", range=at_least(0),
+                                   doc="the first steps compared lie at least this far apart "
+                                       "(3-D)")
+    search_radius: float | None = param(None, unit="m", range=above(0),
+                                        doc="the candidate set F: reachable footholds within "
+                                            "this of the path-nominal position (None: every "
+                                            "reachable one)")
+    pose_candidates: int | None = param(128, unit="-", range=at_least(1),
+                                        doc="first step: pose features of this many best by "
+                                            "terrain + bias (None: of every candidate)")
+    lookahead_radius: float = param(0.05, unit="m", range=above(0),
+                                    doc="later steps consider footholds this close to their "
+                                        "target")
+    target_radius: float = param(0.02, unit="m", range=above(0),
+                                 doc="a step's body is predicted over the terrain's median "
+                                     "height within this of the swing foot's path-nominal "
+                                     "position")
+    lookahead_candidates: int = param(32, unit="-", range=at_least(1),
+                                      doc="later steps: pose features of this many best by "
+                                          "terrain + bias")
+    heading_horizon: float = param(0.3, unit="m", range=above(0),
+                                   doc="the body faces the path point this far ahead (about a "
+                                       "body length)")
+    heading_tolerance: float = param(0.25, unit="rad", range=above(0),
+                                     doc="body headings within this of GRID_YAW score footholds "
+                                         "from the grids; beyond it, exact patches (slow)")
 
     @property
     def lead(self) -> float:

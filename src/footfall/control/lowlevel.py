@@ -36,37 +36,33 @@ import mujoco
 import numpy as np
 
 from footfall.core.errors import FootfallError
+from footfall.core.params import Params, param, within
 from footfall.core.robot import Leg, RobotDescription
 
 Pose = tuple[np.ndarray, np.ndarray]  # (position (3,) [m], rotation matrix (3, 3)): body -> world
 
 
 @dataclass(frozen=True)
-class LowLevelConfig:
-    """Gains and limits of the 100 Hz closed loop."""
+class LowLevelConfig(Params):
+    """Gains and limits of the 100 Hz closed loop (docs/configuration.md)."""
 
-    period: float = 0.01  # [s] set-point period (paper: 100 Hz)
-    position_gain: float = 0.05  # [-] share of the body height error added to the correction
-    # per period
-    horizontal_gain: float = 0.05  # [-] share of the body x, y error added per period: without
-    # it the body settles millimetres off the COG plan (leg compliance, slipped feet), and every
-    # foot set down is dragged by that offset as it takes its load
-    attitude_gain: float = 0.05  # [-] share of the roll / pitch error added per period
-    max_position_correction: float = 0.03  # [m] bound of the accumulated correction, per axis
-    max_attitude_correction: float = 0.2  # [rad] bound of the accumulated roll / pitch correction
-    transfer_time: float = 0.05  # [s] a leg moves from the measured to the commanded body frame
-    # over this long after touch-down (and back after lift-off): the load passes to it, or from
-    # it, without a step in its set-points
-
-    def __post_init__(self) -> None:
-        if not self.period > 0:
-            raise FootfallError(f"low-level period must be > 0 s, got {self.period}")
-        for name in ("position_gain", "horizontal_gain", "attitude_gain"):
-            if not 0 <= getattr(self, name) <= 1:
-                raise FootfallError(f"low-level {name} must be in [0, 1]")
-        for name in ("max_position_correction", "max_attitude_correction", "transfer_time"):
-            if not getattr(self, name) >= 0:
-                raise FootfallError(f"low-level {name} must be >= 0")
+    period: float = param(0.01, unit="s", range=within(0, math.inf, low_open=True),
+                          doc="set-point period (paper: 100 Hz)")
+    position_gain: float = param(0.05, unit="-", range=within(0, 1),
+                                 doc="share of the body height error added to the correction "
+                                     "per period")
+    horizontal_gain: float = param(0.05, unit="-", range=within(0, 1),
+                                   doc="share of the body x, y error added per period")
+    attitude_gain: float = param(0.05, unit="-", range=within(0, 1),
+                                 doc="share of the roll / pitch error added per period")
+    max_position_correction: float = param(0.03, unit="m", range=within(0, math.inf),
+                                           doc="bound of the accumulated correction, per axis")
+    max_attitude_correction: float = param(0.2, unit="rad", range=within(0, math.inf),
+                                           doc="bound of the accumulated roll / pitch "
+                                               "correction")
+    transfer_time: float = param(0.05, unit="s", range=within(0, math.inf),
+                                 doc="a leg moves from the measured to the commanded body frame "
+                                     "over this long after touch-down (and back after lift-off)")
 
 
 class BodyCorrection:

@@ -28,6 +28,7 @@ from footfall.core.kinematics import (
     legs_knee_position,
     rotation_matrix,
 )
+from footfall.core.params import Params, above, at_least, param, within
 from footfall.core.robot import LITTLEDOG, RobotDescription
 
 TERMS = ("joint", "reach", "leg_clearance", "trunk_clearance", "height", "attitude", "yaw")
@@ -35,65 +36,78 @@ TERMS = ("joint", "reach", "leg_clearance", "trunk_clearance", "height", "attitu
 _NO_SOLUTION_MARGIN = -np.pi  # [rad] joint margin charged to a leg the IK cannot solve at all
 
 
+def _odd_counts(grid: object) -> bool:
+    return isinstance(grid, tuple) and len(grid) == 4 and all(
+        isinstance(n, int) and not isinstance(n, bool) and n >= 1 and n % 2 == 1 for n in grid)
+
+
 @dataclass(frozen=True)
-class PoseConfig:
-    """Every knob of the pose finder. Costs are dimensionless; each margin is a hinge."""
+class PoseConfig(Params):
+    """Every knob of the pose finder (docs/configuration.md).
+
+    Costs are dimensionless; each margin is a hinge.
+    """
 
     # Search.
-    height_range: float = 0.04  # [m] coarse-grid half-range of body height around the preferred one
-    roll_range: float = 0.3  # [rad] coarse-grid half-range of roll around the preferred roll
-    pitch_range: float = 0.3  # [rad] coarse-grid half-range of pitch around the preferred pitch
-    yaw_range: float = 0.15  # [rad] coarse-grid half-range of yaw around the hint
-    grid: tuple[int, int, int, int] = (3, 3, 3, 3)  # coarse-grid points (height, roll, pitch, yaw)
-    refinements: int = 4  # rounds of 3^4 pattern search after the grid, each halving the step
+    height_range: float = param(0.04, unit="m", range=above(0),
+                                doc="coarse-grid half-range of body height around the preferred "
+                                    "one")
+    roll_range: float = param(0.3, unit="rad", range=above(0),
+                              doc="coarse-grid half-range of roll around the preferred roll")
+    pitch_range: float = param(0.3, unit="rad", range=above(0),
+                               doc="coarse-grid half-range of pitch around the preferred pitch")
+    yaw_range: float = param(0.15, unit="rad", range=above(0),
+                             doc="coarse-grid half-range of yaw around the hint")
+    grid: tuple[int, int, int, int] = param((3, 3, 3, 3), unit="-", check=_odd_counts,
+                                            must="four odd integers >= 1",
+                                            doc="coarse-grid points (height, roll, pitch, yaw)")
+    refinements: int = param(4, unit="-", range=at_least(0),
+                             doc="rounds of 3^4 pattern search after the grid, each halving the "
+                                 "step")
     # Reachability: a margin below the wanted one costs weight * (shortfall / wanted)^2.
-    joint_margin: float = 0.25  # [rad] wanted smallest distance of any joint from its limits
-    reach_margin: float = 0.015  # [m] wanted distance of every foot centre inside its leg's reach
+    joint_margin: float = param(0.25, unit="rad", range=above(0),
+                                doc="wanted smallest distance of any joint from its limits")
+    reach_margin: float = param(0.015, unit="m", range=above(0),
+                                doc="wanted distance of every foot centre inside its leg's reach")
     # Collisions.
-    leg_clearance: float = 0.01  # [m] wanted clearance of the knees and upper shins (surface)
-    trunk_clearance: float = 0.02  # [m] wanted clearance of the trunk's underside
-    shin_samples: int = 4  # points checked per leg, from the knee (first) down the shin
-    shin_fraction: float = 0.75  # [-] how far from knee to foot centre the shin is checked; the
-    # rest is always near the ground the foot stands on
-    trunk_cell: float = 0.01  # [m] terrain under the trunk is max-pooled into cells of this size
+    leg_clearance: float = param(0.01, unit="m", range=above(0),
+                                 doc="wanted clearance of the knees and upper shins (surface)")
+    trunk_clearance: float = param(0.02, unit="m", range=above(0),
+                                   doc="wanted clearance of the trunk's underside")
+    shin_samples: int = param(4, unit="-", range=at_least(1),
+                              doc="points checked per leg, from the knee (first) down the shin")
+    shin_fraction: float = param(0.75, unit="-", range=within(0, 1),
+                                 doc="how far from knee to foot centre the shin is checked")
+    trunk_cell: float = param(0.01, unit="m", range=above(0),
+                              doc="terrain under the trunk is max-pooled into cells of this size")
     # Preferences: deviation / tolerance, squared, times the weight.
-    height_tolerance: float = 0.02  # [m] height deviation from the preferred height costing 1 weight
-    attitude_tolerance: float = 0.2  # [rad] roll/pitch deviation from the preferred one costing 1
-    yaw_tolerance: float = 0.1  # [rad] yaw deviation from the hint costing 1 weight
-    attitude_follow: float = 0.5  # [-] preferred tilt: 0 level, 1 parallel to the feet's best-fit plane
-    # Weights [-] of the cost terms (see TERMS).
-    weight_joint: float = 10.0  # joint-limit margin
-    weight_reach: float = 10.0  # workspace (reach) margin
-    weight_leg_clearance: float = 10.0  # knee and shin clearance
-    weight_trunk_clearance: float = 10.0  # trunk clearance
-    weight_height: float = 1.0  # deviation from the preferred height
-    weight_attitude: float = 1.0  # deviation from the preferred roll and pitch
-    weight_yaw: float = 1.0  # deviation from the yaw hint
+    height_tolerance: float = param(0.02, unit="m", range=above(0),
+                                    doc="height deviation from the preferred height costing 1 "
+                                        "weight")
+    attitude_tolerance: float = param(0.2, unit="rad", range=above(0),
+                                      doc="roll/pitch deviation from the preferred one costing 1")
+    yaw_tolerance: float = param(0.1, unit="rad", range=above(0),
+                                 doc="yaw deviation from the hint costing 1 weight")
+    attitude_follow: float = param(0.5, unit="-", range=within(0, 1),
+                                   doc="preferred tilt: 0 level, 1 parallel to the feet's "
+                                       "best-fit plane")
+    # Weights of the cost terms (see TERMS).
+    weight_joint: float = param(10.0, unit="-", range=at_least(0), doc="joint-limit margin")
+    weight_reach: float = param(10.0, unit="-", range=at_least(0), doc="workspace (reach) margin")
+    weight_leg_clearance: float = param(10.0, unit="-", range=at_least(0),
+                                        doc="knee and shin clearance")
+    weight_trunk_clearance: float = param(10.0, unit="-", range=at_least(0),
+                                          doc="trunk clearance")
+    weight_height: float = param(1.0, unit="-", range=at_least(0),
+                                 doc="deviation from the preferred height")
+    weight_attitude: float = param(1.0, unit="-", range=at_least(0),
+                                   doc="deviation from the preferred roll and pitch")
+    weight_yaw: float = param(1.0, unit="-", range=at_least(0), doc="deviation from the yaw hint")
 
     @property
     def weights(self) -> dict[str, float]:
         """The weight [-] of each term of TERMS."""
         return {t: getattr(self, f"weight_{t}") for t in TERMS}
-
-    def __post_init__(self) -> None:
-        positive = ("height_range", "roll_range", "pitch_range", "yaw_range", "joint_margin",
-                    "reach_margin", "leg_clearance", "trunk_clearance", "trunk_cell",
-                    "height_tolerance", "attitude_tolerance", "yaw_tolerance")
-        for name in positive:
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise FootfallError(f"pose config: {name} must be > 0, got {value}")
-        if len(self.grid) != 4 or any(int(n) != n or n < 1 or n % 2 == 0 for n in self.grid):
-            raise FootfallError(f"pose config: grid must be four odd counts >= 1, got {self.grid}")
-        if int(self.refinements) != self.refinements or self.refinements < 0:
-            raise FootfallError(f"pose config: refinements must be an integer >= 0, got {self.refinements}")
-        if int(self.shin_samples) != self.shin_samples or self.shin_samples < 1:
-            raise FootfallError(f"pose config: shin_samples must be an integer >= 1, got {self.shin_samples}")
-        if not 0 <= self.shin_fraction <= 1 or not 0 <= self.attitude_follow <= 1:
-            raise FootfallError("pose config: shin_fraction and attitude_follow must be in [0, 1]")
-        for term, weight in self.weights.items():
-            if not (np.isfinite(weight) and weight >= 0):
-                raise FootfallError(f"pose config: weight_{term} must be >= 0, got {weight}")
 
 
 @dataclass(frozen=True, eq=False)

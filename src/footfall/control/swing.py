@@ -33,6 +33,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
+from footfall.core.params import Params, above, at_least, param
 from footfall.core.robot import LITTLEDOG, RobotDescription
 
 TIMINGS = ("cubic", "quintic")  # names of the time scalings SwingConfig.timing accepts
@@ -41,28 +42,24 @@ _ZERO_LENGTH = 1e-6  # [m] a horizontal move shorter than this is a move on the 
 
 
 @dataclass(frozen=True)
-class SwingConfig:
-    """Every knob of the swing-foot trajectory."""
+class SwingConfig(Params):
+    """Every knob of the swing-foot trajectory (docs/configuration.md)."""
 
-    clearance: float = 0.02  # [m] least height of the foot's lowest point above the terrain's hull
-    lift_height: float = 0.02  # [m] height of the knots straight above lift-off and touch-down
-    resolution: float | None = None  # [m] spacing of terrain profile samples; None: map resolution
-    band: float | None = None  # [m] half-width of the terrain band the ball must clear;
-    # None: robot.foot_radius (the ball's footprint)
-    timing: str = "quintic"  # time scaling of the path: 'cubic' (3u^2 - 2u^3, zero end velocity)
-    # or 'quintic' (10u^3 - 15u^4 + 6u^5, zero end velocity and acceleration)
-
-    def __post_init__(self) -> None:
-        if not (np.isfinite(self.clearance) and self.clearance >= 0):
-            raise FootfallError(f"swing clearance must be >= 0, got {self.clearance}")
-        if not (np.isfinite(self.lift_height) and self.lift_height > 0):
-            raise FootfallError(f"swing lift height must be > 0, got {self.lift_height}")
-        if self.resolution is not None and not (np.isfinite(self.resolution) and self.resolution > 0):
-            raise FootfallError(f"swing profile resolution must be > 0, got {self.resolution}")
-        if self.band is not None and not (np.isfinite(self.band) and self.band >= 0):
-            raise FootfallError(f"swing band must be >= 0, got {self.band}")
-        if self.timing not in TIMINGS:
-            raise FootfallError(f"unknown swing timing {self.timing!r}; choose from {', '.join(TIMINGS)}")
+    clearance: float = param(0.02, unit="m", range=at_least(0),
+                             doc="least height of the foot's lowest point above the terrain's "
+                                 "hull")
+    lift_height: float = param(0.02, unit="m", range=above(0),
+                               doc="height of the knots straight above lift-off and touch-down")
+    resolution: float | None = param(None, unit="m", range=above(0),
+                                     doc="spacing of terrain profile samples; None: map "
+                                         "resolution")
+    band: float | None = param(None, unit="m", range=at_least(0),
+                               doc="half-width of the terrain band the ball must clear; None: "
+                                   "robot.foot_radius (the ball's footprint)")
+    timing: str = param("quintic", choices=TIMINGS,
+                        doc="time scaling of the path: 'cubic' (3u^2 - 2u^3, zero end velocity) "
+                            "or 'quintic' (10u^3 - 15u^4 + 6u^5, zero end velocity and "
+                            "acceleration)")
 
 
 def _scaling(u: np.ndarray, timing: str) -> tuple[np.ndarray, np.ndarray]:

@@ -26,7 +26,6 @@ See docs/expert.md for the reasoning behind every term, unit and weight.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, replace
 
@@ -42,6 +41,7 @@ from footfall.core.kinematics import (
     knee_position,
     world_to_body,
 )
+from footfall.core.params import Params, above, at_least, param, within
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState
 from footfall.features.pose_features import triangle_margins
@@ -84,87 +84,117 @@ EXPERT_TERMS: dict[str, str] = {
 EXPERT_TERM_NAMES: tuple[str, ...] = tuple(EXPERT_TERMS)
 
 
+_NONNEGATIVE = at_least(0)  # the expert's numbers are all finite and >= 0 but for a few
+
+
+def _even(n: int) -> bool:
+    return n % 2 == 0
+
+
 @dataclass(frozen=True)
-class ExpertConfig:
+class ExpertConfig(Params):
     """Every knob of the synthetic expert: imperfection, geometry of the analysis, utilities.
 
     Values are in *value units*; one value unit is worth 1 cm of progress
     (``w_progress = 100`` per metre). Each term enters the value through a
     piecewise-linear utility (hinges and caps: see :meth:`SyntheticExpert.utilities`).
+    docs/expert.md gives the reasoning behind every number, docs/configuration.md the table.
     """
 
     # --- imperfection of the demonstrations
-    noise: float = 0.0  # [value] std of Gaussian noise added to each candidate's value when choosing
-    second_best_prob: float = 0.0  # [-] probability of choosing the second-best (noisy) candidate
+    noise: float = param(0.0, unit="value", range=_NONNEGATIVE,
+                         doc="std of Gaussian noise added to each candidate's value when "
+                             "choosing")
+    second_best_prob: float = param(0.0, unit="-", range=within(0, 1),
+                                    doc="probability of choosing the second-best (noisy) "
+                                        "candidate")
     # --- geometry of the terrain analysis
-    directions: int = 16  # [-] ray directions around the foothold (even: opposite pairs)
-    ray_step: float = 0.001  # [m] spacing of the ray samples out to slip_distance (scan resolution)
-    far_step: float = 0.002  # [m] spacing of the ray samples beyond (edges and rims are ball-smooth)
-    slip_distance: float = 0.008  # [m] how far a slipping ball is followed when judging its hold
-    pinch_distance: float = 0.001  # [m] run over which the contact-normal slopes are read
-    trap_radius: float = 0.02  # [m] a pit whose rim lies within this radius traps the foot
-    edge_radius: float = 0.04  # [m] slip distance at which a drop-off stops counting
-    walkable_slope: float = 0.5  # [-] terrain falling away no faster than this is not a drop-off
-    unknown_radius: float = 0.015  # [m] radius checked for missing data
-    leg_samples: int = 10  # [-] spheres along the lower leg, knee included
-    leg_clearance_cap: float = 0.05  # [m] clearances above this count as fully clear
-    placement_error: float = 0.0  # [m] the terrain terms are read where the foot would fare
-    # worst: at the foothold or this far ahead of or behind it along the heading (0: at the
-    # foothold only; the walking expert: about the walker's slip on flat ground)
+    directions: int = param(16, unit="-", range=at_least(4), check=_even,
+                            must="an even integer >= 4",
+                            doc="ray directions around the foothold (even: opposite pairs)")
+    ray_step: float = param(0.001, unit="m", range=above(0),
+                            doc="spacing of the ray samples out to slip_distance (scan "
+                                "resolution)")
+    far_step: float = param(0.002, unit="m", range=above(0),
+                            doc="spacing of the ray samples beyond (edges and rims are "
+                                "ball-smooth)")
+    slip_distance: float = param(0.008, unit="m", range=above(0),
+                                 doc="how far a slipping ball is followed when judging its hold")
+    pinch_distance: float = param(0.001, unit="m", range=above(0),
+                                  doc="run over which the contact-normal slopes are read")
+    trap_radius: float = param(0.02, unit="m", range=above(0),
+                               doc="a pit whose rim lies within this radius traps the foot")
+    edge_radius: float = param(0.04, unit="m", range=above(0),
+                               doc="slip distance at which a drop-off stops counting")
+    walkable_slope: float = param(0.5, unit="-", range=_NONNEGATIVE,
+                                  doc="terrain falling away no faster than this is not a drop-off")
+    unknown_radius: float = param(0.015, unit="m", range=_NONNEGATIVE,
+                                  doc="radius checked for missing data")
+    leg_samples: int = param(10, unit="-", range=at_least(2),
+                             doc="spheres along the lower leg, knee included")
+    leg_clearance_cap: float = param(0.05, unit="m", range=_NONNEGATIVE,
+                                     doc="clearances above this count as fully clear")
+    placement_error: float = param(0.0, unit="m", range=_NONNEGATIVE,
+                                   doc="the terrain terms are read where the foot would fare "
+                                       "worst: at the foothold or this far ahead of or behind it "
+                                       "along the heading")
     # --- utilities of the terrain terms
-    w_hold: float = 20.0  # [value/rad] bonus per radian of slip margin above flat ground's
-    hold_cap: float = 0.2  # [rad] the hold bonus saturates this far above flat ground's margin
-    w_slope: float = 10.0  # [value/rad] penalty per radian of slip margin lost to a slanted face
-    w_cone: float = 60.0  # [value/rad] further penalty per radian beyond the friction cone
-    w_pinch: float = 20.0  # [value] penalty per unit of pinch above pinch_free
-    pinch_free: float = 0.25  # [-] pinch that does no harm (contact tilt ~17 deg at mu = 0.8)
-    pinch_cap: float = 2.0  # [-] pinch beyond this (twice self-locking) costs no more
-    w_trap: float = 500.0  # [value/m] penalty per metre of escape height above trap_free
-    trap_free: float = 0.008  # [m] escape height the swing's lift-off clears without catching
-    w_drop: float = 1000.0  # [value/m] penalty per metre of drop-off depth above drop_free
-    drop_free: float = 0.005  # [m] drop-off depth that does no harm (ball compliance, texture)
-    w_leg: float = 300.0  # [value/m] penalty per metre of leg clearance below leg_safe
-    leg_safe: float = 0.01  # [m] leg clearance wanted for placement errors and the swing
-    w_leg_collision: float = 1500.0  # [value/m] further penalty per metre of leg in the terrain
-    w_unknown: float = 10.0  # [value] penalty for a foothold surrounded by missing data
+    w_hold: float = param(20.0, unit="value/rad", range=_NONNEGATIVE,
+                          doc="bonus per radian of slip margin above flat ground's")
+    hold_cap: float = param(0.2, unit="rad", range=_NONNEGATIVE,
+                            doc="the hold bonus saturates this far above flat ground's margin")
+    w_slope: float = param(10.0, unit="value/rad", range=_NONNEGATIVE,
+                           doc="penalty per radian of slip margin lost to a slanted face")
+    w_cone: float = param(60.0, unit="value/rad", range=_NONNEGATIVE,
+                          doc="further penalty per radian beyond the friction cone")
+    w_pinch: float = param(20.0, unit="value", range=_NONNEGATIVE,
+                           doc="penalty per unit of pinch above pinch_free")
+    pinch_free: float = param(0.25, unit="-", range=_NONNEGATIVE, doc="pinch that does no harm")
+    pinch_cap: float = param(2.0, unit="-", range=_NONNEGATIVE,
+                             doc="pinch beyond this (twice self-locking) costs no more")
+    w_trap: float = param(500.0, unit="value/m", range=_NONNEGATIVE,
+                          doc="penalty per metre of escape height above trap_free")
+    trap_free: float = param(0.008, unit="m", range=_NONNEGATIVE,
+                             doc="escape height the swing's lift-off clears without catching")
+    w_drop: float = param(1000.0, unit="value/m", range=_NONNEGATIVE,
+                          doc="penalty per metre of drop-off depth above drop_free")
+    drop_free: float = param(0.005, unit="m", range=_NONNEGATIVE,
+                             doc="drop-off depth that does no harm (ball compliance, texture)")
+    w_leg: float = param(300.0, unit="value/m", range=_NONNEGATIVE,
+                         doc="penalty per metre of leg clearance below leg_safe")
+    leg_safe: float = param(0.01, unit="m", range=_NONNEGATIVE,
+                            doc="leg clearance wanted for placement errors and the swing")
+    w_leg_collision: float = param(1500.0, unit="value/m", range=_NONNEGATIVE,
+                                   doc="further penalty per metre of leg in the terrain")
+    w_unknown: float = param(10.0, unit="value", range=_NONNEGATIVE,
+                             doc="penalty for a foothold surrounded by missing data")
     # --- utilities of the pose terms
-    w_progress: float = 100.0  # [value/m] reward per metre of progress toward the goal
-    w_stance: float = 0.0  # [value/m] penalty per metre of stance offset (0: the expert places
-    # the foot wherever reach, stability and progress allow; a walking gait's expert, see
-    # walking_expert, wants it where the gait will carry the body over it)
-    stance_lead: float = 0.0  # [m] how far ahead of its default stance position (body frame)
-    # the gait-nominal foothold lies: the body advances over a foot during its stance
-    w_stability: float = 100.0  # [value/m] reward per metre of stability margin, up to stability_cap
-    stability_cap: float = 0.05  # [m] stability margins above this earn nothing more
-    w_reach: float = 200.0  # [value/m] penalty per metre of reach margin below reach_safe
-    reach_safe: float = 0.02  # [m] reach margin wanted (the body moves during the step)
-    w_joint: float = 20.0  # [value/rad] penalty per radian of joint margin below joint_safe
-    joint_safe: float = 0.15  # [rad] joint margin wanted
-    unreachable_joint_margin: float = 0.5  # [rad] joint margin assigned where IK has no solution
+    w_progress: float = param(100.0, unit="value/m", range=_NONNEGATIVE,
+                              doc="reward per metre of progress toward the goal")
+    w_stance: float = param(0.0, unit="value/m", range=_NONNEGATIVE,
+                            doc="penalty per metre of stance offset (0: the foot goes wherever "
+                                "reach, stability and progress allow)")
+    stance_lead: float = param(0.0, unit="m", range=_NONNEGATIVE,
+                               doc="how far ahead of its default stance position (body frame) the "
+                                   "gait-nominal foothold lies")
+    w_stability: float = param(100.0, unit="value/m", range=_NONNEGATIVE,
+                               doc="reward per metre of stability margin, up to stability_cap")
+    stability_cap: float = param(0.05, unit="m", range=_NONNEGATIVE,
+                                 doc="stability margins above this earn nothing more")
+    w_reach: float = param(200.0, unit="value/m", range=_NONNEGATIVE,
+                           doc="penalty per metre of reach margin below reach_safe")
+    reach_safe: float = param(0.02, unit="m", range=_NONNEGATIVE,
+                              doc="reach margin wanted (the body moves during the step)")
+    w_joint: float = param(20.0, unit="value/rad", range=_NONNEGATIVE,
+                           doc="penalty per radian of joint margin below joint_safe")
+    joint_safe: float = param(0.15, unit="rad", range=_NONNEGATIVE, doc="joint margin wanted")
+    unreachable_joint_margin: float = param(0.5, unit="rad", range=_NONNEGATIVE,
+                                            doc="joint margin assigned where IK has no solution")
 
     def __post_init__(self) -> None:
-        for f in dataclasses.fields(self):
-            value = getattr(self, f.name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                    or not math.isfinite(value) or value < 0:
-                raise FootfallError(f"expert config: {f.name} must be a finite number >= 0, "
-                                    f"got {value!r}")
-        if self.second_best_prob > 1:
-            raise FootfallError("expert config: second_best_prob must be in [0, 1]")
-        if int(self.directions) != self.directions or self.directions < 4 or self.directions % 2:
-            raise FootfallError("expert config: directions must be an even integer >= 4")
-        if int(self.leg_samples) != self.leg_samples or self.leg_samples < 2:
-            raise FootfallError("expert config: leg_samples must be an integer >= 2")
-        for name in ("ray_step", "far_step", "slip_distance", "pinch_distance", "trap_radius",
-                     "edge_radius"):
-            if not getattr(self, name) > 0:
-                raise FootfallError(f"expert config: {name} must be > 0")
+        super().__post_init__()
         if self.slip_distance < self.ray_step:
             raise FootfallError("expert config: slip_distance must be at least ray_step")
-
-    def to_dict(self) -> dict:
-        """The settings as plain JSON-serialisable data (recorded with demonstrations)."""
-        return dataclasses.asdict(self)
 
 
 # ----------------------------------------------------------------- geometry

@@ -9,11 +9,10 @@ grid of ``FeatureConfig.template_resolution``.
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
-from footfall.core.errors import FootfallError
 from footfall.core.heightmap import PatchGrid
+from footfall.core.params import Params, above, param, within
 
 
 @dataclass(frozen=True)
@@ -31,30 +30,28 @@ SCALES: tuple[Scale, ...] = (
     Scale("large", 0.144, 0.054),
 )
 
-# 3 mm samples: the ball foot (10 mm radius) spans 7 samples across, enough to
-# see whether it sits in a hollow or on a ridge, while the large patch stays at
-# 49 x 19 = 931 samples, so that dense scoring of a whole board is a cheap
-# matrix product. At 1 mm (the scan resolution) it would be 9x the work for
-# detail the foot cannot feel; at 5 mm the small patch would have 5 x 5 samples.
-DEFAULT_TEMPLATE_RESOLUTION = 0.003  # [m]
-# A patch needs at least this fraction of its samples on measured terrain; below
-# it the foothold is not a candidate (its features would be a guess).
-DEFAULT_MIN_COVERAGE = 0.5  # [-] fraction of samples that hold data
+
+def _scales_data(scales: tuple[Scale, ...]) -> list:
+    return [[s.name, s.length_x, s.length_y] for s in scales]
+
+
+def _scales_from_data(data: list) -> tuple[Scale, ...]:
+    return tuple(Scale(str(n), float(a), float(b)) for n, a, b in data)
 
 
 @dataclass(frozen=True)
-class FeatureConfig:
-    """How foothold features are computed; stored with every model."""
+class FeatureConfig(Params):
+    """How foothold features are computed; stored with every model (docs/configuration.md)."""
 
-    template_resolution: float = DEFAULT_TEMPLATE_RESOLUTION  # [m] patch sample spacing
-    min_coverage: float = DEFAULT_MIN_COVERAGE  # [-] least fraction of samples with data
-    scales: tuple[Scale, ...] = field(default=SCALES)
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.template_resolution) and self.template_resolution > 0):
-            raise FootfallError(f"template resolution must be > 0, got {self.template_resolution}")
-        if not 0 < self.min_coverage <= 1:
-            raise FootfallError(f"min_coverage must be in (0, 1], got {self.min_coverage}")
+    template_resolution: float = param(
+        0.003, unit="m", range=above(0), doc="spacing of the patch samples of every scale")
+    min_coverage: float = param(
+        0.5, unit="-", range=within(0, 1, low_open=True),
+        doc="least fraction of a patch's samples on measured terrain for a candidate")
+    scales: tuple[Scale, ...] = param(
+        SCALES, doc="the named windows features and templates are computed on",
+        check=lambda v: isinstance(v, tuple) and all(isinstance(s, Scale) for s in v),
+        must="a tuple of Scale", encode=_scales_data, decode=_scales_from_data)
 
     @property
     def grids(self) -> tuple[PatchGrid, ...]:
@@ -66,18 +63,3 @@ class FeatureConfig:
     def scale_names(self) -> tuple[str, ...]:
         """Names of the scales, in order."""
         return tuple(s.name for s in self.scales)
-
-    def to_dict(self) -> dict:
-        """Plain data for model files."""
-        return {"template_resolution": self.template_resolution,
-                "min_coverage": self.min_coverage,
-                "scales": [[s.name, s.length_x, s.length_y] for s in self.scales]}
-
-    @classmethod
-    def from_dict(cls, data: dict) -> "FeatureConfig":
-        """Inverse of :meth:`to_dict`."""
-        try:
-            return cls(float(data["template_resolution"]), float(data["min_coverage"]),
-                       tuple(Scale(str(n), float(a), float(b)) for n, a, b in data["scales"]))
-        except (KeyError, TypeError, ValueError) as exc:
-            raise FootfallError(f"malformed feature configuration ({exc})") from None

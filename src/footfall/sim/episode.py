@@ -35,7 +35,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -63,6 +63,7 @@ from footfall.control.swing import SwingConfig, swing_trajectory
 from footfall.core.errors import FootfallError
 from footfall.core.files import plain_json
 from footfall.core.heightmap import HeightMap
+from footfall.core.params import Params, at_least, param, within
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState, nominal_state
 from footfall.data.runlog import RunRecord, RunStep
@@ -77,63 +78,70 @@ WALL_CLOCK_FIELDS = ("planning_ms_per_step", "wall_seconds", "setup_seconds", "r
 # result fields that measure the computer, not the run (they differ between identical runs)
 
 
+# The walk's limits take inf for "none" (a time_limit of inf: the run ends at the goal or a fall).
+_POSITIVE_OR_INF = within(0, math.inf, low_open=True)
+_NONNEGATIVE_OR_INF = within(0, math.inf)
+
+
+# A walk's own planner and COG settings (docs/configuration.md gives the runs behind them).
+def _walk_footstep() -> FootstepConfig:
+    return FootstepConfig(bias_weight=60.0, step_advance=0.025)
+
+
+def _walk_cog() -> CogConfig:
+    return CogConfig(swing_duration=0.4, centring=100.0, slowdown=4.0)
+
+
 @dataclass(frozen=True)
-class WalkConfig:
-    """Every setting of a walking run; written next to its result."""
+class WalkConfig(Params):
+    """Every setting of a walking run; written next to its result (docs/configuration.md)."""
 
-    footstep: FootstepConfig = field(default_factory=lambda: FootstepConfig(
-        bias_weight=60.0, step_advance=0.025))
-    # bias 60 reward/m: keeps the hind feet following the body onto rough ground (at 30 they
-    # stay on the flat behind it and the robot stalls at the first rocks); 25 mm per step
-    # (a 10 cm stride): 21/21 runs on flat and on rocky 0.5 (27.5 mm too, 30 mm only 4/8 on rocky)
-    cog: CogConfig = field(default_factory=lambda: CogConfig(
-        swing_duration=0.4, centring=100.0, slowdown=4.0))
-    # a 0.4 s swing tracks its path within millimetres (0.3 s: feet clip rock edges); centring 100
-    # halves the sway (less reach and roll needed); slowdown 4 keeps slowed shifts feasible
-    swing: SwingConfig = field(default_factory=SwingConfig)
-    pose: PoseConfig = field(default_factory=PoseConfig)
-    lowlevel: LowLevelConfig = field(default_factory=LowLevelConfig)
-    path: BodyPathConfig = field(default_factory=BodyPathConfig)
-    perturbation: PerturbationConfig = field(default_factory=PerturbationConfig)
-    plan_path: bool = False  # False: the fixed straight path along the board's axis (as the paper)
-    start_setback: float = 0.35  # [m] body start this far before the end of the first module
-    goal_margin: float = 0.02  # [m] goal line: hind hips this far past the last non-final module
-    settle_time: float = 0.3  # [s] standing still before the first step
-    touchdown_force: float = 2.0  # [N] vertical foot force that means the foot is down
-    touchdown_early: float = 0.7  # [-] share of the swing (to above the foothold) after which a
-    # contact ends it early
-    touchdown_reach: float = 0.015  # [m] a contact counts as touch-down only this close to the
-    # foothold horizontally (farther off, the foot has brushed an obstacle on its way: it goes on)
-    touchdown_approach: float = 0.008  # [m] the swing ends this far above the foothold; the foot
-    # comes down the rest of the way at touchdown_speed (at most half the swing time)
-    touchdown_search: float = 0.02  # [m] how far below the planned foothold the foot keeps looking
-    touchdown_speed: float = 0.1  # [m/s] how fast it goes down while looking
-    fall_tilt: float = 0.6  # [rad] trunk roll or pitch beyond this is a fall
-    stuck_time: float = 10.0  # [s] a robot that advanced less than stuck_progress in this long is stuck
-    stuck_progress: float = 0.02  # [m]
-    time_limit: float = 240.0  # [s] of simulated time
-    max_steps: int | None = None  # [steps] stop (reason "step limit", no success) after this
-    # many steps; None: no limit (short test runs)
-
-    def __post_init__(self) -> None:
-        for name in ("settle_time", "touchdown_approach", "touchdown_search", "goal_margin"):
-            if not getattr(self, name) >= 0:
-                raise FootfallError(f"walk config: {name} must be >= 0")
-        for name in ("touchdown_force", "touchdown_speed", "touchdown_reach", "fall_tilt",
-                     "stuck_time", "time_limit"):
-            if not getattr(self, name) > 0:
-                raise FootfallError(f"walk config: {name} must be > 0")
-        if not 0 <= self.touchdown_early <= 1:
-            raise FootfallError("walk config: touchdown_early must be in [0, 1]")
-        if self.max_steps is not None and (isinstance(self.max_steps, bool)
-                                           or not isinstance(self.max_steps, int)
-                                           or self.max_steps < 1):
-            raise FootfallError(f"walk config: max_steps must be an integer >= 1 or None, "
-                                f"got {self.max_steps!r}")
-
-    def to_dict(self) -> dict:
-        """Plain JSON-serialisable settings."""
-        return asdict(self)
+    footstep: FootstepConfig = param(factory=_walk_footstep,
+                                     doc="the footstep planner (path bias, stride)")
+    cog: CogConfig = param(factory=_walk_cog, doc="the COG planner (swing and shift timing)")
+    swing: SwingConfig = param(factory=SwingConfig, doc="the swing-foot trajectory")
+    pose: PoseConfig = param(factory=PoseConfig, doc="the pose finder")
+    lowlevel: LowLevelConfig = param(factory=LowLevelConfig, doc="the 100 Hz closed loop")
+    path: BodyPathConfig = param(factory=BodyPathConfig,
+                                 doc="the body path planner (used with plan_path)")
+    perturbation: PerturbationConfig = param(factory=PerturbationConfig,
+                                             doc="how much runs differ from one another")
+    plan_path: bool = param(False, doc="plan the body path by Dijkstra; False: the fixed "
+                                       "straight path along the board's axis (as the paper)")
+    start_setback: float = param(0.35, unit="m",
+                                 doc="body start this far before the end of the first module")
+    goal_margin: float = param(0.02, unit="m", range=_NONNEGATIVE_OR_INF,
+                               doc="goal line: hind hips this far past the last non-final module")
+    settle_time: float = param(0.3, unit="s", range=_NONNEGATIVE_OR_INF,
+                               doc="standing still before the first step")
+    touchdown_force: float = param(2.0, unit="N", range=_POSITIVE_OR_INF,
+                                   doc="vertical foot force that means the foot is down")
+    touchdown_early: float = param(0.7, unit="-", range=within(0, 1),
+                                   doc="share of the swing (to above the foothold) after which "
+                                       "a contact ends it early")
+    touchdown_reach: float = param(0.015, unit="m", range=_POSITIVE_OR_INF,
+                                   doc="a contact counts as touch-down only this close to the "
+                                       "foothold horizontally")
+    touchdown_approach: float = param(0.008, unit="m", range=_NONNEGATIVE_OR_INF,
+                                      doc="the swing ends this far above the foothold; the foot "
+                                          "comes down the rest of the way at touchdown_speed")
+    touchdown_search: float = param(0.02, unit="m", range=_NONNEGATIVE_OR_INF,
+                                    doc="how far below the planned foothold the foot keeps "
+                                        "looking")
+    touchdown_speed: float = param(0.1, unit="m/s", range=_POSITIVE_OR_INF,
+                                   doc="how fast the foot goes down while looking")
+    fall_tilt: float = param(0.6, unit="rad", range=_POSITIVE_OR_INF,
+                             doc="trunk roll or pitch beyond this is a fall")
+    stuck_time: float = param(10.0, unit="s", range=_POSITIVE_OR_INF,
+                              doc="a robot that advanced less than stuck_progress in this long "
+                                  "is stuck")
+    stuck_progress: float = param(0.02, unit="m",
+                                  doc="forward progress in stuck_time that counts as moving")
+    time_limit: float = param(240.0, unit="s", range=_POSITIVE_OR_INF,
+                              doc="longest run, in simulated time")
+    max_steps: int | None = param(None, unit="steps", range=at_least(1),
+                                  doc="stop (reason \"step limit\", no success) after this many "
+                                      "steps; None: no limit (short test runs)")
 
 
 @dataclass

@@ -27,6 +27,7 @@ import numpy as np
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import inverse_kinematics, rotation_matrix, world_to_body
+from footfall.core.params import Params, at_least, param, within
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.sim.mjcf import JOINTS, MAX_HFIELD_SPACING, SHIN_PIECES, compile_model
 
@@ -35,7 +36,7 @@ LEG_PARTS = ("foot", "knee", "shin")  # parts of a leg that collide with the ter
 
 # ----------------------------------------------------------------- perturbation
 @dataclass(frozen=True)
-class PerturbationConfig:
+class PerturbationConfig(Params):
     """How much runs differ from one another: the ranges :meth:`SimPerturbation.sample` draws from.
 
     Bounded errors are drawn uniformly in ``[-limit, +limit]`` (independently
@@ -43,23 +44,26 @@ class PerturbationConfig:
     The defaults are those of a motion-capture-registered LittleDog testbed.
     """
 
-    terrain_shift: float = 0.003  # [m] terrain registration error along x and y (a few mm)
-    terrain_lift: float = 0.001  # [m] terrain registration error along z
-    terrain_yaw: float = math.radians(0.3)  # [rad] terrain registration error about z
-    friction: float = 0.15  # [-] relative friction error: scale uniform in 1 +- this
-    start_shift: float = 0.005  # [m] error of the start body position, per axis
-    start_tilt: float = math.radians(1.0)  # [rad] error of the start roll, pitch and yaw
-    force_noise: float = 0.1  # [N] std of each foot force sensor axis
-    gyro_noise: float = 0.005  # [rad/s] std of each gyro axis
-    accel_noise: float = 0.05  # [m/s^2] std of each accelerometer axis
-    orientation_noise: float = math.radians(0.1)  # [rad] std of the IMU orientation, per axis
-
-    def __post_init__(self) -> None:
-        for name, value in asdict(self).items():
-            if not (math.isfinite(value) and value >= 0):
-                raise FootfallError(f"perturbation config: {name} must be finite and >= 0")
-        if self.friction >= 1:
-            raise FootfallError("perturbation config: friction must be < 1 (a relative error)")
+    terrain_shift: float = param(0.003, unit="m", range=at_least(0),
+                                 doc="terrain registration error along x and y (a few mm)")
+    terrain_lift: float = param(0.001, unit="m", range=at_least(0),
+                                doc="terrain registration error along z")
+    terrain_yaw: float = param(math.radians(0.3), unit="rad", range=at_least(0),
+                               doc="terrain registration error about z")
+    friction: float = param(0.15, unit="-", range=within(0, 1, high_open=True),
+                            doc="relative friction error: the scale is uniform in 1 +- this")
+    start_shift: float = param(0.005, unit="m", range=at_least(0),
+                               doc="error of the start body position, per axis")
+    start_tilt: float = param(math.radians(1.0), unit="rad", range=at_least(0),
+                              doc="error of the start roll, pitch and yaw")
+    force_noise: float = param(0.1, unit="N", range=at_least(0),
+                               doc="std of each foot force sensor axis")
+    gyro_noise: float = param(0.005, unit="rad/s", range=at_least(0),
+                              doc="std of each gyro axis")
+    accel_noise: float = param(0.05, unit="m/s^2", range=at_least(0),
+                               doc="std of each accelerometer axis")
+    orientation_noise: float = param(math.radians(0.1), unit="rad", range=at_least(0),
+                                     doc="std of the IMU orientation, per axis")
 
 
 @dataclass(frozen=True)

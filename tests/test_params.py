@@ -32,13 +32,16 @@ from footfall.core.params import (
     to_dict,
     within,
 )
+from footfall.experiments.offline import OfflineConfig
+from footfall.experiments.reproduce import ReproduceConfig
 from footfall.expert.synthetic import ExpertConfig
 from footfall.features.config import FeatureConfig
 from footfall.sim.episode import WalkConfig
 from footfall.sim.simulation import PerturbationConfig
 
 CONFIGS = (FeatureConfig, PerturbationConfig, WalkConfig, LowLevelConfig, BodyPathConfig,
-           FootstepConfig, CogConfig, SwingConfig, PoseConfig, ExpertConfig)
+           FootstepConfig, CogConfig, SwingConfig, PoseConfig, ExpertConfig, ReproduceConfig,
+           OfflineConfig)
 """Every declared config of footfall (test_every_declared_config_is_listed keeps it whole)."""
 
 

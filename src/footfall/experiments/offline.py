@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import json
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
@@ -22,39 +22,77 @@ import numpy as np
 
 from footfall.core.errors import FootfallError
 from footfall.core.files import write_text_atomic
+from footfall.core.params import Params, at_least, param
 from footfall.core.seeds import SeedStreams
 from footfall.core.stats import bootstrap_ci
 from footfall.data.store import DemoStore
 from footfall.expert.collect import collect_demonstrations
 from footfall.expert.synthetic import SyntheticExpert
 from footfall.features.dense import score_grid
-from footfall.features.family import PAPER_FEATURE_SETS
+from footfall.features.family import PAPER_FEATURE_SETS, feature_set_families
 from footfall.learning.evaluation import expert_values, rank_scores
 from footfall.learning.model import FootholdModel
-from footfall.learning.ranker import BUILTIN_LEARNERS
+from footfall.learning.ranker import BUILTIN_LEARNERS, LEARNERS
 from footfall.learning.train import TrainingDemo, learn_model
 from footfall.plots.maps import save_kept_templates, save_score_maps
 from footfall.plots.relief import save_relief
 from footfall.terrain import make_board
 
 
-@dataclass(frozen=True)
-class OfflineConfig:
-    """What the offline experiment runs; written next to its results."""
+def _kinds(value: object) -> bool:
+    from footfall.terrain import KINDS
 
-    train_kinds: tuple[str, ...] = ("steps", "barrier", "slope", "rocky")
-    unseen_kind: str = "logs"  # never shown in training
-    train_difficulties: tuple[float, ...] = (0.3, 0.6, 0.9)
-    test_difficulties: tuple[float, ...] = (0.45, 0.75)
-    n_train: int = 100  # demonstrations to learn from (the paper had about 100)
-    n_test_modules: int = 40  # demonstrations on unseen modules of the training kinds
-    n_test_kind: int = 30  # demonstrations on the unseen kind
-    feature_sets: tuple[str, ...] = PAPER_FEATURE_SETS
-    learners: tuple[str, ...] = BUILTIN_LEARNERS
-    library_size: int = 1000
-    l1_min_ablation: bool = True  # also learn L1 with lambda at the smallest CV error ("l1-min")
-    seed: int = 0
-    extra_rocky_train: int = 2  # more rocky boards in training: the kind that matters most
+    return isinstance(value, tuple) and len(value) > 0 and all(k in KINDS for k in value)
+
+
+def _difficulties(value: object) -> bool:
+    return isinstance(value, tuple) and len(value) > 0 and all(
+        isinstance(d, (int, float)) and not isinstance(d, bool) and 0 <= d <= 1 for d in value)
+
+
+def _feature_sets(value: object) -> bool:
+    try:
+        return isinstance(value, tuple) and len(value) > 0 and all(
+            isinstance(v, str) and feature_set_families(v) for v in value)
+    except FootfallError:
+        return False
+
+
+@dataclass(frozen=True)
+class OfflineConfig(Params):
+    """What the offline experiment runs; written next to its results (docs/configuration.md)."""
+
+    train_kinds: tuple[str, ...] = param(("steps", "barrier", "slope", "rocky"), check=_kinds,
+                                         must="a non-empty tuple of terrain kinds",
+                                         doc="the kinds of the training boards")
+    unseen_kind: str = param("logs", check=lambda v: _kinds((v,)), must="a terrain kind",
+                             doc="a kind never shown in training")
+    train_difficulties: tuple[float, ...] = param(
+        (0.3, 0.6, 0.9), unit="-", check=_difficulties, must="a tuple of numbers in [0, 1]",
+        doc="difficulties of the training boards (and of the unseen kind's)")
+    test_difficulties: tuple[float, ...] = param(
+        (0.45, 0.75), unit="-", check=_difficulties, must="a tuple of numbers in [0, 1]",
+        doc="difficulties of the unseen modules of the training kinds")
+    n_train: int = param(100, range=at_least(1),
+                         doc="demonstrations to learn from (the paper had about 100)")
+    n_test_modules: int = param(40, range=at_least(1), doc="demonstrations on unseen modules "
+                                                           "of the training kinds")
+    n_test_kind: int = param(30, range=at_least(1), doc="demonstrations on the unseen kind")
+    feature_sets: tuple[str, ...] = param(
+        PAPER_FEATURE_SETS, check=_feature_sets, must="a tuple of feature sets",
+        doc="the feature sets learned (registered sets, or families joined by '+')")
+    learners: tuple[str, ...] = param(
+        BUILTIN_LEARNERS, check=lambda v: isinstance(v, tuple) and len(v) > 0
+        and all(learner in LEARNERS for learner in v), must="a tuple of registered learners",
+        doc="the learners compared")
+    library_size: int = param(1000, range=at_least(3),
+                              doc="templates in the library before L1 selection")
+    l1_min_ablation: bool = param(True, doc="also learn L1 with lambda at the smallest CV error "
+                                            "(\"l1-min\")")
+    seed: int = param(0, range=at_least(0), doc="the experiment's seed: every board, "
+                      "demonstration and learning seed is drawn from its named streams")
+    extra_rocky_train: int = param(2, range=at_least(0), doc="more rocky boards in training: "
+                                                             "the kind that matters most")
 
     @property
     def streams(self) -> SeedStreams:
@@ -142,7 +180,7 @@ def run_offline(out: Path, config: OfflineConfig = OfflineConfig(),
             log(f"  unseen modules top-1 {row['test-modules']['top1']:.3f}, "
                 f"unseen kind top-1 {row['test-kind']['top1']:.3f}")
 
-    summary = {"config": asdict(config), "results": results, "table1": table1,
+    summary = {"config": config.to_dict(), "results": results, "table1": table1,
                "comparisons": compare_feature_sets(results)
                + (compare_feature_sets(results, "l1-min") if config.l1_min_ablation else []),
                "demonstrations": {s: len(d) for s, d in splits.items()},

@@ -46,7 +46,7 @@ import json
 import os
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import dataclass, field, replace
 from multiprocessing import get_context
 from pathlib import Path
 from typing import Callable
@@ -57,6 +57,7 @@ from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
 from footfall.core.files import write_text_atomic
 from footfall.core.heightmap import HeightMap
+from footfall.core.params import Params, above, at_least, param
 from footfall.core.robot import LITTLEDOG
 from footfall.core.seeds import SeedStreams
 from footfall.data.runlog import RunRecord
@@ -65,6 +66,7 @@ from footfall.experiments.batch import summarise
 from footfall.expert.synthetic import ExpertConfig, walking_expert
 from footfall.features.family import PAPER_FEATURE_SETS
 from footfall.learning.model import LEG_GROUPS, FootholdModel
+from footfall.learning.ranker import SELECTIONS
 from footfall.sim.episode import WalkConfig
 from footfall.terrain import make_board
 
@@ -76,57 +78,83 @@ TABLE2_REFERENCES = ("flat", "expert", "default")  # Table II rows beside the th
 Spec = tuple[tuple[str, float], ...]  # a board: (kind, difficulty) of each module
 
 
-@dataclass(frozen=True)
-class ReproduceConfig:
-    """Everything the reproduction runs; written next to its results."""
+def _is_spec(value: object) -> bool:
+    """A board: a non-empty tuple of (kind, difficulty) with a known kind and 0 <= d <= 1."""
+    from footfall.terrain import KINDS
 
-    seed: int = 0
-    train_boards: tuple[Spec, ...] = (
-        (("rocky", 0.4),), (("rocky", 0.6),), (("steps", 0.5),), (("barrier", 0.5),),
-        (("slope", 0.5),), (("logs", 0.5),))
-    test_board: Spec = (("rocky", 0.7), ("steps", 0.7))  # modules with fresh seeds
-    sweep_difficulties: tuple[float, ...] = (0.8, 0.9, 1.0)  # [-] harder test boards, walked
-    # only if every function succeeds in every run on the test board
-    rounds: int = 5  # most correction rounds (walk, correct, learn); with six runs a round and
-    # the worst six corrections a run, five rounds collect the paper's ~100 (three gave 58)
-    target_demos: int = 100  # rounds stop once this many corrections are collected
-    extra_rounds: int = 3  # further rounds, walked only while the front or the hind legs have
-    # fewer corrections than the cv folds need (nothing to learn them from)
-    corrections_per_run: int | None = 6  # the expert labels the worst this many steps of a run
-    # whose shortfall exceeds the margin (None: all of them)
-    margin: float = 2.0  # [expert value units; the walking expert's unit: 1 cm off the gait-
-    # nominal foothold] shortfall that counts
-    library_size: int = 1000  # templates in the library before L1 selection
-    training_candidates: int = 100  # candidates per demonstration in the pairwise training set
-    selection: str = "min"  # lambda at the smallest cross-validation error (paper §V)
-    cv: int = 5  # cross-validation folds
-    round_bandwidth_rms: float = 0.004  # [m] RBF bandwidth (as RMS height difference) of the
-    # functions the robot walks with between rounds (the final ones choose theirs by CV)
-    final_bandwidth_rms: float | None = None  # [m] fixed bandwidth of the final functions; None: CV
-    eval_runs: int = 21  # runs per function on the test board (the paper's 21)
-    sweep_runs: int = 10  # runs per function and difficulty in the sweep
-    offline_demos: int = 40  # expert demonstrations on the test board for the ranking table
-    walk: WalkConfig = field(default_factory=lambda: reproduction_walk())  # every run's settings
-    expert: ExpertConfig | None = None  # the synthetic expert who corrects and demonstrates;
-    # None: walking_expert(walk.footstep.lead), filled in on construction so config.json states it
+    return isinstance(value, tuple) and len(value) > 0 and all(
+        isinstance(m, tuple) and len(m) == 2 and m[0] in KINDS
+        and isinstance(m[1], (int, float)) and not isinstance(m[1], bool) and 0 <= m[1] <= 1
+        for m in value)
+
+
+def _difficulties(value: object) -> bool:
+    return isinstance(value, tuple) and all(
+        isinstance(d, (int, float)) and not isinstance(d, bool) and 0 <= d <= 1 for d in value)
+
+
+@dataclass(frozen=True)
+class ReproduceConfig(Params):
+    """Everything the reproduction runs; written next to its results (docs/configuration.md)."""
+
+    seed: int = param(0, range=at_least(0), doc="the experiment's seed: every board, run and "
+                      "demonstration seed is drawn from its named streams (core.seeds)")
+    train_boards: tuple[Spec, ...] = param(
+        ((("rocky", 0.4),), (("rocky", 0.6),), (("steps", 0.5),), (("barrier", 0.5),),
+         (("slope", 0.5),), (("logs", 0.5),)),
+        check=lambda v: isinstance(v, tuple) and len(v) > 0 and all(map(_is_spec, v)),
+        must="a non-empty tuple of boards, each a tuple of (kind, difficulty in [0, 1])",
+        doc="the training boards the robot is corrected on")
+    test_board: Spec = param(
+        (("rocky", 0.7), ("steps", 0.7)),
+        check=lambda v: _is_spec(v) and any(kind == "rocky" for kind, _ in v),
+        must="a board with a rocky module (a tuple of (kind, difficulty in [0, 1]))",
+        doc="the unseen test board of Table II (modules with fresh seeds)")
+    sweep_difficulties: tuple[float, ...] = param(
+        (0.8, 0.9, 1.0), unit="-", check=_difficulties, must="a tuple of numbers in [0, 1]",
+        doc="harder test boards, walked only if every function succeeds in every test run")
+    rounds: int = param(5, range=at_least(1), doc="most correction rounds (walk, correct, learn)")
+    target_demos: int = param(100, range=at_least(1),
+                              doc="rounds stop once this many corrections are collected")
+    extra_rounds: int = param(3, range=at_least(0),
+                              doc="further rounds, walked only while the front or the hind legs "
+                                  "have fewer corrections than the cv folds need")
+    corrections_per_run: int | None = param(
+        6, range=at_least(1), doc="the expert labels the worst this many steps of a run whose "
+                                  "shortfall exceeds the margin (None: all of them)")
+    margin: float = param(2.0, unit="value", range=at_least(0),
+                          doc="shortfall against the expert's best that counts (the walking "
+                              "expert's unit: 1 cm off the gait-nominal foothold)")
+    library_size: int = param(1000, range=at_least(1),
+                              doc="templates in the library before L1 selection")
+    training_candidates: int = param(100, range=at_least(1),
+                                     doc="candidates per demonstration in the pairwise training set")
+    selection: str = param("min", choices=SELECTIONS,
+                           doc="lambda: at the smallest cross-validation error (paper §V) or by "
+                               "the one-standard-error rule")
+    cv: int = param(5, range=at_least(1), doc="cross-validation folds")
+    round_bandwidth_rms: float = param(
+        0.004, unit="m", range=above(0), doc="RBF bandwidth (as RMS height difference) of the "
+                                             "functions the robot walks with between rounds")
+    final_bandwidth_rms: float | None = param(
+        None, unit="m", range=above(0),
+        doc="fixed bandwidth of the final functions; None: chosen by cross-validation")
+    eval_runs: int = param(21, range=at_least(1),
+                           doc="runs per function on the test board (the paper's 21)")
+    sweep_runs: int = param(10, range=at_least(1),
+                            doc="runs per function and difficulty in the sweep")
+    offline_demos: int = param(40, range=at_least(1), doc="expert demonstrations on the test "
+                                                          "board for the ranking table")
+    walk: WalkConfig = param(factory=lambda: reproduction_walk(),
+                             doc="every run's settings (F within REPRODUCTION_SEARCH_RADIUS)")
+    expert: ExpertConfig | None = param(
+        None, doc="the synthetic expert who corrects and demonstrates; None: "
+                  "walking_expert(walk.footstep.lead), filled in so that config.json states it")
 
     def __post_init__(self) -> None:
-        if self.expert is None:
+        if self.expert is None and isinstance(self.walk, WalkConfig):
             object.__setattr__(self, "expert", walking_expert(self.walk.footstep.lead))
-        for name in ("rounds", "target_demos", "eval_runs", "sweep_runs", "cv", "library_size",
-                     "training_candidates"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-                raise FootfallError(f"reproduce config: {name} must be an integer >= 1")
-        v = self.extra_rounds
-        if isinstance(v, bool) or not isinstance(v, int) or v < 0:
-            raise FootfallError("reproduce config: extra_rounds must be an integer >= 0")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
-            raise FootfallError("reproduce config: seed must be an integer >= 0")
-        if not self.train_boards or not self.test_board:
-            raise FootfallError("reproduce config: needs training boards and a test board")
-        if not any(kind == "rocky" for kind, _ in self.test_board):
-            raise FootfallError("reproduce config: the test board needs a rocky module")
+        super().__post_init__()
 
     @classmethod
     def quick(cls, seed: int = 0) -> ReproduceConfig:
@@ -137,17 +165,10 @@ class ReproduceConfig:
                    training_candidates=40, cv=3, final_bandwidth_rms=0.004, eval_runs=4,
                    sweep_runs=2, offline_demos=12)
 
-    def to_dict(self) -> dict:
-        return asdict(self)
-
 
 REPRODUCTION_SEARCH_RADIUS = 0.03  # [m] the candidate set F of a step in the reproduction: the
 # reachable footholds within this distance of the gait-nominal position (or all reachable ones
-# where none of those is usable). Measured on the six training boards (seed 7) with a function
-# learned from 74 corrections: 1 / 6 crossings with every reachable foothold, 3 / 6 within
-# 3 cm, 2 / 6 within 4 cm; the hand-tuned default crossed 5 / 6 either way. This controller's
-# body advances a fixed distance per step, so a foothold far from the gait-nominal one leaves
-# long, thin support triangles however good its terrain is.
+# where none of those is usable); docs/configuration.md gives the runs behind the number
 
 
 def reproduction_walk() -> WalkConfig:

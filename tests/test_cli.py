@@ -114,3 +114,40 @@ def test_demo_writes_its_pictures_and_report(tmp_path, capsys):
     assert summary["valid_footholds"] > 0.9 * summary["lattice_points"]
     # The best foothold of the hand-tuned reward is on the rocky part, and better than the worst.
     assert 0.61 <= summary["best_foothold"][0] <= 1.83
+
+
+def _choices(command, name):
+    return next(p.type.choices for p in command.params if p.name == name)
+
+
+def test_choices_come_from_the_registries(tmp_path, capsys, monkeypatch):
+    from footfall.cli import cli
+    from footfall.core.robot import LEG_NAMES
+    from footfall.data.store import DemoStore
+    from footfall.features.family import FEATURE_SETS, register_feature_set
+    from footfall.learning import ranker
+    from footfall.terrain import KINDS
+
+    assert _choices(cli.commands["features"], "leg") == tuple(LEG_NAMES)
+    assert _choices(cli.commands["learn"], "learner") == tuple(ranker.LEARNERS)
+    assert _choices(cli.commands["learn"], "selection") == tuple(ranker.SELECTIONS)
+    assert _choices(cli.commands["terrain"].commands["make"], "kind") == tuple(KINDS)
+    # Read when used: a learner registered after import is a choice at once.
+    monkeypatch.setattr(ranker, "LEARNERS", tuple(ranker.LEARNERS) + ("huber",))
+    assert _choices(cli.commands["learn"], "learner")[-1] == "huber"
+    # A feature set registered after import is accepted by --features and listed in --help;
+    # family names joined by '+' are accepted too.
+    empty = tmp_path / "empty.sqlite"
+    DemoStore(empty, create=True).close()
+    learn = ["learn", empty, "-o", tmp_path / "m.npz", "--features"]
+    code, _, err = run(capsys, *learn, "edges")
+    assert_user_error(code, err, "Invalid value for '--features'")
+    register_feature_set("edges", ("terrain", "pose"))
+    try:
+        for features in ("edges", "pose+terrain"):
+            code, _, err = run(capsys, *learn, features)
+            assert_user_error(code, err, "the store holds no demonstrations")  # past the option
+        code, out, _ = run(capsys, "learn", "--help")
+        assert code == 0 and "terrain|templates|both|edges" in out
+    finally:
+        del FEATURE_SETS["edges"]

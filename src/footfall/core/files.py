@@ -151,3 +151,19 @@ def checked_json(value: Any, what: str, object_only: bool = False) -> Any:
     if object_only and not isinstance(out, dict):
         raise FootfallError(f"{what} must be a JSON object")
     return out
+
+
+def writable_path(path: str | os.PathLike) -> Path:
+    """``path`` as a file to write, refused before any work whose result could not be kept.
+
+    Raises
+    ------
+    FootfallError
+        If ``path`` is a directory or its directory does not exist.
+    """
+    p = Path(path)
+    if p.exists() and p.is_dir():
+        raise FootfallError(f"output path is a directory: {p}")
+    if not p.parent.exists():
+        raise FootfallError(f"output directory does not exist: {p.parent}")
+    return p

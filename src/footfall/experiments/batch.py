@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from multiprocessing import get_context
 from pathlib import Path
 from typing import Callable
@@ -19,11 +19,13 @@ import numpy as np
 
 from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
+from footfall.core.files import writable_path
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LITTLEDOG
 from footfall.core.stats import wilson_interval
 from footfall.data.runlog import RunRecord
-from footfall.sim.episode import WalkConfig, walk
+from footfall.data.store import DemoStore
+from footfall.sim.episode import Frames, WalkConfig, walk
 
 
 def reward_source(model_path: str | os.PathLike | None, hmap: HeightMap):
@@ -181,3 +183,153 @@ def save_video(images: list, path: str | os.PathLike, fps: float) -> None:
                                 macro_block_size=8, ffmpeg_log_level="error") as writer:
             for img in images:
                 writer.append_data(img)
+
+
+# ------------------------------------------------ runs from files (footfall walk, walk-many)
+def load_board(path: str | os.PathLike) -> HeightMap:
+    """The board height map at ``path``; a missing file is refused by name."""
+    if not Path(path).exists():
+        raise FootfallError(f"no such terrain file: {path}")
+    return HeightMap.load(path)
+
+
+def walk_config(model_path: str | os.PathLike | None = None, expert: bool = False,
+                search_radius: float | None = None) -> WalkConfig:
+    """The default walk, with the candidate set F limited to ``search_radius`` [m] if given.
+
+    Raises
+    ------
+    FootfallError
+        For the expert together with a model, or a bad search radius.
+    """
+    if expert and model_path is not None:
+        raise FootfallError("--expert chooses the footholds itself: give no --model with it")
+    base = WalkConfig()
+    if search_radius is None:
+        return base
+    return replace(base, footstep=replace(base.footstep, search_radius=search_radius))
+
+
+@dataclass(frozen=True)
+class WalkOutcome:
+    """One run across a board: who chose the footholds, and the run's record."""
+
+    terrain: str  # the board file, as given
+    model: str | None  # the model file, None for the hand-tuned reward
+    expert: bool  # the walking expert chose every foothold
+    seed: int  # the run seed
+    record: RunRecord  # the run: result (success, slip, speed, ...) and every step
+    run_id: int | None = None  # the run's id in the log store, if logged
+
+    def as_dict(self) -> dict:
+        """Plain data for JSON: the settings, the run's result, then its log id if logged."""
+        data = {"terrain": self.terrain, "model": self.model, "expert": self.expert,
+                "seed": self.seed, **self.record.result}
+        if self.run_id is not None:
+            data["run_id"] = self.run_id
+        return data
+
+
+def _open_log(log_path: str | os.PathLike | None) -> DemoStore | None:
+    """The log store, opened (and created) before a run, so that a bad path fails first."""
+    return None if log_path is None else DemoStore(writable_path(log_path), create=True)
+
+
+def _path_or_none(path: str | os.PathLike | None) -> str | None:
+    return None if path is None else str(path)
+
+
+def walk_once(terrain_path: str | os.PathLike, seed: int, *,
+              model_path: str | os.PathLike | None = None, expert: bool = False,
+              search_radius: float | None = None, snapshots: str | os.PathLike | None = None,
+              frames: int = 6, video: str | os.PathLike | None = None,
+              log_path: str | os.PathLike | None = None) -> WalkOutcome:
+    """One run across the board at ``terrain_path`` with the reward of ``model_path``.
+
+    Without a model the hand-tuned reward chooses the footholds; with
+    ``expert`` the walking expert does (:func:`expert_judge`).
+    ``search_radius`` [m] limits the candidate set F (:func:`walk_config`).
+    ``snapshots`` writes a strip of ``frames`` pictures (.png), ``video`` an
+    .mp4 at 25 frames/s, ``log_path`` appends the run to a store.
+
+    Raises
+    ------
+    FootfallError
+        For bad settings, a missing board, a model for another robot or map,
+        or a bad output path: all before the run.
+    """
+    config = walk_config(model_path, expert, search_radius)
+    hmap = load_board(terrain_path)
+    reward_for = reward_source(model_path, hmap)
+    for p in (snapshots, video):
+        if p is not None:
+            writable_path(p)
+    store = _open_log(log_path)
+    pictures = None
+    if snapshots or video:
+        pictures = Frames(snapshot_count=frames if snapshots else 0,
+                          video_fps=25.0 if video else 0.0)
+    record = walk(hmap, reward_for, seed, config, frames=pictures,
+                  judge=expert_judge(config) if expert else None)
+    if snapshots:
+        save_strip(pictures.snapshots, snapshots)
+    if video:
+        save_video(pictures.video, video, pictures.video_fps)
+    run_id = None
+    if store is not None:
+        with store:
+            run_id = store.add_run(record, terrains=[hmap])
+    return WalkOutcome(str(terrain_path), _path_or_none(model_path), expert, seed, record, run_id)
+
+
+@dataclass(frozen=True)
+class BatchOutcome:
+    """Runs with seeds ``seed``, ``seed + 1``, ... across a board, and their Table II measures."""
+
+    terrain: str  # the board file, as given
+    model: str | None  # the model file, None for the hand-tuned reward
+    expert: bool  # the walking expert chose every foothold
+    seed: int  # seed of the first run
+    summary: RunSummary  # success rate, slip, speed, ...
+    records: tuple[RunRecord, ...]  # the runs, in seed order
+
+    def as_dict(self) -> dict:
+        """Plain data for JSON: the settings, the summary's keys, then each run's result."""
+        return {"terrain": self.terrain, "model": self.model, "expert": self.expert,
+                "seed": self.seed, **self.summary.as_dict(),
+                "runs_detail": [{"seed": self.seed + i, **r.result}
+                                for i, r in enumerate(self.records)]}
+
+
+def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
+               model_path: str | os.PathLike | None = None, expert: bool = False,
+               search_radius: float | None = None, log_path: str | os.PathLike | None = None,
+               progress: Callable[[RunRecord], None] | None = None) -> BatchOutcome:
+    """``runs`` runs in parallel (:func:`walk_many`), each logged to ``log_path`` as it ends.
+
+    Settings as for :func:`walk_once`; ``progress`` is called with each
+    finished run (in the order they finish).
+
+    Raises
+    ------
+    FootfallError
+        As :func:`walk_once` and :func:`walk_many`.
+    """
+    config = walk_config(model_path, expert, search_radius)
+    hmap = load_board(terrain_path)
+    store = _open_log(log_path)
+
+    def finished(record: RunRecord) -> None:
+        if progress is not None:
+            progress(record)
+        if store is not None:  # each finished run is kept at once
+            store.add_run(record, terrains=[hmap])
+
+    try:
+        records = walk_many(terrain_path, model_path, runs, seed, config, progress=finished,
+                            expert=expert)
+    finally:
+        if store is not None:
+            store.close()
+    return BatchOutcome(str(terrain_path), _path_or_none(model_path), expert, seed,
+                        summarise(records), tuple(records))

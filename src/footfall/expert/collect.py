@@ -9,17 +9,20 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
+from collections import Counter
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
 
 from footfall.core.errors import FootfallError
-from footfall.core.files import plain_json
+from footfall.core.files import plain_json, writable_path
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState, nominal_state
-from footfall.data.store import Demonstration
+from footfall.data.store import Demonstration, DemoStore
 from footfall.features.candidates import DEFAULT_SPACING, reachable_footholds
 from footfall.features.config import FeatureConfig
 
@@ -374,3 +377,78 @@ def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, s
         if len(out) >= n or len(out) == before:
             break
     return out[:n]
+
+
+RECORDED_STEPS = ("rough", "all")  # a collection records the steps on non-flat modules, or all
+
+
+@dataclass(frozen=True)
+class CollectedDemonstrations:
+    """What one collection added to a demonstration store."""
+
+    store: str  # the store's path
+    requested: int  # demonstrations asked for
+    added: int  # demonstrations added (fewer when the terrains are too short)
+    first_id: int  # id of the first demonstration added
+    last_id: int  # id of the last one
+    added_by_terrain: dict[str, int]  # {terrain hash: demonstrations added}, in walking order
+    added_by_leg: dict[str, int]  # {swing leg: demonstrations added}, in walking order
+    expert: dict[str, Any]  # the expert's settings, recorded with each demonstration
+    seed: int  # the collection's seed
+    steps: str  # which steps were recorded: one of RECORDED_STEPS
+    total: int  # demonstrations in the store afterwards
+    terrains: int  # terrains in the store afterwards
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain data for JSON, in field order."""
+        return dict(vars(self))
+
+
+def collect_into_store(terrains: Sequence[str | os.PathLike], path: str | os.PathLike, n: int,
+                       seed: int, *, noise: float | None = None,
+                       second_best: float | None = None, steps: str = "rough",
+                       progress: Callable[[Demonstration], None] | None = None,
+                       ) -> CollectedDemonstrations:
+    """Add the synthetic expert's foothold choices on terrain files to a store (created if missing).
+
+    :func:`collect_demonstrations` spreads the ``n`` demonstrations over the
+    terrains and their lateral paths. ``noise`` [value units] and
+    ``second_best`` (the probability of picking the second-best foothold)
+    override the expert's defaults; ``steps`` is ``"rough"`` (footholds on
+    a board's non-flat modules only) or ``"all"``. The store is written in one
+    transaction at the end: a failure leaves it as it was.
+
+    Raises
+    ------
+    FootfallError
+        For a bad output path, a terrain file or an existing store that cannot
+        be read (all checked before walking), or when no demonstration was recorded.
+    """
+    if steps not in RECORDED_STEPS:
+        raise FootfallError(f"steps must be one of {', '.join(RECORDED_STEPS)}, got {steps!r}")
+    out = writable_path(path)
+    hmaps = [HeightMap.load(p) for p in terrains]
+    if out.exists():
+        with DemoStore(out):  # refuse a bad store before walking, not after
+            pass
+    try:  # imported here: tests put a fake expert in its place
+        from footfall.expert.synthetic import ExpertConfig, SyntheticExpert
+    except ImportError as exc:
+        raise FootfallError(f"the synthetic expert is not available ({exc})") from None
+    settings = {k: v for k, v in (("noise", noise), ("second_best_prob", second_best))
+                if v is not None}
+    expert = SyntheticExpert(config=ExpertConfig(**settings))
+    collected = collect_demonstrations(hmaps, expert, n, seed, rough_only=steps == "rough",
+                                       progress=progress)
+    if not collected:
+        raise FootfallError("the walker recorded no demonstrations on these terrains "
+                            "(too short, or no rough modules on its paths: try --steps all)")
+    used = {d.terrain_hash for d in collected}
+    with DemoStore(out, create=True) as store:
+        ids = store.add_demonstrations(collected, terrains=[h for h in hmaps
+                                                            if h.content_hash() in used])
+        summary = store.summary()
+    return CollectedDemonstrations(
+        str(out), n, len(ids), ids[0], ids[-1], dict(Counter(d.terrain_hash for d in collected)),
+        dict(Counter(d.swing_leg for d in collected)), collected[0].expert, seed, steps,
+        summary["demonstrations"], summary["terrains"])

@@ -11,6 +11,7 @@ columns the L1 learner left at zero (templates without weight).
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -19,9 +20,11 @@ from typing import Any
 import numpy as np
 
 from footfall.core.errors import FootfallError
+from footfall.core.files import writable_path
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState
+from footfall.data.store import Demonstration, DemoStore
 from footfall.features.config import FeatureConfig
 from footfall.features.family import FeatureFamily
 from footfall.features.templates import DEFAULT_LIBRARY_SIZE
@@ -144,3 +147,77 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
                                "training_candidates": training_candidates,
                                "selection": selection,
                                "seconds": time.perf_counter() - started})
+
+
+def store_demonstrations(path: str | os.PathLike, source: str | None = None
+                         ) -> tuple[list[Demonstration], dict[str, HeightMap]]:
+    """A store's demonstrations (those whose source starts with ``source``) and their terrains.
+
+    Returns
+    -------
+    (list of Demonstration, dict)
+        The demonstrations in id order and {terrain hash: HeightMap} of their terrains.
+
+    Raises
+    ------
+    FootfallError
+        If the store cannot be read or holds no such demonstration.
+    """
+    with DemoStore(path) as store:
+        demos = store.demonstrations(source_prefix=source)
+        if not demos:
+            raise FootfallError(f"{path}: the store holds no demonstrations"
+                                + ("" if source is None else f" from source {source!r}"))
+        maps = {h: store.terrain(h) for h in {d.terrain_hash for d in demos}}
+    return demos, maps
+
+
+@dataclass(frozen=True)
+class LearnedModel:
+    """A model learned from a store and written to a file: what was learned, from how much."""
+
+    model: str  # the model file written
+    feature_set: str
+    learner: str
+    demonstrations: int  # demonstrations learned from
+    seconds: float  # [s] learning time
+    groups: dict[str, dict[str, Any]]  # per leg group: lambda, cv_error, bandwidths, kept, ...
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain data for JSON, in field order."""
+        return dict(vars(self))
+
+
+def _group_summary(f: RankingFunction, scales: int) -> dict[str, Any]:
+    """Lambda, CV error, RBF bandwidths [1/m^2] and [m RMS], templates kept of a ranking function."""
+    return {"lambda": f.info["lambda"], "cv_error": f.info["cv_error"],
+            "bandwidths_per_m2": list(getattr(f.family("templates"), "bandwidths", ())),
+            "bandwidth_rms_m": f.info.get("bandwidth_rms_m"),
+            "templates_kept": f.info.get("kept_counts", [0] * scales),
+            "library": f.info.get("library_counts", [0] * scales),
+            "non_zero_weights": f.info["n_nonzero"]}
+
+
+def learn_from_store(store: str | os.PathLike, path: str | os.PathLike, feature_set: str,
+                     learner: str = "l1", *, source: str | None = None,
+                     log: Callable[[str], None] = lambda s: None, **options: Any) -> LearnedModel:
+    """Learn a model (:func:`learn_model`) from a store's demonstrations and save it to ``path``.
+
+    ``source`` keeps only demonstrations whose source starts with it;
+    ``options`` are :func:`learn_model`'s keyword arguments (library_size,
+    training_candidates, bandwidth_rms, cv, seed, selection, ...).
+
+    Raises
+    ------
+    FootfallError
+        For a bad output path (checked first), a store without such
+        demonstrations, or bad learning settings.
+    """
+    out = writable_path(path)
+    demos, maps = store_demonstrations(store, source=source)
+    training = [TrainingDemo(maps[d.terrain_hash], d.state, d.candidates, d.chosen) for d in demos]
+    model = learn_model(training, feature_set, learner, log=log, **options)
+    model.save(out)
+    return LearnedModel(str(out), feature_set, learner, len(demos), model.info["seconds"],
+                        {g: _group_summary(f, len(model.config.scales))
+                         for g, f in model.functions.items()})

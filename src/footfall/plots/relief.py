@@ -8,6 +8,7 @@ Uses matplotlib figure objects directly (no pyplot), so it is safe headless.
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import matplotlib
 import numpy as np
@@ -18,7 +19,7 @@ from matplotlib.figure import Figure
 from matplotlib.image import AxesImage
 
 from footfall.core.errors import FootfallError
-from footfall.core.files import atomic_path
+from footfall.core.files import atomic_path, writable_path
 from footfall.core.heightmap import HeightMap
 
 # Land part of matplotlib's "terrain" map (its low end is sea blue).
@@ -110,3 +111,14 @@ def save_relief(hmap: HeightMap, path: str | os.PathLike, title: str | None = No
             fig.savefig(tmp, format="png", dpi=DPI)
     except OSError as exc:
         raise FootfallError(f"cannot write {path}: {exc}") from None
+
+
+def save_relief_of_file(source: str | os.PathLike, path: str | os.PathLike) -> Path:
+    """Write the shaded relief of the height-map file ``source``, titled with its name.
+
+    Returns the path written. Raises :class:`FootfallError` for a bad output
+    path (checked first) or a file that is not a readable height map.
+    """
+    out = writable_path(path)
+    save_relief(HeightMap.load(source), out, title=Path(source).name)
+    return out

@@ -1,0 +1,60 @@
+"""``footfall bench``: benchmarks that print figures, each against a baseline run in the same
+process (:mod:`footfall.experiments.bench`)."""
+
+from __future__ import annotations
+
+import click
+
+from footfall.cli.output import emit, json_option
+
+
+@click.group()
+def bench() -> None:
+    """Benchmarks: print figures, compared with a baseline run in the same process."""
+
+
+@bench.command("scoring")
+@click.option("--repeats", type=click.IntRange(1, 100), default=7, show_default=True)
+@click.option("--baseline-sample", type=click.IntRange(10, 100000), default=300,
+              show_default=True, help="Candidates timed with the per-candidate loop.")
+@json_option
+def bench_scoring_cmd(repeats: int, baseline_sample: int, as_json: bool) -> None:
+    """Dense scoring of a 3-module board at 5 mm with 60 templates and 27 features."""
+    from footfall.experiments.bench import bench_scoring, format_scoring
+
+    result = bench_scoring(repeats=repeats, baseline_sample=baseline_sample)
+    emit(as_json, result, format_scoring(result))
+
+
+@bench.command("learning")
+@click.option("--demos", "n_demos", type=click.IntRange(10, 10000), default=100, show_default=True)
+@click.option("--library-size", type=click.IntRange(3, 100000), default=1000, show_default=True)
+@json_option
+def bench_learning_cmd(n_demos: int, library_size: int, as_json: bool) -> None:
+    """Paper-scale learning against scikit-learn's LogisticRegressionCV."""
+    from footfall.experiments.bench import bench_learning, format_learning
+
+    result = bench_learning(n_demos=n_demos, library_size=library_size)
+    emit(as_json, result, format_learning(result))
+
+
+@bench.command("sim")
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True)
+@json_option
+def bench_sim_cmd(seed: int, as_json: bool) -> None:
+    """Real-time factor of the walking stack against bare MuJoCo stepping."""
+    from footfall.experiments.bench import bench_sim, format_sim
+
+    result = bench_sim(seed=seed)
+    emit(as_json, result, format_sim(result))
+
+
+@bench.command("expert")
+@click.option("--states", type=click.IntRange(1, 1000), default=16, show_default=True)
+@json_option
+def bench_expert_cmd(states: int, as_json: bool) -> None:
+    """The walking expert's judgement with its placement error against without."""
+    from footfall.experiments.bench import bench_expert, format_expert
+
+    result = bench_expert(states=states)
+    emit(as_json, result, format_expert(result))

@@ -1,0 +1,107 @@
+"""Option choices read from footfall's registries when a command is parsed or its help shown.
+
+Read late on purpose: a name registered after import (a new learner, feature
+set or terrain kind) is a valid choice at once, and ``footfall --help`` does
+not import scikit-learn to list them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from typing import Any
+
+import click
+
+from footfall.core.errors import FootfallError
+
+
+class RegistryChoice(click.Choice):
+    """A choice among the names ``names()`` returns at the time of use.
+
+    ``invalid``: the message for a name not among them, with ``{value!r}``
+    and ``{choices}`` (comma-separated); click's own message by default.
+    """
+
+    def __init__(self, names: Callable[[], Iterable[str]], invalid: str | None = None) -> None:
+        # click.Choice.__init__ would freeze the names into a tuple: keep the callable instead.
+        self._names = names
+        self._invalid = invalid
+        self.case_sensitive = True
+
+    @property
+    def choices(self) -> tuple[str, ...]:  # type: ignore[override]
+        return tuple(self._names())
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> Any:
+        if self._invalid is not None and value not in self.choices:
+            self.fail(self._invalid.format(value=value, choices=", ".join(self.choices)),
+                      param, ctx)
+        return super().convert(value, param, ctx)
+
+
+class FeatureSetChoice(click.ParamType):
+    """A registered feature set, or feature family names joined by ``+`` (``terrain+pose``)."""
+
+    name = "feature set"
+
+    def get_metavar(self, param: click.Parameter, ctx: click.Context | None = None) -> str:
+        from footfall.features.family import FEATURE_SETS
+
+        return "[" + "|".join([*FEATURE_SETS, "FAMILY+FAMILY..."]) + "]"
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> str:
+        from footfall.features.family import feature_set_families
+
+        try:
+            feature_set_families(value)
+        except FootfallError as exc:
+            self.fail(str(exc), param, ctx)
+        return value
+
+
+class ChoiceArgument(click.Argument):
+    """An argument whose usage line lists its choices while its errors still call it by name."""
+
+    def get_error_hint(self, ctx: click.Context) -> str:
+        return f"'{self.human_readable_name.upper()}'"
+
+
+def _legs() -> tuple[str, ...]:
+    from footfall.core.robot import LEG_NAMES
+
+    return tuple(LEG_NAMES)
+
+
+def _learners() -> tuple[str, ...]:
+    from footfall.learning.ranker import LEARNERS
+
+    return tuple(LEARNERS)
+
+
+def _selections() -> tuple[str, ...]:
+    from footfall.learning.ranker import SELECTIONS
+
+    return tuple(SELECTIONS)
+
+
+def _terrain_kinds() -> tuple[str, ...]:
+    from footfall.terrain import KINDS
+
+    return tuple(KINDS)
+
+
+def _recorded_steps() -> tuple[str, ...]:
+    from footfall.expert.collect import RECORDED_STEPS
+
+    return tuple(RECORDED_STEPS)
+
+
+LEG = RegistryChoice(_legs)  # footfall.core.robot.LEG_NAMES
+LEARNER = RegistryChoice(_learners)  # footfall.learning.ranker.LEARNERS
+SELECTION = RegistryChoice(_selections)  # footfall.learning.ranker.SELECTIONS
+TERRAIN_KIND = RegistryChoice(  # footfall.terrain.KINDS, refused in the generator's words
+    _terrain_kinds, invalid="unknown terrain module kind {value!r}; known kinds: {choices}")
+RECORDED_STEP = RegistryChoice(_recorded_steps)  # footfall.expert.collect.RECORDED_STEPS
+FEATURE_SET = FeatureSetChoice()  # footfall.features.family: FEATURE_SETS and family names

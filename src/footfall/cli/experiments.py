@@ -1,0 +1,67 @@
+"""``footfall offline``, ``reproduce`` and ``demo``: the experiments end to end, and the picture
+demo."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from footfall.cli.output import emit, json_option, progress_log
+
+
+@click.command()
+@click.option("--out", "out", default="out/offline", show_default=True, help="Report folder.")
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--quick", is_flag=True,
+              help="A small version (fewer demonstrations, L1 only) for a smoke test.")
+@json_option
+def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
+    """The offline experiment: learn from demonstrations, rank unseen terrain (Table I)."""
+    from footfall.experiments.offline import OfflineConfig, run_offline
+
+    config = OfflineConfig(seed=seed)
+    if quick:  # belongs beside ReproduceConfig.quick, in OfflineConfig
+        config = OfflineConfig(seed=seed, n_train=30, n_test_modules=12, n_test_kind=8,
+                               learners=("l1",), library_size=150,
+                               train_difficulties=(0.5,), test_difficulties=(0.6,),
+                               extra_rocky_train=1)
+    summary = run_offline(Path(out), config, log=progress_log(as_json))
+    emit(as_json, summary, f"wrote {Path(out) / 'report.md'}")
+
+
+def _table2_line(name: str, row: dict) -> str:
+    """One row of Table II: successes of runs, and slip [mm]."""
+    slip = ("-" if row["slip_mean_mm"] is None
+            else f"{row['slip_mean_mm']:.1f} +- {row['slip_std_mm']:.1f} mm")
+    return f"{name}: {row['successes']} / {row['runs']} succeeded, slip {slip}"
+
+
+@click.command()
+@click.option("--out", "out", default="out/reproduce", show_default=True, help="Report folder "
+              "(and the store of every run; run again with the same arguments to resume).")
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True)
+@click.option("--quick", is_flag=True, help="A small version (a few minutes) for a smoke test.")
+@click.option("--processes", type=click.IntRange(min=1), default=None,
+              help="Parallel runs [default: the available cores].")
+@json_option
+def reproduce(out: str, seed: int, quick: bool, processes: int | None, as_json: bool) -> None:
+    """The paper's walking experiment end to end: corrections, learning, Tables I and II."""
+    from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
+
+    config = ReproduceConfig.quick(seed) if quick else ReproduceConfig(seed=seed)
+    results = run_reproduction(Path(out), config, processes=processes, log=progress_log(as_json))
+    lines = [_table2_line(k, v) for k, v in results["table2"].items()]
+    emit(as_json, results, "\n".join(lines + [f"wrote {Path(out) / 'report.md'} and report.html"]))
+
+
+@click.command()
+@click.option("--out", "out", default="out/demo", show_default=True, help="Output folder.")
+@click.option("--seed", type=int, default=0, show_default=True)
+@json_option
+def demo(out: str, seed: int, as_json: bool) -> None:
+    """Build a board, score it densely and draw the terrain, features and templates."""
+    from footfall.plots.showcase import run_demo
+
+    result = run_demo(Path(out), seed=seed)
+    emit(as_json, result, "\n".join(f"wrote {p}" for p in result["files"]))

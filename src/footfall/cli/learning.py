@@ -1,0 +1,71 @@
+"""``footfall learn`` and ``footfall rank-eval``: a foothold model from a store, and its agreement
+with the expert on demonstrations."""
+
+from __future__ import annotations
+
+import click
+
+from footfall.cli.choices import FEATURE_SET, LEARNER, SELECTION
+from footfall.cli.output import emit, json_option, progress_log
+
+SOURCE_HELP = "Only demonstrations whose source starts with this (e.g. walker:train)."
+
+
+@click.command()
+@click.argument("store_path", metavar="DEMOS.sqlite")
+@click.option("--features", "feature_set", type=FEATURE_SET, required=True,
+              help="Feature set (each with the pose features), or feature families joined "
+                   "by '+' (e.g. terrain+pose).")
+@click.option("--learner", type=LEARNER, default="l1", show_default=True,
+              help="L1 / L2 logistic regression or a linear SVM.")
+@click.option("--library-size", type=click.IntRange(3, 100000), default=1000, show_default=True,
+              help="Templates in the library, over the three scales.")
+@click.option("--training-candidates", type=click.IntRange(1, 100000), default=100,
+              show_default=True, help="Other candidates per demonstration used for pairs.")
+@click.option("--bandwidth-rms", type=float, nargs=3, default=None, metavar="S M L",
+              help="Fix the RBF bandwidths as RMS height differences [m] per scale "
+                   "(default: chosen by cross-validation).")
+@click.option("--cv", type=click.IntRange(2, 50), default=5, show_default=True)
+@click.option("--selection", type=SELECTION, default="1se", show_default=True,
+              help="Lambda: one-standard-error rule (sparser) or the smallest CV error.")
+@click.option("--source", default=None, help=SOURCE_HELP)
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("-o", "--output", required=True, help="Output model (.npz).")
+@json_option
+def learn(store_path: str, feature_set: str, learner: str, library_size: int,
+          training_candidates: int, bandwidth_rms: tuple[float, float, float] | None, cv: int,
+          selection: str, source: str | None, seed: int, output: str, as_json: bool) -> None:
+    """Learn front- and hind-leg foothold ranking functions from demonstrations."""
+    from footfall.learning.train import learn_from_store
+
+    learned = learn_from_store(store_path, output, feature_set, learner, source=source,
+                               log=progress_log(as_json), library_size=library_size,
+                               training_candidates=training_candidates,
+                               bandwidth_rms=bandwidth_rms, cv=cv, seed=seed,
+                               selection=selection)
+    lines = [f"wrote {learned.model}: {feature_set}/{learner} from {learned.demonstrations} "
+             f"demonstrations in {learned.seconds:.1f} s"]
+    for g, v in learned.groups.items():
+        lines.append(f"  {g}: lambda {v['lambda']:.4g}, cv error {v['cv_error']:.4f}, "
+                     f"templates kept {v['templates_kept']} of {v['library']}")
+    emit(as_json, learned.as_dict(), "\n".join(lines))
+
+
+@click.command("rank-eval")
+@click.argument("model_path", metavar="MODEL.npz")
+@click.argument("store_path", metavar="DEMOS.sqlite")
+@click.option("--no-expert", is_flag=True, help="Skip the reward loss (needs the expert).")
+@click.option("--source", default=None, help=SOURCE_HELP)
+@json_option
+def rank_eval_cmd(model_path: str, store_path: str, no_expert: bool, source: str | None,
+                  as_json: bool) -> None:
+    """Top-1 agreement, mean percentile rank and mean reward loss of a model on demonstrations."""
+    from footfall.experiments.rank_eval import rank_eval
+
+    agreement = rank_eval(model_path, store_path, with_expert=not no_expert, source=source)
+    s = agreement.scores
+    emit(as_json, agreement.as_dict(),
+         f"{agreement.feature_set}/{agreement.learner} on {s.n} demonstrations: "
+         f"top-1 {s.top1:.3f}, within 1 cm {s.top1_near:.3f}, percentile {s.percentile:.3f}, "
+         f"reward loss {s.reward_loss:.3f} "
+         f"(95 % CI {s.reward_loss_ci[0]:.3f} to {s.reward_loss_ci[1]:.3f})")

@@ -1,0 +1,56 @@
+"""How every command prints: its figures as JSON with ``--json``, as text otherwise.
+
+Progress goes to standard error, so that standard output holds only the result.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import sys
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import click
+
+json_option = click.option("--json", "as_json", is_flag=True, help="Print machine-readable JSON.")
+
+
+def emit(as_json: bool, data: dict[str, Any], text: str) -> None:
+    """Print a command's result: ``data`` as JSON, or ``text``."""
+    if as_json:
+        click.echo(json.dumps(data, indent=2, allow_nan=False))
+    else:
+        click.echo(text)
+
+
+def progress_log(as_json: bool) -> Callable[[str], None]:
+    """A log of progress lines on standard error; silent with ``--json``."""
+    if as_json:
+        return lambda line: None
+    return lambda line: click.echo(line, err=True)
+
+
+@contextlib.contextmanager
+def progress_bar(total: int, desc: str, unit: str, quiet: bool) -> Iterator[Callable[[Any], None]]:
+    """A step counter shown as a bar on standard error (a terminal only, not with ``quiet``).
+
+    The bar opens at the first step, so that an argument refused before any
+    work leaves the error as the only line.
+    """
+    from tqdm import tqdm
+
+    bar = None
+
+    def step(_: Any) -> None:
+        nonlocal bar
+        if bar is None:
+            bar = tqdm(total=total, unit=unit, desc=desc, file=sys.stderr, dynamic_ncols=True,
+                       disable=quiet or not sys.stderr.isatty())
+        bar.update(1)
+
+    try:
+        yield step
+    finally:
+        if bar is not None:
+            bar.close()

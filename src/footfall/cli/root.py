@@ -1,0 +1,67 @@
+"""The ``footfall`` command group and its entry point: user errors become one line and status 2.
+
+Every command lives in the module of its group (terrain, features, demos, learning, walking,
+experiments, bench) and is added here.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from footfall.cli.bench import bench
+from footfall.cli.demos import demos
+from footfall.cli.experiments import demo, offline, reproduce
+from footfall.cli.features import features
+from footfall.cli.learning import learn, rank_eval_cmd
+from footfall.cli.terrain import terrain
+from footfall.cli.walking import walk_cmd, walk_many_cmd
+from footfall.core.errors import FootfallError
+
+EXIT_USER_ERROR = 2  # a bad file or argument
+EXIT_INTERRUPTED = 130  # Ctrl-C, as a shell reports SIGINT
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.option("--debug", is_flag=True, help="Show tracebacks for errors.")
+@click.version_option(package_name="footfall")
+def cli(debug: bool) -> None:
+    """footfall: learning where a legged robot should put its feet, with terrain templates."""
+
+
+for _command in (terrain, features, demos, learn, rank_eval_cmd, walk_cmd, walk_many_cmd,
+                 offline, reproduce, demo, bench):
+    cli.add_command(_command)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point: run the CLI, turning user errors into one line and exit status 2."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in args
+    try:
+        cli.main(args=args, prog_name="footfall", standalone_mode=False)
+    except FootfallError as exc:
+        if debug:
+            raise
+        click.echo(f"footfall: error: {exc}", err=True)
+        return EXIT_USER_ERROR
+    except click.exceptions.Abort:
+        click.echo("footfall: interrupted", err=True)
+        return EXIT_INTERRUPTED
+    except click.ClickException as exc:
+        if debug:
+            raise
+        message = " ".join(exc.format_message().split())
+        click.echo(f"footfall: error: {message} (see --help)", err=True)
+        return EXIT_USER_ERROR
+    except (OSError, MemoryError) as exc:
+        if debug:
+            raise
+        click.echo(f"footfall: error: {exc}", err=True)
+        return EXIT_USER_ERROR
+    return 0
+
+
+def _console() -> None:  # pragma: no cover - the console script
+    sys.exit(main())

@@ -1,0 +1,89 @@
+"""``footfall terrain``: make, import and look at terrain height maps."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import click
+
+from footfall.cli.choices import TERRAIN_KIND, ChoiceArgument
+from footfall.cli.output import emit, json_option
+
+if TYPE_CHECKING:
+    from footfall.terrain.saving import MapSummary
+
+
+@click.group()
+def terrain() -> None:
+    """Make, import and look at terrain height maps."""
+
+
+def _emit_map(as_json: bool, summary: MapSummary) -> None:
+    """A written map's summary: JSON, or one line with its size [mm, m] and heights [mm]."""
+    text = (f"wrote {summary.file}: {summary.shape[0]} x {summary.shape[1]} cells at "
+            f"{summary.resolution * 1000:g} mm, {summary.length[0]:.3f} x "
+            f"{summary.length[1]:.3f} m, heights {summary.height_min * 1000:.1f} .. "
+            f"{summary.height_max * 1000:.1f} mm")
+    emit(as_json, summary.as_dict(), text)
+
+
+@terrain.command("make")
+@click.argument("kind", type=TERRAIN_KIND, cls=ChoiceArgument)
+@click.option("--difficulty", type=float, default=0.5, show_default=True,
+              help="Difficulty in [0, 1].")
+@click.option("--seed", type=int, required=True, help="Random seed.")
+@click.option("-o", "--output", required=True, help="Output height map (.npz).")
+@json_option
+def terrain_make(kind: str, difficulty: float, seed: int, output: str, as_json: bool) -> None:
+    """Make one 61 x 61 cm terrain module of KIND."""
+    from footfall.terrain.saving import save_module
+
+    _emit_map(as_json, save_module(kind, difficulty, seed, output))
+
+
+@terrain.command("board")
+@click.argument("specs", nargs=-1, required=True, metavar="KIND[:DIFFICULTY]...")
+@click.option("--seed", type=int, required=True, help="Random seed.")
+@click.option("--flat-ends/--no-flat-ends", default=True, show_default=True,
+              help="Add a flat start and end module unless the row already has them.")
+@click.option("-o", "--output", required=True, help="Output height map (.npz).")
+@json_option
+def terrain_board(specs: tuple[str, ...], seed: int, flat_ends: bool, output: str,
+                  as_json: bool) -> None:
+    """Make a board: modules in a row along x, e.g. `rocky:0.5 rocky:0.8`.
+
+    KIND is one of the kinds `footfall terrain make --help` lists.
+    """
+    from footfall.terrain.saving import save_board
+
+    _emit_map(as_json, save_board(specs, seed, output, flat_ends=flat_ends))
+
+
+@terrain.command("import")
+@click.argument("source")
+@click.option("--resolution", type=float, default=None,
+              help="Cell size [m] (required for .npy, .png and point clouds).")
+@click.option("--z-scale", type=float, default=None,
+              help="Metres per raw height unit (required for 16-bit PNG).")
+@click.option("--nodata", type=float, default=None, help="Raw value that means no data.")
+@click.option("-o", "--output", required=True, help="Output height map (.npz).")
+@json_option
+def terrain_import(source: str, resolution: float | None, z_scale: float | None,
+                   nodata: float | None, output: str, as_json: bool) -> None:
+    """Import SOURCE (.npy, 16-bit .png, .ply, .xyz, .npz) as a footfall height map."""
+    from footfall.terrain.saving import save_imported
+
+    _emit_map(as_json, save_imported(source, output, resolution=resolution, z_scale=z_scale,
+                                     nodata=nodata))
+
+
+@terrain.command("show")
+@click.argument("source")
+@click.option("-o", "--output", required=True, help="Output picture (.png).")
+@json_option
+def terrain_show(source: str, output: str, as_json: bool) -> None:
+    """Draw a shaded relief of a height map with a colour bar."""
+    from footfall.plots.relief import save_relief_of_file
+
+    out = save_relief_of_file(source, output)
+    emit(as_json, {"file": str(out), "source": str(source)}, f"wrote {out}")

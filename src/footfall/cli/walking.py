@@ -1,0 +1,86 @@
+"""``footfall walk`` and ``footfall walk-many``: the simulated robot across a board, once or
+many times in parallel."""
+
+from __future__ import annotations
+
+import click
+
+from footfall.cli.output import emit, json_option, progress_bar
+
+TERRAIN_OPTION = click.option("--terrain", "terrain_path", required=True,
+                              help="Board height map (.npz).")
+MODEL_OPTION = click.option("--model", "model_path", default=None,
+                            help="Learned model (.npz); default: the hand-tuned reward.")
+
+
+def _chooser_options(f):
+    """--expert and --search-radius: who chooses the footholds, and among which."""
+    f = click.option("--search-radius", type=float, default=None,
+                     help="Candidate set F of a step: the footholds within this many metres of "
+                          "the gait-nominal position (the reproduction uses 0.03); "
+                          "default: every reachable one.")(f)
+    return click.option("--expert", is_flag=True,
+                        help="The synthetic walking expert chooses every foothold (no --model): "
+                             "what learning from its demonstrations can reach at best.")(f)
+
+
+def _run_text(result: dict) -> str:
+    """One line of a run's result: success, distance, time, steps, speed, slip."""
+    slip = ("" if result.get("slip_mean_mm") is None else
+            f", slip {result['slip_mean_mm']:.1f} +- {result['slip_std_mm']:.1f} mm "
+            f"({result['slip_count']} footholds)")
+    return (f"{'success' if result['success'] else 'failure'} ({result['reason']}): "
+            f"{result['distance']:.3f} m in {result['time']:.1f} s, {result['steps']} steps, "
+            f"{result['speed_cm_s']:.1f} cm/s{slip}; real-time factor "
+            f"{result['real_time_factor']:.1f}")
+
+
+@click.command("walk")
+@TERRAIN_OPTION
+@MODEL_OPTION
+@click.option("--seed", type=click.IntRange(min=0), required=True,
+              help="Run seed: start pose, terrain registration, friction, sensor noise.")
+@click.option("--snapshots", default=None, help="Write a strip of frames (.png).")
+@click.option("--frames", type=click.IntRange(2, 12), default=6, show_default=True,
+              help="Frames in the snapshot strip.")
+@click.option("--video", default=None, help="Write a video (.mp4).")
+@click.option("--log", "log_path", default=None, help="Append the run log to this store (.sqlite).")
+@_chooser_options
+@json_option
+def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: str | None,
+             frames: int, video: str | None, log_path: str | None, expert: bool,
+             search_radius: float | None, as_json: bool) -> None:
+    """One run of the simulated robot across a board (success, slip, speed)."""
+    from footfall.experiments.batch import walk_once
+
+    outcome = walk_once(terrain_path, seed, model_path=model_path, expert=expert,
+                        search_radius=search_radius, snapshots=snapshots, frames=frames,
+                        video=video, log_path=log_path)
+    emit(as_json, outcome.as_dict(), _run_text(outcome.record.result))
+
+
+@click.command("walk-many")
+@TERRAIN_OPTION
+@MODEL_OPTION
+@click.option("--runs", type=click.IntRange(min=1), default=21, show_default=True)
+@click.option("--seed", type=click.IntRange(min=0), required=True,
+              help="Run i has seed SEED + i.")
+@click.option("--log", "log_path", default=None, help="Append every run log to this store.")
+@_chooser_options
+@json_option
+def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: int,
+                  log_path: str | None, expert: bool, search_radius: float | None,
+                  as_json: bool) -> None:
+    """N runs in parallel processes: success rate (Wilson 95 % CI), slip, speed."""
+    from footfall.experiments.batch import walk_batch
+
+    with progress_bar(runs, "runs", "run", quiet=False) as step:  # also with --json
+        batch = walk_batch(terrain_path, runs, seed, model_path=model_path, expert=expert,
+                           search_radius=search_radius, log_path=log_path, progress=step)
+    s = batch.summary
+    slip = ("no successful run" if s.slip_mean_mm is None else
+            f"slip {s.slip_mean_mm:.1f} +- {s.slip_std_mm:.1f} mm over "
+            f"{s.slip_count} footholds, {s.speed_cm_s:.1f} cm/s")
+    emit(as_json, batch.as_dict(), f"{s.successes} / {s.runs} succeeded "
+         f"({100 * s.success_rate:.1f} %, 95 % CI {100 * s.success_ci[0]:.1f}-"
+         f"{100 * s.success_ci[1]:.1f} %); {slip}")

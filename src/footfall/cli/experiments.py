@@ -20,12 +20,7 @@ def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
     """The offline experiment: learn from demonstrations, rank unseen terrain (Table I)."""
     from footfall.experiments.offline import OfflineConfig, run_offline
 
-    config = OfflineConfig(seed=seed)
-    if quick:  # belongs beside ReproduceConfig.quick, in OfflineConfig
-        config = OfflineConfig(seed=seed, n_train=30, n_test_modules=12, n_test_kind=8,
-                               learners=("l1",), library_size=150,
-                               train_difficulties=(0.5,), test_difficulties=(0.6,),
-                               extra_rocky_train=1)
+    config = OfflineConfig.quick(seed) if quick else OfflineConfig(seed=seed)
     summary = run_offline(Path(out), config, log=progress_log(as_json))
     emit(as_json, summary, f"wrote {Path(out) / 'report.md'}")
 

@@ -94,6 +94,13 @@ class OfflineConfig(Params):
     extra_rocky_train: int = param(2, range=at_least(0), doc="more rocky boards in training: "
                                                              "the kind that matters most")
 
+    @classmethod
+    def quick(cls, seed: int = 0) -> OfflineConfig:
+        """A small version for a smoke test: fewer boards and demonstrations, L1 only."""
+        return cls(seed=seed, n_train=30, n_test_modules=12, n_test_kind=8, learners=("l1",),
+                   library_size=150, train_difficulties=(0.5,), test_difficulties=(0.6,),
+                   extra_rocky_train=1)
+
     @property
     def streams(self) -> SeedStreams:
         """The experiment's named seed streams (boards, demonstrations, learning)."""

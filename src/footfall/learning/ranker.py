@@ -277,7 +277,7 @@ class FootholdRanker(BaseEstimator):
         self.tol = tol
         self.max_iter = max_iter
 
-    def _path(self, learner: Learner, pairs: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    def _path(self, pairs: np.ndarray, labels: np.ndarray) -> np.ndarray:
         if not np.isscalar(self.Cs):
             Cs = np.sort(np.asarray(self.Cs, dtype=np.float64))
             if Cs.size == 0 or not (Cs > 0).all():
@@ -286,7 +286,7 @@ class FootholdRanker(BaseEstimator):
         n = int(self.Cs)
         if n < 1:
             raise FootfallError("Cs must be at least 1")
-        return learner.path(pairs, labels, n)
+        return get_learner(self.learner).path(pairs, labels, n)
 
     def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray) -> "FootholdRanker":
         """Learn from stacked candidate features of demonstrations (see :func:`pairwise_transform`).
@@ -309,7 +309,7 @@ class FootholdRanker(BaseEstimator):
         signs = np.where(np.arange(pairs.shape[0]) % 2 == 0, 1.0, -1.0)
         Xs = pairs / scale * signs[:, None]
         labels = signs
-        Cs = self._path(learner, Xs, labels)
+        Cs = self._path(Xs, labels)
         folds = grouped_folds(pair_groups, int(self.cv))
         self.fold_groups_ = [(np.unique(pair_groups[tr]), np.unique(pair_groups[te]))
                              for tr, te in folds]

@@ -116,7 +116,8 @@ def test_walk_is_deterministic_for_a_seed(board):
 
 def test_walk_stops_before_the_far_end(board):
     demos = walk_demonstrations(board, ProgressExpert(), np.random.default_rng(0), 1000,
-                                WalkPath(y=0.05), WalkOptions(spacing=SPACING, source="walker:test"))
+                                WalkPath(y=0.05),
+                                WalkOptions(spacing=SPACING, source="walker:test"))
     stop_x = board.bounds[1] - LITTLEDOG.hip_x - EDGE_MARGIN
     last = demos[-1].state.body_position[0]
     assert last <= stop_x < last + DEFAULT_STRIDE / 4

@@ -360,7 +360,7 @@ class FootstepPlanner:
             body_yaw=ahead.body_yaw[:m], targets=ahead.targets[:m], state=st0)
 
     def _horizon(self, state: RobotState) -> _Horizon:
-        """The next ``lookahead`` steps from ``state`` as the path predicts them (see :meth:`plan`)."""
+        """The next ``lookahead`` steps from ``state``, as the path predicts them (:meth:`plan`)."""
         cfg, robot, path = self.config, self.robot, self.path
         order = list(robot.gait_order)
         first = order.index(state.swing_leg)

@@ -242,7 +242,7 @@ def _sklearn_baseline(X: np.ndarray, y: np.ndarray, groups: np.ndarray, ours
 
 
 def _timed(work: Callable[[], _Result]) -> tuple[_Result, float, int]:
-    """Run ``work``: its result, the wall-clock seconds it took and its peak traced memory [bytes]."""
+    """Run ``work``: its result, its wall-clock time [s] and its peak traced memory [bytes]."""
     tracemalloc.start()
     t0 = time.perf_counter()
     out = work()

@@ -104,7 +104,7 @@ def walk_demonstrations(hmap: HeightMap, expert: Expert, rng: np.random.Generato
                         expert_info: dict | None = None,
                         progress: Callable[[Demonstration], None] | None = None
                         ) -> list[Demonstration]:
-    """Walk straight along +x (heading 0) at lateral position ``path.y``, recording each foothold choice.
+    """Walk straight along +x (heading 0) at lateral position ``path.y``, recording each choice.
 
     The robot starts standing in its nominal stance with the body at
     ``(path.start_x, path.y)``. Step k swings leg ``robot.gait_order[k % 4]``

@@ -295,7 +295,7 @@ class Walk:
 
     # --------------------------------------------------------------- one step
     def _step(self, k: int) -> None:
-        """Step ``k`` in its phases: plan (foothold, COG, pose), shift and swing, touch-down, load."""
+        """Step ``k`` in its phases: plan (foothold, COG, pose), shift, swing, touch-down, load."""
         leg = self.robot.gait_order[k % 4]
         s = LEG_NAMES.index(leg)
         tp = time.perf_counter()
@@ -417,7 +417,7 @@ class Walk:
             landed = self._touching_down(s)
 
     def _load(self, k: int, s: int, record: dict) -> None:
-        """Foot ``s`` stands where it touched down and starts taking its load; log the touch-down."""
+        """Foot ``s`` stands where it touched down and starts to take its load; log it."""
         sim = self.sim
         centre = sim.foot_positions()[s]
         self._targets[s] = centre

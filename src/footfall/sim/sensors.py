@@ -98,7 +98,7 @@ class Sensors:
                 "accel": s[self._imu_adr["accel"]] + self._rng.normal(0.0, p.accel_noise, 3)}
 
     def _touching(self) -> np.ndarray:
-        """Whether each geom is in contact now, (ngeom,) bool (robot geoms only touch the terrain)."""
+        """Whether each geom is in contact now, (ngeom,) bool (robot geoms touch only the terrain)."""
         touching = np.zeros(self.model.ngeom, dtype=bool)
         touching[self.data.contact.geom[:self.data.ncon].ravel()] = True
         return touching

@@ -85,3 +85,58 @@ def test_the_top_level_holds_a_handful_of_entries():
     entries = sorted(p.name for p in SRC.iterdir() if p.name != "__pycache__")
     assert len(entries) <= 12, entries
     assert set(LAYERS) <= set(entries)
+
+
+# ------------------------------------------------------------------ function length
+MAX_FUNCTION_LINES = 80  # STYLE.md: small phases, not long methods (issue 16)
+LONG_MARKER = "# long:"  # "# long: <why>" at a function's top lets it be longer
+
+
+def long_functions(root: Path, limit: int = MAX_FUNCTION_LINES) -> list[str]:
+    """Every function or method below ``root`` longer than ``limit`` lines without a reason.
+
+    A function's lines run from its first decorator (or ``def``) to its last line, docstring
+    included. A comment ``# long: <why>`` on the line above it or at its top (before the first
+    statement after the docstring) is its reason. Each entry reads ``path:line name (n lines)``.
+    """
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        source = path.read_text(encoding="utf-8")
+        lines = source.splitlines()
+        functions = [node for node in ast.walk(ast.parse(source))
+                     if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))]
+        for node in sorted(functions, key=lambda node: node.lineno):
+            first = min([node.lineno] + [d.lineno for d in node.decorator_list])
+            length = node.end_lineno - first + 1
+            if length <= limit:
+                continue
+            documented = ast.get_docstring(node) is not None and len(node.body) > 1
+            top = lines[max(first - 2, 0):node.body[1 if documented else 0].lineno]
+            if any(line.strip().startswith(LONG_MARKER) and line.strip()[len(LONG_MARKER):].strip()
+                   for line in top):
+                continue
+            found.append(f"{path.relative_to(root).as_posix()}:{node.lineno} {node.name} "
+                         f"({length} lines)")
+    return found
+
+
+def test_no_function_is_longer_than_80_lines_without_saying_why():
+    found = long_functions(SRC)
+    assert found == [], ("functions over 80 lines without a '# long: <why>' comment at "
+                         "their top:\n" + "\n".join(found))
+
+
+def test_the_length_check_names_a_long_function_and_accepts_a_reason(tmp_path):
+    body = "".join(f"    x{i} = {i}\n" for i in range(80))
+    indented = body.replace("    x", "        x")
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "m.py").write_text(
+        "def short():\n    return 1\n\n\n"
+        f'def long():\n    """Doc."""\n{body}\n\n'
+        f'def told():\n    """Doc."""\n    # long: eighty cases read best side by side\n{body}\n\n'
+        f"class C:\n    @staticmethod\n    def method():\n{indented}\n\n"
+        f"def bare():\n    # long:\n{body}")
+    assert long_functions(tmp_path) == ["pkg/m.py:5 long (82 lines)",
+                                        "pkg/m.py:176 method (82 lines)",
+                                        "pkg/m.py:259 bare (82 lines)"]
+    assert long_functions(tmp_path, limit=82) == []

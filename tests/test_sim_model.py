@@ -28,6 +28,7 @@ from footfall.sim.mjcf import (
     terrain_layout,
     terrain_surface,
 )
+from footfall.sim.sensors import LEG_PARTS, Sensors
 from footfall.sim.simulation import (
     PerturbationConfig,
     SimPerturbation,
@@ -355,6 +356,33 @@ def test_sensor_noise_has_the_configured_spread():
     gyros = np.array([sim.imu()["gyro"] for _ in range(400)])
     assert forces.std(axis=0).mean() == pytest.approx(0.2, rel=0.1)
     assert gyros.std(axis=0).mean() == pytest.approx(0.01, rel=0.1)
+
+
+def test_sensors_read_the_simulation_they_were_given_and_draw_from_their_own_generator():
+    p = SimPerturbation(force_noise=0.2, gyro_noise=0.01, accel_noise=0.05, orientation_noise=0.01)
+    sims = [Simulation(R, None, perturbation=p, rng=5) for _ in range(2)]
+    for sim in sims:
+        sim.stand(*_world_feet(_flat_stance()))
+        sim.advance(0.1)
+    a, b = sims
+    # The simulation's readings are its sensors' readings: the same noise, drawn in turn.
+    np.testing.assert_array_equal(a.foot_forces(), b.sensors.foot_forces())
+    imu_a, imu_b = a.imu(), b.sensors.imu()
+    for key in ("quat", "gyro", "accel"):
+        np.testing.assert_array_equal(imu_a[key], imu_b[key])
+    # A separate Sensors on the same state with the same seed reads the same; the noiseless
+    # reading is the MuJoCo sensor itself.
+    twin = Sensors(a.model, a.data, p, np.random.default_rng(7))
+    again = Sensors(a.model, a.data, p, np.random.default_rng(7))
+    np.testing.assert_array_equal(twin.foot_forces("sensor"), again.foot_forces("sensor"))
+    quiet = Sensors(a.model, a.data, SimPerturbation(), np.random.default_rng(0))
+    assert quiet.foot_forces("world")[:, 2].sum() == pytest.approx(
+        R.total_mass * GRAVITY - 4 * R.foot_mass * GRAVITY, rel=0.02)
+    np.testing.assert_array_equal(quiet.touches_terrain("foot"), a.foot_contact())
+    assert quiet.trunk_touches_terrain() is False
+    assert set(LEG_PARTS) == {"foot", "knee", "shin"}
+    with pytest.raises(FootfallError, match="unknown leg part 'arm'"):
+        quiet.touches_terrain("arm")
 
 
 # ------------------------------------------------------------------ utilities

@@ -19,6 +19,8 @@ from footfall.data.store import DemoStore
 from footfall.expert.collect import (
     EDGE_MARGIN,
     PATH_OFFSETS,
+    WalkOptions,
+    WalkPath,
     collect_demonstrations,
     estimated_steps,
     expert_settings,
@@ -30,6 +32,7 @@ from footfall.features.candidates import reachable_footholds
 from footfall.features.config import FeatureConfig
 
 SPACING = 0.01  # [m] a coarse candidate lattice keeps the walks fast
+FAST = WalkOptions(spacing=SPACING)
 
 
 class ProgressExpert:
@@ -64,8 +67,7 @@ def board():
 
 @pytest.fixture(scope="module")
 def walk(board):
-    return walk_demonstrations(board, ProgressExpert(), np.random.default_rng(3), 8,
-                               spacing=SPACING)
+    return walk_demonstrations(board, ProgressExpert(), np.random.default_rng(3), 8, options=FAST)
 
 
 # ---------------------------------------------------------------------- walker
@@ -104,7 +106,7 @@ def test_candidates_are_the_reachable_footholds_with_valid_features(board, walk)
 def test_walk_is_deterministic_for_a_seed(board):
     def signature(seed):
         demos = walk_demonstrations(board, ProgressExpert(noise=0.05), np.random.default_rng(seed),
-                                    5, spacing=SPACING)
+                                    5, options=FAST)
         return [(d.state.to_vector().tobytes(), d.candidates.tobytes(), d.chosen) for d in demos]
 
     first = signature(3)
@@ -114,7 +116,8 @@ def test_walk_is_deterministic_for_a_seed(board):
 
 def test_walk_stops_before_the_far_end(board):
     demos = walk_demonstrations(board, ProgressExpert(), np.random.default_rng(0), 1000,
-                                y=0.05, spacing=SPACING, source="walker:test")
+                                WalkPath(y=0.05),
+                                WalkOptions(spacing=SPACING, source="walker:test"))
     stop_x = board.bounds[1] - LITTLEDOG.hip_x - EDGE_MARGIN
     last = demos[-1].state.body_position[0]
     assert last <= stop_x < last + DEFAULT_STRIDE / 4
@@ -126,7 +129,7 @@ def test_walk_stops_before_the_far_end(board):
 def test_x_range_keeps_only_footholds_in_it(board, walk):
     lo, hi = 0.40, 0.50
     kept = walk_demonstrations(board, ProgressExpert(), np.random.default_rng(3), 100,
-                               spacing=SPACING, x_range=(lo, hi))
+                               WalkPath(x_range=(lo, hi)), FAST)
     assert kept and all(lo <= d.foothold[0] <= hi for d in kept)
     # The same walk, thinned: the kept steps are the walk's steps in the range.
     in_range = [d for d in walk if lo <= d.foothold[0] <= hi]
@@ -136,7 +139,7 @@ def test_x_range_keeps_only_footholds_in_it(board, walk):
 
 def test_record_every_thins_the_same_walk(board, walk):
     thinned = walk_demonstrations(board, ProgressExpert(), np.random.default_rng(3), 2,
-                                  spacing=SPACING, record_every=3, record_phase=1)
+                                  WalkPath(record_every=3, record_phase=1), FAST)
     assert [d.state.to_vector().tobytes() for d in thinned] == \
         [walk[k].state.to_vector().tobytes() for k in (1, 4)]
     assert [d.chosen for d in thinned] == [walk[1].chosen, walk[4].chosen]
@@ -150,20 +153,20 @@ def test_walk_checks_its_arguments(board):
     with pytest.raises(FootfallError, match="n_max"):
         walk_demonstrations(board, expert, rng, -1)
     with pytest.raises(FootfallError, match="stride"):
-        walk_demonstrations(board, expert, rng, 2, stride=0.0)
+        walk_demonstrations(board, expert, rng, 2, options=WalkOptions(stride=0.0))
     with pytest.raises(FootfallError, match="off the terrain"):
-        walk_demonstrations(board, expert, rng, 2, y=0.3)
+        walk_demonstrations(board, expert, rng, 2, WalkPath(y=0.3))
     with pytest.raises(FootfallError, match="x_range"):
-        walk_demonstrations(board, expert, rng, 2, x_range=(0.5, 0.4))
+        walk_demonstrations(board, expert, rng, 2, WalkPath(x_range=(0.5, 0.4)))
     with pytest.raises(FootfallError, match="record_phase"):
-        walk_demonstrations(board, expert, rng, 2, record_every=2, record_phase=2)
+        walk_demonstrations(board, expert, rng, 2, WalkPath(record_every=2, record_phase=2))
 
     class Wild(ProgressExpert):
         def choose(self, hmap, state, candidates, rng):
             return len(candidates)
 
     with pytest.raises(FootfallError, match="not an index"):
-        walk_demonstrations(board, Wild(), rng, 2, spacing=SPACING)
+        walk_demonstrations(board, Wild(), rng, 2, options=FAST)
 
 
 def test_expert_settings_record_the_config():
@@ -237,7 +240,7 @@ def test_collect_returns_what_fits_and_checks_arguments():
 def test_with_the_synthetic_expert(board):
     expert_module = pytest.importorskip("footfall.expert.synthetic")
     expert = expert_module.SyntheticExpert()
-    demos = walk_demonstrations(board, expert, np.random.default_rng(0), 2, spacing=SPACING)
+    demos = walk_demonstrations(board, expert, np.random.default_rng(0), 2, options=FAST)
     assert len(demos) == 2 and demos[0].expert["class"].endswith("SyntheticExpert")
     for d in demos:  # noiseless by default: the best foothold by its own values
         v = expert.values(board, d.state, d.candidates)
@@ -342,8 +345,7 @@ def base_store(tmp_path_factory, terrain_file):
     """A store with two demonstrations on the CLI test terrain."""
     path = tmp_path_factory.mktemp("base") / "demos.sqlite"
     hmap = HeightMap.load(terrain_file)
-    demos = walk_demonstrations(hmap, ProgressExpert(), np.random.default_rng(0), 2,
-                                spacing=SPACING)
+    demos = walk_demonstrations(hmap, ProgressExpert(), np.random.default_rng(0), 2, options=FAST)
     with DemoStore(path, create=True) as store:
         store.add_demonstrations(demos, terrains=[hmap])
     return path

@@ -274,40 +274,74 @@ def evaluate_cells(hmap: HeightMap, reward_for: RewardFor, robot: RobotDescripti
     centres = np.stack(np.meshgrid(xs, ys, indexing="ij"), axis=-1)  # (nx, ny, 2)
     c, s = math.cos(yaw), math.sin(yaw)
     rot = np.array([[c, -s], [s, c]])
+    footholds, pooled_rewards = _foothold_sums(hmap, reward_for, grids, robot, config, yaw,
+                                               centres, rot)
+    unit = reward_unit(pooled_rewards)
+    body_clear, knee_clear = _clearances(hmap, robot, config, yaw, xs, ys, centres, rot)
+    body_short = np.maximum(config.body_margin - body_clear, 0.0)
+    knee_short = np.maximum(config.knee_margin - knee_clear, 0.0).sum(axis=-1)
+    heuristic = -unit * (config.body_weight * body_short + config.knee_weight * knee_short)
+    reward = np.where(np.isfinite(footholds), footholds + heuristic, -np.inf)
+    return CellRewards(xs, ys, footholds, body_clear, knee_clear, unit, reward)
 
-    # Per-leg best-k sums: gather each cell's window of lattice points at once.
+
+def _foothold_sums(hmap: HeightMap, reward_for: RewardFor, grids: dict[str, ScoreGrid],
+                   robot: RobotDescription, config: BodyPathConfig, yaw: float,
+                   centres: np.ndarray, rot: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Sum over the legs of each cell's best-k foothold rewards (nx, ny) (-inf: a leg has none),
+    and every distinct reward grid with the points whose patches leave the map masked (-inf).
+
+    ``centres`` (nx, ny, 2) [m] are the cell centres, ``rot`` (2, 2) the body's rotation by ``yaw``.
+    """
     masked: dict[int, np.ndarray] = {}
     pooled_rewards = []
     footholds = np.zeros(centres.shape[:2])
     for name in LEG_NAMES:  # four legs
         grid = grids[name]
-        spacing = grid_spacing(grid)
         if id(grid) not in masked:
             inner = _interior(grid, hmap, _patch_half_extent(reward_for(name), yaw))
             masked[id(grid)] = np.where(inner, grid.reward, -np.inf)
             pooled_rewards.append(masked[id(grid)])
-        values = masked[id(grid)]
-        n = int(math.floor(config.search_radius / spacing + 1e-9))
-        d = np.arange(-n, n + 1)
-        di, dj = np.meshgrid(d, d, indexing="ij")
-        keep = (di * di + dj * dj) * spacing * spacing <= config.search_radius ** 2 + 1e-12
-        di, dj = di[keep], dj[keep]  # (m,) window offsets in lattice steps
-        pad = 2 * n + 1
-        padded = np.pad(values, pad, constant_values=-np.inf)
         foot = centres + np.array(robot.nominal_foot(name)[:2]) @ rot.T
-        i, j = grid_index(grid, foot, spacing)
-        # Far off the grid: clipped to where the whole window is still off it (-inf).
-        i = np.clip(i, -n - 1, values.shape[0] + n) + pad
-        j = np.clip(j, -n - 1, values.shape[1] + n) + pad
-        window = padded[i[..., None] + di, j[..., None] + dj]  # (nx, ny, m)
-        k = min(config.best_k, window.shape[-1])
-        best = -np.partition(-window, k - 1, axis=-1)[..., :k]
-        # Missing footholds count as the worst valid one; none valid (worst = inf): impassable.
-        worst = np.min(np.where(np.isfinite(best), best, np.inf), axis=-1, keepdims=True)
-        total = np.where(np.isfinite(best), best, worst).sum(axis=-1)
-        footholds += np.where(np.isfinite(worst[..., 0]), total, -np.inf)
-    unit = reward_unit(pooled_rewards)
+        footholds += _best_k_sum(grid, masked[id(grid)], foot, config)
+    return footholds, pooled_rewards
 
+
+def _best_k_sum(grid: ScoreGrid, values: np.ndarray, foot: np.ndarray, config: BodyPathConfig
+                ) -> np.ndarray:
+    """Sum of the ``best_k`` rewards ``values`` (na, nb) on ``grid``'s lattice within
+    ``search_radius`` of each default foot position (nx, ny, 2) [m]; -inf where none is valid.
+
+    Each cell's window of lattice points is gathered at once.
+    """
+    spacing = grid_spacing(grid)
+    n = int(math.floor(config.search_radius / spacing + 1e-9))
+    d = np.arange(-n, n + 1)
+    di, dj = np.meshgrid(d, d, indexing="ij")
+    keep = (di * di + dj * dj) * spacing * spacing <= config.search_radius ** 2 + 1e-12
+    di, dj = di[keep], dj[keep]  # (m,) window offsets in lattice steps
+    pad = 2 * n + 1
+    padded = np.pad(values, pad, constant_values=-np.inf)
+    i, j = grid_index(grid, foot, spacing)
+    # Far off the grid: clipped to where the whole window is still off it (-inf).
+    i = np.clip(i, -n - 1, values.shape[0] + n) + pad
+    j = np.clip(j, -n - 1, values.shape[1] + n) + pad
+    window = padded[i[..., None] + di, j[..., None] + dj]  # (nx, ny, m)
+    k = min(config.best_k, window.shape[-1])
+    best = -np.partition(-window, k - 1, axis=-1)[..., :k]
+    # Missing footholds count as the worst valid one; none valid (worst = inf): impassable.
+    worst = np.min(np.where(np.isfinite(best), best, np.inf), axis=-1, keepdims=True)
+    total = np.where(np.isfinite(best), best, worst).sum(axis=-1)
+    return np.where(np.isfinite(worst[..., 0]), total, -np.inf)
+
+
+def _clearances(hmap: HeightMap, robot: RobotDescription, config: BodyPathConfig, yaw: float,
+                xs: np.ndarray, ys: np.ndarray, centres: np.ndarray, rot: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Clearance [m] of the trunk's underside (nx, ny) and of the knees (nx, ny, 4) above the
+    highest terrain under them, the body in its default stance in every cell (see
+    :func:`evaluate_cells`)."""
+    cell = config.cell
     # Terrain heights: at the default feet, and the highest under trunk and knees.
     nominal = np.array([robot.nominal_foot(n_)[:2] for n_ in LEG_NAMES]) @ rot.T  # (4, 2)
     feet_z = hmap.height_at(centres[:, :, None, :] + nominal)  # (nx, ny, 4)
@@ -330,12 +364,7 @@ def evaluate_cells(hmap: HeightMap, reward_for: RewardFor, robot: RobotDescripti
         ground = np.where(inside, near[np.clip(ki, 0, xs.size - 1), np.clip(kj, 0, ys.size - 1)],
                           -np.inf)
         knee_clear[..., k_] = body_z + knee[2] - robot.lower_leg_radius - ground
-
-    body_short = np.maximum(config.body_margin - body_clear, 0.0)
-    knee_short = np.maximum(config.knee_margin - knee_clear, 0.0).sum(axis=-1)
-    heuristic = -unit * (config.body_weight * body_short + config.knee_weight * knee_short)
-    reward = np.where(np.isfinite(footholds), footholds + heuristic, -np.inf)
-    return CellRewards(xs, ys, footholds, body_clear, knee_clear, unit, reward)
+    return body_clear, knee_clear
 
 
 def cell_rewards(hmap: HeightMap, reward_for: RewardFor, robot: RobotDescription = LITTLEDOG,
@@ -476,8 +505,6 @@ def plan_body_path(hmap: HeightMap, reward_for: RewardFor, start_xy, goal,
     """
     if cells is None:
         cells = evaluate_cells(hmap, reward_for, robot, config, yaw, grids)
-    xs, ys, reward = cells.x, cells.y, cells.reward
-    nx, ny = reward.shape
     start = np.asarray(start_xy, dtype=np.float64)
     if start.shape != (2,) or not np.isfinite(start).all():
         raise FootfallError(f"start must be a finite (x, y) [m], got {start_xy!r}")
@@ -485,18 +512,54 @@ def plan_body_path(hmap: HeightMap, reward_for: RewardFor, start_xy, goal,
     if goal_arr.shape not in ((), (2,)) or not np.isfinite(goal_arr).all():
         raise FootfallError(f"goal must be a finite (x, y) point or an x line [m], got {goal!r}")
     cell = config.cell
+    si, sj = _cell_index(cells, start, "start", cell)
+    dist, pred = _cheapest_paths(cells, config, si, sj)
+    xs, ys = cells.x, cells.y
+    if goal_arr.shape == (2,):
+        gi, gj = _cell_index(cells, goal_arr, "goal", cell)
+        end = goal_arr
+    else:
+        gi = int(np.floor((float(goal_arr) - xs[0]) / cell + 0.5))
+        if not 0 <= gi < xs.size:
+            raise FootfallError(f"goal line x = {float(goal_arr):.3f} m is off the map")
+        gj = int(np.argmin(dist[gi]))
+        end = np.array([float(goal_arr), ys[gj]])
+    if not np.isfinite(dist[gi, gj]):
+        raise FootfallError("no passable body path from the start to the goal")
 
-    def index(xy: np.ndarray, what: str) -> tuple[int, int]:
-        i = int(np.floor((xy[0] - xs[0]) / cell + 0.5))
-        j = int(np.floor((xy[1] - ys[0]) / cell + 0.5))
-        if not (0 <= i < nx and 0 <= j < ny):
-            raise FootfallError(f"{what} ({xy[0]:.3f}, {xy[1]:.3f}) m is off the map")
-        if not np.isfinite(reward[i, j]):
-            raise FootfallError(f"{what} ({xy[0]:.3f}, {xy[1]:.3f}) m is impassable: some leg has "
-                                f"no valid foothold near its default position")
-        return i, j
+    node, chain = gi * ys.size + gj, []
+    while node >= 0:  # walk the predecessor tree back to the start (path length, not cells)
+        chain.append(node)
+        node = int(pred[node])
+    chain = np.array(chain[::-1])
+    pts = np.column_stack([xs[chain // ys.size], ys[chain % ys.size]])
+    pts = np.concatenate([start[None], pts[1:-1], end[None]]) if pts.shape[0] > 2 else \
+        np.array([start, end])
+    if np.linalg.norm(pts[-1] - pts[0]) < 1e-12 and pts.shape[0] <= 2:
+        raise FootfallError("start and goal coincide: no path to plan")
+    return BodyPath(_smooth(pts, cell, config.smoothing))
 
-    si, sj = index(start, "start")
+
+def _cell_index(cells: CellRewards, xy: np.ndarray, what: str, cell: float) -> tuple[int, int]:
+    """Index (i, j) of the path cell nearest ``xy`` (2,) [m]; raises FootfallError if it is off
+    the grid or impassable (``what`` names the point in the message)."""
+    i = int(np.floor((xy[0] - cells.x[0]) / cell + 0.5))
+    j = int(np.floor((xy[1] - cells.y[0]) / cell + 0.5))
+    if not (0 <= i < cells.x.size and 0 <= j < cells.y.size):
+        raise FootfallError(f"{what} ({xy[0]:.3f}, {xy[1]:.3f}) m is off the map")
+    if not np.isfinite(cells.reward[i, j]):
+        raise FootfallError(f"{what} ({xy[0]:.3f}, {xy[1]:.3f}) m is impassable: some leg has "
+                            f"no valid foothold near its default position")
+    return i, j
+
+
+def _cheapest_paths(cells: CellRewards, config: BodyPathConfig, si: int, sj: int
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Dijkstra from cell (si, sj) over the 8-connected grid of passable cells: the cost of the
+    cheapest path to every cell (nx, ny) (inf: unreachable) and each node's predecessor (nx * ny,)
+    (node ``i * ny + j``; negative at the start and at unreachable nodes)."""
+    reward, cell = cells.reward, config.cell
+    nx, ny = reward.shape
     passable = np.isfinite(reward)
     best = reward[passable].max()
     cost = np.where(passable,
@@ -516,28 +579,4 @@ def plan_body_path(hmap: HeightMap, reward_for: RewardFor, start_xy, goal,
     graph = coo_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))),
                        shape=(nx * ny, nx * ny)).tocsr()
     dist, pred = dijkstra(graph, directed=False, indices=ids[si, sj], return_predecessors=True)
-    dist = dist.reshape(nx, ny)
-
-    if goal_arr.shape == (2,):
-        gi, gj = index(goal_arr, "goal")
-        end = goal_arr
-    else:
-        gi = int(np.floor((float(goal_arr) - xs[0]) / cell + 0.5))
-        if not 0 <= gi < nx:
-            raise FootfallError(f"goal line x = {float(goal_arr):.3f} m is off the map")
-        gj = int(np.argmin(dist[gi]))
-        end = np.array([float(goal_arr), ys[gj]])
-    if not np.isfinite(dist[gi, gj]):
-        raise FootfallError("no passable body path from the start to the goal")
-
-    node, chain = int(ids[gi, gj]), []
-    while node >= 0:  # walk the predecessor tree back to the start (path length, not cells)
-        chain.append(node)
-        node = int(pred[node])
-    chain = np.array(chain[::-1])
-    pts = np.column_stack([xs[chain // ny], ys[chain % ny]])
-    pts = np.concatenate([start[None], pts[1:-1], end[None]]) if pts.shape[0] > 2 else \
-        np.array([start, end])
-    if np.linalg.norm(pts[-1] - pts[0]) < 1e-12 and pts.shape[0] <= 2:
-        raise FootfallError("start and goal coincide: no path to plan")
-    return BodyPath(_smooth(pts, cell, config.smoothing))
+    return dist.reshape(nx, ny), pred

@@ -263,63 +263,13 @@ def _solve(start: np.ndarray, v0: np.ndarray, stances: np.ndarray, triangles: np
     states at boundaries 1 .. 2K, 4 numbers each): it is built as a map
     (..., n) and a constant (...).
     """
-    n_steps = triangles.shape[0]
-    n_phases = 2 * n_steps
-    n = 4 * n_phases
-    # Column of each input (p0, v0, p1, v1) of each phase on each axis; the start's are constants
-    # and go to a scratch column n.
-    boundary = np.arange(n_phases)[:, None] + np.array([0, 0, 1, 1])  # (P, 4)
-    cols = 4 * (boundary - 1)[..., None] + np.array([0, 2, 0, 2])[:, None] + np.arange(2)
-    cols[0, :2] = n  # (P, 4, 2)
-    inputs_c = np.zeros((n_phases, 4, 2))
-    inputs_c[0, 0], inputs_c[0, 1] = start, v0
-
-    def linear(weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Weights (P, q, 4) on the inputs -> maps (P, q, 2, n) and constants (P, q, 2)."""
-        P, q, _ = weights.shape
-        m = np.zeros((P, q, 2, n + 1))
-        idx = (np.arange(P)[:, None, None, None], np.arange(q)[None, :, None, None],
-               np.arange(2)[None, None, :, None], cols.transpose(0, 2, 1)[:, None])
-        m[idx] = weights[:, :, None, :]
-        return m[..., :n], np.einsum("pqj,pjd->pqd", weights, inputs_c)
-
+    n_phases = 2 * triangles.shape[0]
+    inputs = _phase_inputs(start, v0, n_phases)
     w = _phase_weights(durations, height / GRAVITY)
-    # Objective: integrated squared acceleration, linear in time within a phase (a0 -> a1):
-    # T/3 (a0^2 + a0 a1 + a1^2) = |sqrt(T/3) (a0 + a1/2)|^2 + |sqrt(T/4) a1|^2.
-    T = durations[:, None, None]
-    root = np.concatenate([np.sqrt(T / 3) * np.array([1.0, 0.5]), np.sqrt(T / 4) * np.array([0.0, 1.0])],
-                          axis=1)  # (P, 2, 2): residual rows as combinations of (a0, a1)
-    res_m, res_c = linear(root @ w["acc"])
-    # ... plus the pull of every swing's lift-off and touch-down positions toward the incentre.
     centres, radii = incircle(triangles)
-    pull_m = np.zeros((n_steps, 2, 2, n))
-    k, which, d = np.meshgrid(np.arange(n_steps), np.arange(2), np.arange(2), indexing="ij")
-    pull_m[k, which, d, 4 * (2 * k + which) + d] = np.sqrt(config.centring)
-    pull_c = -np.sqrt(config.centring) * np.broadcast_to(centres[:, None], (n_steps, 2, 2))
-    G = np.vstack([res_m.reshape(-1, n), pull_m.reshape(-1, n)])
-    g = np.concatenate([res_c.ravel(), pull_c.ravel()])
-
-    # Constraints, M z + c >= 0: during each swing, the COG's and the ZMP's Bezier points inside
-    # the inset triangle; during each shift, the ZMP's inside the inset support polygon.
     pinned = radii <= config.margin + _SAFETY
-    normals, offsets = _triangle_halfplanes(triangles, config.margin + _SAFETY)  # (K, 3, 2), (K, 3)
-    points_m, points_c = linear(np.concatenate([w["bezier"], w["zmp"]], axis=1))
-    points_m, points_c = points_m[1::2], points_c[1::2]  # the swings
-    rows_m = np.einsum("ked,kqdn->kqen", normals, points_m)[~pinned]
-    rows_c = (np.einsum("ked,kqd->kqe", normals, points_c) - offsets[:, None])[~pinned]
-    C, c = [rows_m.reshape(-1, n)], [rows_c.ravel()]
-    if shift_zmp:
-        zmp_m, zmp_c = linear(w["zmp"])
-        zmp_m, zmp_c = zmp_m[0::2], zmp_c[0::2]  # the shifts
-        for k in range(n_steps):  # the horizon's shifts: a handful of 4-point hulls
-            try:
-                hull = stances[k][ConvexHull(stances[k]).vertices]
-            except QhullError:  # feet in a line: no polygon to keep the ZMP in
-                continue
-            nrm, off = _halfplanes(hull, config.margin + _SAFETY)
-            C.append(np.einsum("ed,qdn->qen", nrm, zmp_m[k]).reshape(-1, n))
-            c.append((zmp_c[k] @ nrm.T - off).ravel())
-    C, c = np.vstack(C), np.concatenate(c)
+    G, g = _objective(w, durations, centres, config, inputs)
+    C, c = _constraints(w, stances, triangles, pinned, config, shift_zmp, inputs)
 
     # A pinned swing stands still at the incentre: its boundary states are constants.
     fixed = np.zeros((n_phases, 4))
@@ -338,6 +288,85 @@ def _solve(start: np.ndarray, v0: np.ndarray, stances: np.ndarray, triangles: np
         return None, centres, pinned
     states = np.concatenate([np.stack([start, v0])[None], z.reshape(n_phases, 2, 2)])
     return states, centres, pinned
+
+
+def _phase_inputs(start: np.ndarray, v0: np.ndarray, n_phases: int
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Where each phase's inputs (p0, v0, p1, v1) come from, on each axis.
+
+    Returns the column (P, 4, 2) of each in the unknowns z (n = 4P of them; the start's
+    state is a constant and goes to a scratch column n) and the constant inputs (P, 4, 2).
+    """
+    n = 4 * n_phases
+    boundary = np.arange(n_phases)[:, None] + np.array([0, 0, 1, 1])  # (P, 4)
+    cols = 4 * (boundary - 1)[..., None] + np.array([0, 2, 0, 2])[:, None] + np.arange(2)
+    cols[0, :2] = n  # (P, 4, 2)
+    inputs_c = np.zeros((n_phases, 4, 2))
+    inputs_c[0, 0], inputs_c[0, 1] = start, v0
+    return cols, inputs_c
+
+
+def _linear(weights: np.ndarray, inputs: tuple[np.ndarray, np.ndarray]
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """Weights (P, q, 4) on the phases' inputs -> maps (P, q, 2, n) and constants (P, q, 2)."""
+    cols, inputs_c = inputs
+    n = 4 * cols.shape[0]
+    P, q, _ = weights.shape
+    m = np.zeros((P, q, 2, n + 1))
+    idx = (np.arange(P)[:, None, None, None], np.arange(q)[None, :, None, None],
+           np.arange(2)[None, None, :, None], cols.transpose(0, 2, 1)[:, None])
+    m[idx] = weights[:, :, None, :]
+    return m[..., :n], np.einsum("pqj,pjd->pqd", weights, inputs_c)
+
+
+def _objective(w: dict[str, np.ndarray], durations: np.ndarray, centres: np.ndarray,
+               config: CogConfig, inputs: tuple[np.ndarray, np.ndarray]
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """The objective as |G z + g|^2: G (r, n), g (r,)."""
+    n_steps, n = centres.shape[0], 4 * durations.size
+    # Integrated squared acceleration, linear in time within a phase (a0 -> a1):
+    # T/3 (a0^2 + a0 a1 + a1^2) = |sqrt(T/3) (a0 + a1/2)|^2 + |sqrt(T/4) a1|^2.
+    T = durations[:, None, None]
+    root = np.concatenate([np.sqrt(T / 3) * np.array([1.0, 0.5]), np.sqrt(T / 4) * np.array([0.0, 1.0])],
+                          axis=1)  # (P, 2, 2): residual rows as combinations of (a0, a1)
+    res_m, res_c = _linear(root @ w["acc"], inputs)
+    # ... plus the pull of every swing's lift-off and touch-down positions toward the incentre.
+    pull_m = np.zeros((n_steps, 2, 2, n))
+    k, which, d = np.meshgrid(np.arange(n_steps), np.arange(2), np.arange(2), indexing="ij")
+    pull_m[k, which, d, 4 * (2 * k + which) + d] = np.sqrt(config.centring)
+    pull_c = -np.sqrt(config.centring) * np.broadcast_to(centres[:, None], (n_steps, 2, 2))
+    G = np.vstack([res_m.reshape(-1, n), pull_m.reshape(-1, n)])
+    g = np.concatenate([res_c.ravel(), pull_c.ravel()])
+    return G, g
+
+
+def _constraints(w: dict[str, np.ndarray], stances: np.ndarray, triangles: np.ndarray,
+                 pinned: np.ndarray, config: CogConfig, shift_zmp: bool,
+                 inputs: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """The constraints as C z + c >= 0: C (m, n), c (m,).
+
+    During each swing not ``pinned``, the COG's and the ZMP's Bezier points inside the inset
+    triangle; with ``shift_zmp``, during each shift, the ZMP's inside the inset support polygon.
+    """
+    n_steps, n = triangles.shape[0], 4 * 2 * triangles.shape[0]
+    normals, offsets = _triangle_halfplanes(triangles, config.margin + _SAFETY)  # (K, 3, 2), (K, 3)
+    points_m, points_c = _linear(np.concatenate([w["bezier"], w["zmp"]], axis=1), inputs)
+    points_m, points_c = points_m[1::2], points_c[1::2]  # the swings
+    rows_m = np.einsum("ked,kqdn->kqen", normals, points_m)[~pinned]
+    rows_c = (np.einsum("ked,kqd->kqe", normals, points_c) - offsets[:, None])[~pinned]
+    C, c = [rows_m.reshape(-1, n)], [rows_c.ravel()]
+    if shift_zmp:
+        zmp_m, zmp_c = _linear(w["zmp"], inputs)
+        zmp_m, zmp_c = zmp_m[0::2], zmp_c[0::2]  # the shifts
+        for k in range(n_steps):  # the horizon's shifts: a handful of 4-point hulls
+            try:
+                hull = stances[k][ConvexHull(stances[k]).vertices]
+            except QhullError:  # feet in a line: no polygon to keep the ZMP in
+                continue
+            nrm, off = _halfplanes(hull, config.margin + _SAFETY)
+            C.append(np.einsum("ed,qdn->qen", nrm, zmp_m[k]).reshape(-1, n))
+            c.append((zmp_c[k] @ nrm.T - off).ravel())
+    return np.vstack(C), np.concatenate(c)
 
 
 def least_squares_inequality(G: np.ndarray, g: np.ndarray, C: np.ndarray, c: np.ndarray

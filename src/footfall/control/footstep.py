@@ -137,6 +137,17 @@ def _diverse_best(score: np.ndarray, points: np.ndarray, count: int, separation:
     return np.array(chosen, dtype=np.int64)
 
 
+@dataclass(frozen=True, eq=False)
+class _Horizon:
+    """The planner's prediction of the next ``lookahead`` steps (K of them), this one first."""
+
+    legs: list[str]  # (K,) swing leg of each step, in gait order
+    body_xy: np.ndarray  # (K, 2) [m] body position on the path at each touch-down
+    body_yaw: np.ndarray  # (K,) [rad] body heading at each touch-down
+    targets: np.ndarray  # (K, 2) [m] path-nominal foothold of each step
+    grounds: list[float]  # (K,) [m] median terrain height near each target; NaN: no data
+
+
 class FootstepPlanner:
     """Plans footholds along a body path with a reward function.
 
@@ -323,6 +334,22 @@ class FootstepPlanner:
         """
         if not isinstance(state, RobotState):
             raise FootfallError(f"plan needs a RobotState, got {type(state).__name__}")
+        ahead = self._horizon(state)
+        st0, cand, reward, total, roots = self._first_step(state, ahead)
+        value, chosen = self._rollouts(state, ahead, cand[roots], total[roots])
+        best = int(np.argmax(value))  # ties: the better first step (roots are ranked)
+        index = int(roots[best])
+        values = np.full(cand.shape[0], -np.inf)
+        values[roots] = value
+        m = len(chosen)
+        return FootstepPlan(
+            leg=ahead.legs[0], index=index, foothold=cand[index].copy(), candidates=cand,
+            reward=reward, total=total, value=values, legs=tuple(ahead.legs[:m]),
+            footholds=np.array([c_[best] for c_ in chosen]), body_xy=ahead.body_xy[:m],
+            body_yaw=ahead.body_yaw[:m], targets=ahead.targets[:m], state=st0)
+
+    def _horizon(self, state: RobotState) -> _Horizon:
+        """The next ``lookahead`` steps from ``state``, as the path predicts them (:meth:`plan`)."""
         cfg, robot, path = self.config, self.robot, self.path
         order = list(robot.gait_order)
         first = order.index(state.swing_leg)
@@ -338,27 +365,35 @@ class FootstepPlanner:
         targets = mid_xy + np.column_stack([c * nominal[:, 0] - sn * nominal[:, 1],
                                             sn * nominal[:, 0] + c * nominal[:, 1]])
         grounds = [self._ground(t) for t in targets]  # lookahead (five) targets
+        return _Horizon(legs, body_xy, body_yaw, targets, grounds)
 
-        # Step 0: the whole candidate set F, scored as the reward defines it.
-        leg0 = legs[0]
-        yaw0 = float(body_yaw[0])
-        st0 = self._state(state.feet, body_xy[0], yaw0, leg0, state.goal, targets[0],
-                          grounds[0])
+    def _first_step(self, state: RobotState, ahead: _Horizon
+                    ) -> tuple[RobotState, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Step 0: the whole candidate set F, scored as the reward defines it.
+
+        Returns the state F is computed for, F (n, 3) [m], its reward (n,) (NaN: pose part not
+        evaluated), reward less path bias (n,), and the roots of the rollouts (r,) [index in F].
+        """
+        cfg = self.config
+        leg0, target = ahead.legs[0], ahead.targets[0]
+        yaw0 = float(ahead.body_yaw[0])
+        st0 = self._state(state.feet, ahead.body_xy[0], yaw0, leg0, state.goal, target,
+                          ahead.grounds[0])
         exact = abs(_wrap(yaw0 - GRID_YAW)) > cfg.heading_tolerance
-        cand = reachable_footholds(self.hmap, st0, robot, cfg.spacing,
+        cand = reachable_footholds(self.hmap, st0, self.robot, cfg.spacing,
                                    self.rewards_[leg0].config if exact else None)
         terrain = self._terrain(leg0, cand, yaw0)
         keep = np.isfinite(terrain)
         if cfg.search_radius is not None:  # F: the footholds near the gait-nominal position, or,
             # where none near it is usable (a step edge, a gap), every reachable one
-            near = np.sum((cand[:, :2] - targets[0]) ** 2, axis=1) <= cfg.search_radius ** 2
+            near = np.sum((cand[:, :2] - target) ** 2, axis=1) <= cfg.search_radius ** 2
             if np.any(keep & near):
                 keep &= near
         cand, terrain = cand[keep], terrain[keep]
         if cand.shape[0] == 0:
             raise NoFootholdError(f"leg {leg0} has no candidate foothold at body "
-                                  f"({body_xy[0, 0]:.3f}, {body_xy[0, 1]:.3f}) m")
-        bias = self.bias_[leg0] * np.linalg.norm(cand[:, :2] - targets[0], axis=1)
+                                  f"({ahead.body_xy[0, 0]:.3f}, {ahead.body_xy[0, 1]:.3f}) m")
+        bias = self.bias_[leg0] * np.linalg.norm(cand[:, :2] - target, axis=1)
         reward = terrain
         if self._posed[leg0]:
             short = np.arange(cand.shape[0])
@@ -370,32 +405,38 @@ class FootstepPlanner:
         roots = _diverse_best(total, cand, cfg.beam_width, cfg.root_separation)
         if roots.size == 0:
             raise NoFootholdError(f"leg {leg0} has no candidate foothold with a finite reward")
+        return st0, cand, reward, total, roots
 
-        # Rollouts: feet (R, 4, 3), summed value (R,), chosen footholds per step.
-        n_roots = roots.size
-        feet = np.broadcast_to(state.feet, (n_roots, 4, 3)).copy()
-        feet[:, LEG_NAMES.index(leg0)] = cand[roots]
-        value = total[roots].copy()
-        chosen = [cand[roots]]
+    def _rollouts(self, state: RobotState, ahead: _Horizon, first: np.ndarray, value: np.ndarray
+                  ) -> tuple[np.ndarray, list[np.ndarray]]:
+        """Roll each first step (R, 3) [m] of summed value (R,) out greedily over the later steps.
+
+        Returns the summed values (R,) and the chosen footholds, one (R, 3) [m] per step taken.
+        """
+        cfg = self.config
+        n_roots = first.shape[0]
+        feet = np.broadcast_to(state.feet, (n_roots, 4, 3)).copy()  # (R, 4, 3) [m]
+        feet[:, LEG_NAMES.index(ahead.legs[0])] = first
+        value = value.copy()
+        chosen = [first]
         for k in range(1, cfg.lookahead):  # a handful of steps, not a loop over candidates
-            leg, yaw = legs[k], float(body_yaw[k])
-            best_so_far = self._state(feet[0], body_xy[k], yaw, leg, state.goal, targets[k],
-                                      grounds[k])
-            near = self._near(best_so_far, targets[k])
+            leg, yaw = ahead.legs[k], float(ahead.body_yaw[k])
+            xy, target, ground = ahead.body_xy[k], ahead.targets[k], ahead.grounds[k]
+            best_so_far = self._state(feet[0], xy, yaw, leg, state.goal, target, ground)
+            near = self._near(best_so_far, target)
             if abs(_wrap(yaw - GRID_YAW)) > cfg.heading_tolerance:  # exact patches: few of them
-                dist = np.linalg.norm(near[:, :2] - targets[k], axis=1)
+                dist = np.linalg.norm(near[:, :2] - target, axis=1)
                 near = near[np.argsort(dist, kind="stable")[:2 * cfg.lookahead_candidates]]
             t = self._terrain(leg, near, yaw)
             near, t = near[np.isfinite(t)], t[np.isfinite(t)]
             if near.shape[0] == 0:
                 break
-            t = t - self.bias_[leg] * np.linalg.norm(near[:, :2] - targets[k], axis=1)
+            t = t - self.bias_[leg] * np.linalg.norm(near[:, :2] - target, axis=1)
             if self._posed[leg]:
                 top = np.argsort(-t, kind="stable")[:cfg.lookahead_candidates]
                 near, t = near[top], t[top]
-                scores = np.stack([t + self._pose(self._state(feet[r], body_xy[k], yaw, leg,
-                                                              state.goal, targets[k],
-                                                              grounds[k]), near)
+                scores = np.stack([t + self._pose(self._state(feet[r], xy, yaw, leg, state.goal,
+                                                              target, ground), near)
                                    for r in range(n_roots)])  # beam_width rollouts
             else:
                 scores = np.broadcast_to(t, (n_roots, t.size))
@@ -405,17 +446,7 @@ class FootstepPlanner:
             value += scores[np.arange(n_roots), pick]
             feet[:, LEG_NAMES.index(leg)] = near[pick]
             chosen.append(near[pick])
-
-        best = int(np.argmax(value))  # ties: the better first step (roots are ranked)
-        index = int(roots[best])
-        values = np.full(cand.shape[0], -np.inf)
-        values[roots] = value
-        m = len(chosen)
-        return FootstepPlan(
-            leg=leg0, index=index, foothold=cand[index].copy(), candidates=cand, reward=reward,
-            total=total, value=values, legs=tuple(legs[:m]),
-            footholds=np.array([c_[best] for c_ in chosen]), body_xy=body_xy[:m],
-            body_yaw=body_yaw[:m], targets=targets[:m], state=st0)
+        return value, chosen
 
 
 class JudgedFootstepPlanner(FootstepPlanner):

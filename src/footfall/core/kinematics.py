@@ -82,27 +82,40 @@ def inverse_kinematics(leg: Leg, foot: np.ndarray, robot: RobotDescription
     (..., 3) (NaN where no solution exists) and ``ok`` (...) true where the
     point is in the workspace and every joint is within its limits.
     """
+    p = np.asarray(foot, dtype=np.float64) - np.asarray(leg.hip)
+    q, reached = _ik_angles(p, leg.side * robot.hip_offset,
+                            1.0 if leg.knee_forward else -1.0, robot)
+    return q, reached & within_limits(leg, q)
+
+
+def _ik_angles(p: np.ndarray, side: float | np.ndarray, knee: float | np.ndarray,
+               robot: RobotDescription) -> tuple[np.ndarray, np.ndarray]:
+    """Joint angles [rad] (..., 3) putting foot centres ``p`` (..., 3) [m], relative to the hip,
+    on a leg whose upper leg hangs ``side`` [m] out along y (``leg.side * hip_offset``) with knee
+    sign ``knee`` (+1: forward); and whether each is within reach (...), limits not checked.
+
+    ``side`` and ``knee`` broadcast against ``p``'s leading shape (one leg, or every leg at once).
+    NaN angles where there is no solution.
+    """
     # The low-level controller calls this for 4 points at 100 Hz, where NumPy's per-call overhead
     # is the whole cost: the angles are written into one preallocated array, and clipping and
     # stacking wrappers are avoided (the arithmetic is the same, operation for operation).
-    p = np.asarray(foot, dtype=np.float64) - np.asarray(leg.hip)
     px, py, pz = p[..., 0], p[..., 1], p[..., 2]
     l1, l2, d = robot.upper_leg, robot.lower_leg, robot.hip_offset
     rho2 = py * py + pz * pz - d * d
     in_plane = rho2 >= 0
     zp = -np.sqrt(np.where(in_plane, rho2, np.nan))
     q = np.empty(p.shape)
-    q1 = np.arctan2(pz, py) - np.arctan2(zp, leg.side * d)
+    q1 = np.arctan2(pz, py) - np.arctan2(zp, side)
     q[..., 0] = (q1 + np.pi) % (2 * np.pi) - np.pi
     r2 = px * px + zp * zp
     c3 = (r2 - l1 * l1 - l2 * l2) / (2 * l1 * l2)
     reach = np.abs(c3) <= 1.0
-    q3 = np.arccos(np.where(reach, c3, np.nan)) * (1.0 if leg.knee_forward else -1.0)
+    q3 = np.arccos(np.where(reach, c3, np.nan)) * knee
     q[..., 2] = q3
     q2 = np.arctan2(-px, -zp) - np.arctan2(l2 * np.sin(q3), l1 + l2 * np.cos(q3))
     q[..., 1] = (q2 + np.pi) % (2 * np.pi) - np.pi
-    ok = in_plane & reach & within_limits(leg, q)
-    return q, ok
+    return q, in_plane & reach
 
 
 @lru_cache(maxsize=64)
@@ -157,24 +170,9 @@ def legs_inverse_kinematics(robot: RobotDescription, foot: np.ndarray
     very same numbers, in a quarter of the NumPy calls.
     """
     hips, side, knee, lo, hi = _leg_arrays(robot)
-    p = np.asarray(foot, dtype=np.float64) - hips
-    px, py, pz = p[..., 0], p[..., 1], p[..., 2]
-    l1, l2, d = robot.upper_leg, robot.lower_leg, robot.hip_offset
-    rho2 = py * py + pz * pz - d * d
-    in_plane = rho2 >= 0
-    zp = -np.sqrt(np.where(in_plane, rho2, np.nan))
-    q = np.empty(p.shape)
-    q1 = np.arctan2(pz, py) - np.arctan2(zp, side)
-    q[..., 0] = (q1 + np.pi) % (2 * np.pi) - np.pi
-    r2 = px * px + zp * zp
-    c3 = (r2 - l1 * l1 - l2 * l2) / (2 * l1 * l2)
-    reach = np.abs(c3) <= 1.0
-    q3 = np.arccos(np.where(reach, c3, np.nan)) * knee
-    q[..., 2] = q3
-    q2 = np.arctan2(-px, -zp) - np.arctan2(l2 * np.sin(q3), l1 + l2 * np.cos(q3))
-    q[..., 1] = (q2 + np.pi) % (2 * np.pi) - np.pi
+    q, reached = _ik_angles(np.asarray(foot, dtype=np.float64) - hips, side, knee, robot)
     with np.errstate(invalid="ignore"):
-        ok = in_plane & reach & np.all((q >= lo) & (q <= hi), axis=-1)
+        ok = reached & np.all((q >= lo) & (q <= hi), axis=-1)
     return q, ok
 
 

@@ -13,6 +13,7 @@ import os
 import platform
 import time
 import tracemalloc
+from typing import Callable, TypeVar
 
 import numpy as np
 
@@ -27,6 +28,7 @@ from footfall.terrain import make_board
 
 TEMPLATES_PER_SCALE = 20  # the issue's benchmark: 60 templates in all
 BENCH_TEMPLATE_RMS = 0.005  # [m] RMS height difference at which a match scores exp(-1)
+_Result = TypeVar("_Result")  # what a timed piece of work returns
 
 
 def benchmark_reward(board, config: FeatureConfig, rng: np.random.Generator) -> LinearReward:
@@ -149,15 +151,40 @@ def bench_learning(n_demos: int = 100, library_size: int = 1000, seed: int = 0) 
     ranking function (front and hind legs together, as one problem) on the
     templates + features set with a ~1000-template library.
     """
-    import warnings
+    from footfall.learning.ranker import FootholdRanker
 
-    from sklearn.exceptions import ConvergenceWarning
-    from sklearn.linear_model import LogisticRegressionCV
+    n, library, (X, y, groups), collect, features = _learning_problem(n_demos, library_size, seed)
+    ours, ours_s, ours_peak = _timed(
+        lambda: FootholdRanker(learner="l1", Cs=10, cv=5).fit(X, y, groups))
+    ref, ref_s, ref_peak, n_pairs = _sklearn_baseline(X, y, groups, ours)
+    return {
+        "demonstrations": n, "library": list(library.counts),
+        "features": int(X.shape[1]), "candidate_rows": int(X.shape[0]),
+        "pairs_mirrored": n_pairs,
+        "collect_seconds_untimed_part": collect, "feature_seconds": features,
+        "learn_seconds": ours_s, "target_seconds": 30.0,
+        "path_points_evaluated": len(ours.path_), "lambda": ours.lambda_,
+        "cv_error": ours.cv_error_, "non_zero": int(np.count_nonzero(ours.coef_)),
+        "learn_peak_memory_mib": ours_peak / 2 ** 20,
+        "baseline": "sklearn LogisticRegressionCV(l1, liblinear) on the same mirrored pairs, "
+                    "folds and C values",
+        "baseline_seconds": ref_s, "baseline_peak_memory_mib": ref_peak / 2 ** 20,
+        "baseline_non_zero": int(np.count_nonzero(ref.coef_)),
+        "speedup_vs_baseline": ref_s / ours_s,
+    }
 
+
+def _learning_problem(n_demos: int, library_size: int, seed: int
+                      ) -> tuple[int, TemplateLibrary, tuple[np.ndarray, ...], float, float]:
+    """The benchmark's learning problem: demonstrations on five boards, the templates + features
+    families fitted to them and their candidate rows.
+
+    Returns the number of demonstrations, the template library, the stacked (X, y, groups), and
+    the seconds spent collecting and computing the features.
+    """
     from footfall.expert.collect import collect_demonstrations
     from footfall.expert.synthetic import SyntheticExpert
     from footfall.learning.dataset import create_families, make_example, stack, training_rows
-    from footfall.learning.ranker import FootholdRanker, grouped_folds, pairwise_transform
 
     rng = np.random.default_rng(seed)
     config = FeatureConfig()
@@ -174,54 +201,55 @@ def bench_learning(n_demos: int = 100, library_size: int = 1000, seed: int = 0) 
                            [d.chosen for d in demos], rng, library_size=library_size,
                            bandwidth_rms=(0.004,) * len(config.scales))
                      for f in create_families("both", config))
-    library = families[1].library
     examples = [make_example(h, d.state, d.candidates, d.chosen, families, config,
                              training_rows(d.candidates.shape[0], d.chosen, 100, rng))
                 for h, d in zip(hmaps, demos)]
-    X, y, groups = stack(examples, families)
-    features = time.perf_counter() - t0
+    rows = stack(examples, families)
+    return len(demos), families[1].library, rows, collect, time.perf_counter() - t0
 
-    tracemalloc.start()
-    t0 = time.perf_counter()
-    ours = FootholdRanker(learner="l1", Cs=10, cv=5).fit(X, y, groups)
-    ours_s = time.perf_counter() - t0
-    _, ours_peak = tracemalloc.get_traced_memory()
-    tracemalloc.stop()
 
-    # The baseline: scikit-learn's own cross-validated L1 logistic regression on
-    # the same standardised mirrored pairs, folds and C values, without early stop.
+def _sklearn_baseline(X: np.ndarray, y: np.ndarray, groups: np.ndarray, ours
+                      ) -> tuple[object, float, int, int]:
+    """scikit-learn's own cross-validated L1 logistic regression on the same standardised
+    mirrored pairs, folds and C values as the fitted ranker ``ours``, without early stop.
+
+    Returns the fitted estimator, its seconds and peak memory [bytes], and the number of pairs.
+    """
+    import warnings
+
+    from sklearn.exceptions import ConvergenceWarning
+    from sklearn.linear_model import LogisticRegressionCV
+
+    from footfall.learning.ranker import grouped_folds, pairwise_transform
+
     pairs, labels, pair_groups = pairwise_transform(X, y, groups)
     scale = pairs.std(axis=0)
     scale[scale < 1e-12] = 1.0
     Cs = np.array([p.C for p in ours.path_])
     Cs = np.concatenate([Cs, Cs[-1] * np.logspace(0.41, 0.41 * (10 - Cs.size), 10 - Cs.size)]) \
         if Cs.size < 10 else Cs
+
+    def fit():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            warnings.simplefilter("ignore", FutureWarning)
+            return LogisticRegressionCV(Cs=Cs, cv=grouped_folds(pair_groups, 5), l1_ratios=(1.0,),
+                                        solver="liblinear", fit_intercept=False, tol=1e-4,
+                                        max_iter=2000, random_state=0).fit(pairs / scale, labels)
+
+    ref, seconds, peak = _timed(fit)
+    return ref, seconds, peak, int(pairs.shape[0])
+
+
+def _timed(work: Callable[[], _Result]) -> tuple[_Result, float, int]:
+    """Run ``work``: its result, its wall-clock time [s] and its peak traced memory [bytes]."""
     tracemalloc.start()
     t0 = time.perf_counter()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ConvergenceWarning)
-        warnings.simplefilter("ignore", FutureWarning)
-        ref = LogisticRegressionCV(Cs=Cs, cv=grouped_folds(pair_groups, 5), l1_ratios=(1.0,),
-                                   solver="liblinear", fit_intercept=False, tol=1e-4,
-                                   max_iter=2000, random_state=0).fit(pairs / scale, labels)
-    ref_s = time.perf_counter() - t0
-    _, ref_peak = tracemalloc.get_traced_memory()
+    out = work()
+    seconds = time.perf_counter() - t0
+    _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
-    ref_nonzero = int(np.count_nonzero(ref.coef_))
-    return {
-        "demonstrations": len(demos), "library": list(library.counts),
-        "features": int(X.shape[1]), "candidate_rows": int(X.shape[0]),
-        "pairs_mirrored": int(pairs.shape[0]),
-        "collect_seconds_untimed_part": collect, "feature_seconds": features,
-        "learn_seconds": ours_s, "target_seconds": 30.0,
-        "path_points_evaluated": len(ours.path_), "lambda": ours.lambda_,
-        "cv_error": ours.cv_error_, "non_zero": int(np.count_nonzero(ours.coef_)),
-        "learn_peak_memory_mib": ours_peak / 2 ** 20,
-        "baseline": "sklearn LogisticRegressionCV(l1, liblinear) on the same mirrored pairs, "
-                    "folds and C values",
-        "baseline_seconds": ref_s, "baseline_peak_memory_mib": ref_peak / 2 ** 20,
-        "baseline_non_zero": ref_nonzero, "speedup_vs_baseline": ref_s / ours_s,
-    }
+    return out, seconds, peak
 
 
 def format_learning(r: dict) -> str:

@@ -105,35 +105,53 @@ def _pct(x: float) -> str:
 
 
 def _markdown(results: dict, figs: list[tuple[str, str]]) -> str:
+    """The report in Markdown: one section after another, each ending with a blank line."""
+    sections = (_intro(results), _demonstration_rounds(results), _table1(results),
+                _table2(results), _sweep(results), _ranking(results), _verdict(results),
+                _pictures(figs))
+    return "\n".join(line for section in sections for line in section)
+
+
+def _intro(results: dict) -> list[str]:
     c = results["config"]
-    lines = ["# footfall: the paper's walking experiment, reproduced", "",
-             "Kalakrishnan et al., *Learning Locomotion over Rough Terrain using Terrain "
-             "Templates* (IROS 2009), §II-B and §V, on the simulated LittleDog. "
-             f"Seed {c['seed']}; every setting in `config.json`, every number in `results.json`, "
-             f"every run and demonstration in `reproduce.sqlite`.", "",
-             "## Demonstrations (expert corrections of run logs)", "",
+    return ["# footfall: the paper's walking experiment, reproduced", "",
+            "Kalakrishnan et al., *Learning Locomotion over Rough Terrain using Terrain "
+            "Templates* (IROS 2009), §II-B and §V, on the simulated LittleDog. "
+            f"Seed {c['seed']}; every setting in `config.json`, every number in `results.json`, "
+            f"every run and demonstration in `reproduce.sqlite`.", ""]
+
+
+def _demonstration_rounds(results: dict) -> list[str]:
+    lines = ["## Demonstrations (expert corrections of run logs)", "",
              "| round | robot's reward | crossings | corrections so far |",
              "| --- | --- | --- | --- |"]
     for r in results["rounds"]:
         lines.append(f"| {r['round']} | {r['reward']} | {r['successes']} / {r['runs']} | "
                      f"{r['demonstrations_total']} |")
     d = results["demonstrations"]
-    lines += ["", f"{d['n']} demonstrations, by module: " + ", ".join(
+    return lines + ["", f"{d['n']} demonstrations, by module: " + ", ".join(
         f"{k} {v}" for k, v in d["by_module"].items()) + "; by leg: " + ", ".join(
-        f"{k} {v}" for k, v in sorted(d["by_leg"].items())) + ".", "",
-        "## Table I: templates kept per scale (L1, lambda at the smallest CV error)", "",
-        "| features | legs | small | medium | large | paper (of 946) |",
-        "| --- | --- | --- | --- | --- | --- |"]
+        f"{k} {v}" for k, v in sorted(d["by_leg"].items())) + ".", ""]
+
+
+def _table1(results: dict) -> list[str]:
+    lines = ["## Table I: templates kept per scale (L1, lambda at the smallest CV error)", "",
+             "| features | legs | small | medium | large | paper (of 946) |",
+             "| --- | --- | --- | --- | --- | --- |"]
     for fs, groups in results["table1"].items():
         for g, v in groups.items():
             paper = " / ".join(str(x) for x in PAPER_TABLE1[fs])
             lines.append(f"| {NAMES[fs]} | {g} | " + " | ".join(
                 f"{k} / {n}" for k, n in zip(v["kept"], v["library"])) + f" | {paper} |")
-    lines += ["", "## Table II: walking on the unseen test board "
-              f"(difficulty {results['test_difficulty']:g})", "",
-              "| method | success | 95 % CI (Wilson) | slip on successful runs [mm] | footholds | "
-              "speed [cm/s] | paper: success, slip |",
-              "| --- | --- | --- | --- | --- | --- | --- |"]
+    return lines + [""]
+
+
+def _table2(results: dict) -> list[str]:
+    lines = ["## Table II: walking on the unseen test board "
+             f"(difficulty {results['test_difficulty']:g})", "",
+             "| method | success | 95 % CI (Wilson) | slip on successful runs [mm] | footholds | "
+             "speed [cm/s] | paper: success, slip |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
     for k in (k for k in TABLE2_ROWS if k in results["table2"]):
         t = results["table2"][k]
         slip = ("-" if t["slip_mean_mm"] is None
@@ -144,49 +162,67 @@ def _markdown(results: dict, figs: list[tuple[str, str]]) -> str:
         lines.append(f"| {NAMES[k]} | {t['successes']} / {t['runs']} ({_pct(t['success_rate'])}) | "
                      f"{_pct(t['success_ci'][0])} - {_pct(t['success_ci'][1])} | {slip} | "
                      f"{t['slip_count']} | {speed} | {paper} |")
-    lines += ["", "The references walk the same test board with the same seeds: the synthetic "
-              "expert choosing every foothold itself bounds what a function learned from its "
-              "corrections can do; the hand-tuned reward is the robot before any learning.", "",
-              "How runs ended: " + "; ".join(
-                  f"{NAMES[k]}: " + ", ".join(f"{r} {n}" for r, n in
-                                              sorted(results["table2"][k]["reasons"].items()))
-                  for k in TABLE2_ROWS if k in results["table2"]) + ".", ""]
-    if results["sweep"]:
-        lines += ["### Success against difficulty", "",
-                  "| difficulty | " + " | ".join(NAMES[k] for k in ("terrain", "templates", "both"))
-                  + " |", "| --- | --- | --- | --- |"]
-        for dd, v in results["sweep"].items():
-            lines.append(f"| {dd} | " + " | ".join(
-                f"{v[k]['successes']} / {v[k]['runs']}" for k in ("terrain", "templates", "both"))
-                + " |")
-        lines.append("")
-    lines += ["## Offline ranking on expert demonstrations over the test board", "",
-              "Loss: the expert's value of its best candidate minus its value of the function's "
-              "pick (1 unit = 1 cm off the gait-nominal foothold for the walking expert), 95 % "
-              "bootstrap interval.", "",
-              "| features | top-1 | within 1 cm | percentile | loss | loss 95 % CI |",
-              "| --- | --- | --- | --- | --- | --- |"]
+    return lines + [
+        "", "The references walk the same test board with the same seeds: the synthetic "
+        "expert choosing every foothold itself bounds what a function learned from its "
+        "corrections can do; the hand-tuned reward is the robot before any learning.", "",
+        "How runs ended: " + "; ".join(
+            f"{NAMES[k]}: " + ", ".join(f"{r} {n}" for r, n in
+                                        sorted(results["table2"][k]["reasons"].items()))
+            for k in TABLE2_ROWS if k in results["table2"]) + ".", ""]
+
+
+def _sweep(results: dict) -> list[str]:
+    if not results["sweep"]:
+        return []
+    lines = ["### Success against difficulty", "",
+             "| difficulty | " + " | ".join(NAMES[k] for k in ("terrain", "templates", "both"))
+             + " |", "| --- | --- | --- | --- |"]
+    for dd, v in results["sweep"].items():
+        lines.append(f"| {dd} | " + " | ".join(
+            f"{v[k]['successes']} / {v[k]['runs']}" for k in ("terrain", "templates", "both"))
+            + " |")
+    return lines + [""]
+
+
+def _ranking(results: dict) -> list[str]:
+    lines = ["## Offline ranking on expert demonstrations over the test board", "",
+             "Loss: the expert's value of its best candidate minus its value of the function's "
+             "pick (1 unit = 1 cm off the gait-nominal foothold for the walking expert), 95 % "
+             "bootstrap interval.", "",
+             "| features | top-1 | within 1 cm | percentile | loss | loss 95 % CI |",
+             "| --- | --- | --- | --- | --- | --- |"]
     for fs, a in results["ranking"].items():
         lo, hi = a["reward_loss_ci"]
         lines.append(f"| {NAMES[fs]} | {a['top1']:.3f} | {a['top1_near']:.3f} | "
                      f"{a['percentile']:.3f} | {a['reward_loss']:.2f} | {lo:.2f} to {hi:.2f} |")
+    return lines + [""]
+
+
+def _verdict(results: dict) -> list[str]:
     judged = {k: v for k, v in results.get("choices", {}).items() if v["steps"]}
-    if judged:
-        severe = next(iter(judged.values()))["severe_above"]
-        lines += ["", "## The expert's verdict on the robot's choices in the test-board runs", "",
-                  "Shortfall: the expert's value of its best foothold in a step's candidate set "
-                  "minus its value of the robot's choice [value units], over every step of the "
-                  f"{c['eval_runs']} runs of each Table II row; corrected above {c['margin']:g} (the "
-                  f"reproduction's margin), severe above {severe:g}.", "",
-                  "| method | steps | mean | median | 90th percentile | above the margin | severe |",
-                  "| --- | --- | --- | --- | --- | --- | --- |"]
-        for k, v in judged.items():
-            lines.append(f"| {NAMES[k]} | {v['steps']} | {v['mean']:.2f} | {v['median']:.2f} | "
-                         f"{v['p90']:.2f} | {_pct(v['above_margin'])} | {_pct(v['severe'])} |")
-    lines += ["", "## Pictures", ""]
+    if not judged:
+        return []
+    c = results["config"]
+    severe = next(iter(judged.values()))["severe_above"]
+    lines = ["## The expert's verdict on the robot's choices in the test-board runs", "",
+             "Shortfall: the expert's value of its best foothold in a step's candidate set "
+             "minus its value of the robot's choice [value units], over every step of the "
+             f"{c['eval_runs']} runs of each Table II row; corrected above {c['margin']:g} (the "
+             f"reproduction's margin), severe above {severe:g}.", "",
+             "| method | steps | mean | median | 90th percentile | above the margin | severe |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
+    for k, v in judged.items():
+        lines.append(f"| {NAMES[k]} | {v['steps']} | {v['mean']:.2f} | {v['median']:.2f} | "
+                     f"{v['p90']:.2f} | {_pct(v['above_margin'])} | {_pct(v['severe'])} |")
+    return lines + [""]
+
+
+def _pictures(figs: list[tuple[str, str]]) -> list[str]:
+    lines = ["## Pictures", ""]
     for name, caption in figs:
         lines += [f"![{caption}]({name})", "", f"*{caption}*", ""]
-    return "\n".join(lines)
+    return lines
 
 
 def _inline(md: str) -> str:

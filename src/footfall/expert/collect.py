@@ -11,7 +11,7 @@ import math
 import numbers
 import os
 from collections import Counter
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -75,21 +75,44 @@ def _finite(value: Any, what: str) -> float:
     return float(value)
 
 
+@dataclass(frozen=True)
+class WalkOptions:
+    """How the kinematic walker walks, and the source it records with each demonstration."""
+
+    stride: float = DEFAULT_STRIDE  # [m] body advance per gait cycle (four steps), > 0
+    robot: RobotDescription = LITTLEDOG  # stance, gait order, kinematics
+    spacing: float = DEFAULT_SPACING  # [m] candidate lattice spacing
+    config: FeatureConfig | None = None  # candidates need enough data for these feature
+    # patches; None: FeatureConfig(), so every candidate has valid features
+    source: str = "walker"  # the source recorded with each demonstration
+
+
+@dataclass(frozen=True)
+class WalkPath:
+    """Where one walk goes along the board, and which of its steps become demonstrations."""
+
+    y: float = 0.0  # [m] lateral position of the body's path
+    start_x: float | None = None  # [m] start of the body; None: the hind hips EDGE_MARGIN inside
+    # the board's near x end (or, with x_range, an APPROACH before the front feet reach it)
+    x_range: tuple[float, float] | None = None  # [m] record only steps whose chosen foothold has
+    # x_range[0] <= x <= x_range[1] (e.g. the rough modules); the walk itself takes every step
+    record_every: int = 1  # [steps] record only eligible steps (those x_range keeps) number
+    record_phase: int = 0  # record_phase, record_phase + record_every, ... (counting from 0), to
+    # spread a few demonstrations along the path; an odd record_every rotates them through the legs
+
+
 def walk_demonstrations(hmap: HeightMap, expert: Expert, rng: np.random.Generator, n_max: int,
-                        y: float = 0.0, start_x: float | None = None,
-                        stride: float = DEFAULT_STRIDE, source: str = "walker",
-                        x_range: tuple[float, float] | None = None,
-                        robot: RobotDescription = LITTLEDOG, spacing: float = DEFAULT_SPACING,
-                        config: FeatureConfig | None = None, expert_info: dict | None = None,
-                        progress: Callable[[Demonstration], None] | None = None,
-                        record_every: int = 1, record_phase: int = 0) -> list[Demonstration]:
-    """Walk straight along +x (heading 0) at lateral position ``y``, recording each foothold choice.
+                        path: WalkPath = WalkPath(), options: WalkOptions = WalkOptions(), *,
+                        expert_info: dict | None = None,
+                        progress: Callable[[Demonstration], None] | None = None
+                        ) -> list[Demonstration]:
+    """Walk straight along +x (heading 0) at lateral position ``path.y``, recording each choice.
 
     The robot starts standing in its nominal stance with the body at
-    ``(start_x, y)``. Step k swings leg ``robot.gait_order[k % 4]`` (crawl:
-    LH, LF, RH, RF): the body first moves ``stride / 4`` forward, to where it
-    is at touch-down, at height ``robot.nominal_height`` above the mean height
-    of the four feet, which stay where they are; F is
+    ``(path.start_x, path.y)``. Step k swings leg ``robot.gait_order[k % 4]``
+    (crawl: LH, LF, RH, RF): the body first moves ``stride / 4`` forward, to
+    where it is at touch-down, at height ``robot.nominal_height`` above the
+    mean height of the four feet, which stay where they are; F is
     ``reachable_footholds(hmap, state, robot, spacing, config)`` for that
     state, the expert chooses from F, and the swing foot moves there.
 
@@ -109,35 +132,14 @@ def walk_demonstrations(hmap: HeightMap, expert: Expert, rng: np.random.Generato
         Passed to every ``expert.choose``; the same seed gives the same walk.
     n_max : int
         Most demonstrations to record (>= 0).
-    y : float
-        Lateral position [m] of the body's path.
-    start_x : float, optional
-        Start position [m] of the body; by default the hind hips start
-        ``EDGE_MARGIN`` inside the board's near x end.
-    stride : float
-        Body advance [m] per gait cycle (four steps), > 0.
-    source : str
-        The source recorded with each demonstration.
-    x_range : (float, float), optional
-        Record only steps whose chosen foothold has ``x_range[0] <= x <=
-        x_range[1]`` [m] (e.g. the rough modules); the walk itself takes
-        every step. By default every step is recorded.
-    robot : RobotDescription
-        The robot: stance, gait order, kinematics.
-    spacing : float
-        Candidate lattice spacing [m].
-    config : FeatureConfig, optional
-        Candidates need enough data for these feature patches; default
-        ``FeatureConfig()``, so every candidate has valid features.
+    path : WalkPath
+        The lateral position, start and recorded steps of the walk.
+    options : WalkOptions
+        Stride, robot, candidate spacing and feature config, and the source recorded.
     expert_info : dict, optional
         Expert settings to record; default :func:`expert_settings` of ``expert``.
     progress : callable, optional
         Called with each recorded demonstration.
-    record_every, record_phase : int
-        Record only eligible steps (those ``x_range`` keeps) number
-        ``record_phase``, ``record_phase + record_every``, ... (counting from
-        0), to spread a few demonstrations along the path; an odd
-        ``record_every`` rotates them through the legs.
 
     Returns
     -------
@@ -150,18 +152,75 @@ def walk_demonstrations(hmap: HeightMap, expert: Expert, rng: np.random.Generato
         For bad arguments, a start stance off the map or on cells without
         data, or an expert that returns an index outside F.
     """
+    rng, stride, path = _checked_walk(hmap, rng, n_max, path, options)
+    config = FeatureConfig() if options.config is None else options.config
+    info = expert_settings(expert) if expert_info is None else dict(expert_info)
+    start = _start_state(hmap, path, options.robot)
+    terrain_hash = hmap.content_hash()
+    x_range = path.x_range
+    out: list[Demonstration] = []
+    eligible = 0  # steps so far whose foothold x_range keeps
+    steps = _walk(hmap, expert, rng, start, path, stride, options, config) if n_max > 0 else ()
+    for state, candidates, choice in steps:
+        foothold = candidates[choice]
+        if x_range is None or x_range[0] <= foothold[0] <= x_range[1]:
+            if eligible % path.record_every == path.record_phase:
+                demo = Demonstration(terrain_hash, state, candidates, choice, options.source, info)
+                out.append(demo)
+                if progress is not None:
+                    progress(demo)
+                if len(out) >= n_max:
+                    break  # before the next step: the expert draws from rng no more
+            eligible += 1
+    return out
+
+
+def _walk(hmap: HeightMap, expert: Expert, rng: np.random.Generator, start: RobotState,
+          path: WalkPath, stride: float, options: WalkOptions, config: FeatureConfig
+          ) -> Iterator[tuple[RobotState, np.ndarray, int]]:
+    """The walk's steps from the ``start`` stance, as (state at touch-down, candidates F (n, 3)
+    [m], the expert's choice in F); each step's swing foot lands on its choice."""
+    robot, x_range = options.robot, path.x_range
+    feet = start.feet.copy()  # (4, 3) [m], in LEG_NAMES order
+    goal = start.goal  # 1 km straight ahead along the path
+    stop_x = hmap.bounds[1] - robot.hip_x - EDGE_MARGIN  # [m] last body x: the front hips stay on
+    step = stride / 4  # [m] body advance per swing
+    k = 0
+    while True:
+        body_x = path.start_x + (k + 1) * step  # [m] at the touch-down of step k
+        if body_x > stop_x:
+            return
+        if x_range is not None and body_x - robot.hip_x - robot.max_reach > x_range[1]:
+            return  # no foot can land in the recorded range any more
+        leg = robot.gait_order[k % len(robot.gait_order)]
+        body = np.array([body_x, path.y, feet[:, 2].mean() + robot.nominal_height])
+        state = RobotState(feet, body, np.zeros(3), leg, goal)
+        decision = _decide(hmap, expert, rng, state, options, config)
+        if decision is None:
+            return
+        candidates, choice = decision
+        yield state, candidates, choice
+        feet[LEG_NAMES.index(leg)] = candidates[choice]  # the swing foot lands
+        k += 1
+
+
+def _checked_walk(hmap: HeightMap, rng: Any, n_max: Any, path: WalkPath, options: WalkOptions
+                  ) -> tuple[np.random.Generator, float, WalkPath]:
+    """The walker's arguments checked: the generator, the stride [m] and the path with its start
+    (and every number) filled in; raises FootfallError for a bad one."""
     if not isinstance(hmap, HeightMap):
         raise FootfallError(f"the walker needs a HeightMap, got {type(hmap).__name__}")
     rng = _check_rng(rng)
     if isinstance(n_max, bool) or not isinstance(n_max, numbers.Integral) or n_max < 0:
         raise FootfallError(f"n_max must be a non-negative integer, got {n_max!r}")
-    stride = _finite(stride, "stride")
+    stride = _finite(options.stride, "stride")
     if stride <= 0:
         raise FootfallError(f"stride must be > 0 m, got {stride}")
-    y = _finite(y, "y")
-    x_min, x_max, _, _ = hmap.bounds
-    default_start = start_x is None
-    start_x = x_min + robot.hip_x + EDGE_MARGIN if start_x is None else _finite(start_x, "start_x")
+    y = _finite(path.y, "y")
+    robot, x_range = options.robot, path.x_range
+    default_start = path.start_x is None
+    start_x = (hmap.bounds[0] + robot.hip_x + EDGE_MARGIN if default_start
+               else _finite(path.start_x, "start_x"))
     if x_range is not None:
         lo, hi = (_finite(v, "x_range") for v in x_range)
         if lo > hi:
@@ -170,55 +229,39 @@ def walk_demonstrations(hmap: HeightMap, expert: Expert, rng: np.random.Generato
             # Steps long before the recorded range only cost time: start an
             # approach of APPROACH metres before the front feet reach it.
             start_x = max(start_x, lo - robot.hip_x - APPROACH)
-    for value, what in ((record_every, "record_every"), (record_phase, "record_phase")):
+        x_range = (lo, hi)
+    every, phase = path.record_every, path.record_phase
+    for value, what in ((every, "record_every"), (phase, "record_phase")):
         if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 0:
             raise FootfallError(f"{what} must be a non-negative integer, got {value!r}")
-    if not 0 <= record_phase < record_every:
-        raise FootfallError(f"record_phase must be in [0, record_every), got {record_phase} "
-                            f"with record_every {record_every}")
-    config = FeatureConfig() if config is None else config
-    info = expert_settings(expert) if expert_info is None else dict(expert_info)
+    if not 0 <= phase < every:
+        raise FootfallError(f"record_phase must be in [0, record_every), got {phase} "
+                            f"with record_every {every}")
+    return rng, stride, WalkPath(y, start_x, x_range, every, phase)
 
-    state = nominal_state(hmap, (start_x, y), 0.0, robot.gait_order[0], robot=robot)
+
+def _start_state(hmap: HeightMap, path: WalkPath, robot: RobotDescription) -> RobotState:
+    """The nominal stance at the walk's start; raises FootfallError where a foot has no data."""
+    state = nominal_state(hmap, (path.start_x, path.y), 0.0, robot.gait_order[0], robot=robot)
     if np.isnan(hmap.height_at(state.feet[:, :2])).any():
-        raise FootfallError(f"walker start ({start_x:.3f}, {y:.3f}) m: the feet of the nominal "
-                            f"stance are off the terrain or on cells without data")
-    terrain_hash = hmap.content_hash()
-    feet = state.feet.copy()  # (4, 3) [m], in LEG_NAMES order
-    goal = state.goal  # 1 km straight ahead along the path
-    stop_x = x_max - robot.hip_x - EDGE_MARGIN  # [m] last body x: the front hips stay on
-    step = stride / 4  # [m] body advance per swing
-    out: list[Demonstration] = []
-    k = 0
-    eligible = 0  # steps so far whose foothold x_range keeps
-    while len(out) < n_max:
-        body_x = start_x + (k + 1) * step  # [m] at the touch-down of step k
-        if body_x > stop_x:
-            break
-        if x_range is not None and body_x - robot.hip_x - robot.max_reach > hi:
-            break  # no foot can land in the recorded range any more
-        leg = robot.gait_order[k % len(robot.gait_order)]
-        body = np.array([body_x, y, feet[:, 2].mean() + robot.nominal_height])
-        state = RobotState(feet, body, np.zeros(3), leg, goal)
-        candidates = reachable_footholds(hmap, state, robot, spacing, config)
-        if candidates.shape[0] < 2:
-            break
-        choice = expert.choose(hmap, state, candidates, rng)
-        if isinstance(choice, bool) or not isinstance(choice, numbers.Integral) \
-                or not 0 <= choice < candidates.shape[0]:
-            raise FootfallError(f"the expert chose {choice!r}, not an index into the "
-                                f"{candidates.shape[0]} candidates")
-        foothold = candidates[int(choice)]
-        if x_range is None or lo <= foothold[0] <= hi:
-            if eligible % record_every == record_phase:
-                demo = Demonstration(terrain_hash, state, candidates, int(choice), source, info)
-                out.append(demo)
-                if progress is not None:
-                    progress(demo)
-            eligible += 1
-        feet[LEG_NAMES.index(leg)] = foothold
-        k += 1
-    return out
+        raise FootfallError(f"walker start ({path.start_x:.3f}, {path.y:.3f}) m: the feet of the "
+                            f"nominal stance are off the terrain or on cells without data")
+    return state
+
+
+def _decide(hmap: HeightMap, expert: Expert, rng: np.random.Generator, state: RobotState,
+            options: WalkOptions, config: FeatureConfig) -> tuple[np.ndarray, int] | None:
+    """The swing leg's candidates F (n, 3) [m] and the expert's choice among them; None where
+    F has fewer than two (the walk stops)."""
+    candidates = reachable_footholds(hmap, state, options.robot, options.spacing, config)
+    if candidates.shape[0] < 2:
+        return None
+    choice = expert.choose(hmap, state, candidates, rng)
+    if isinstance(choice, bool) or not isinstance(choice, numbers.Integral) \
+            or not 0 <= choice < candidates.shape[0]:
+        raise FootfallError(f"the expert chose {choice!r}, not an index into the "
+                            f"{candidates.shape[0]} candidates")
+    return candidates, int(choice)
 
 
 def rough_x_range(hmap: HeightMap) -> tuple[float, float] | None:
@@ -327,7 +370,9 @@ def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, s
     rough_only : bool
         Record only footholds on a board's non-flat modules
         (:func:`rough_x_range`; boards without module metadata count whole).
-    stride, robot, spacing, config, source, progress
+    stride, robot, spacing, config, source
+        As for :class:`WalkOptions`.
+    progress : callable, optional
         As for :func:`walk_demonstrations`.
     max_rounds : int
         Most rounds of lateral paths (>= 1).
@@ -347,36 +392,48 @@ def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, s
     terrains = list(unique.values())
     if not terrains:
         raise FootfallError("collecting demonstrations needs at least one terrain")
+    options = WalkOptions(stride, robot, spacing, config, source)
     info = expert_settings(expert)
     out: list[Demonstration] = []
     for round_ in range(max_rounds):
-        paths = [lateral_paths(hmap, round_, robot) for hmap in terrains]
-        # Path by path, terrain by terrain: the shares even out over the terrains.
-        walks = [(t, j, ys[j]) for j in range(max(map(len, paths)))
-                 for t, ys in enumerate(paths) if j < len(ys)]
+        walks = _round_walks(terrains, round_, robot)
         before = len(out)
         for w, (t, j, y) in enumerate(walks):
             remaining = n - len(out)
             if remaining <= 0:
                 break
             quota = -(-remaining // (len(walks) - w))  # an equal share; later walks make up
-            hmap = terrains[t]
-            x_range = rough_x_range(hmap) if rough_only else None
-            # Spread a small share along the path: every m-th eligible step, m odd so
-            # that the legs take turns, each walk starting at another phase.
-            every = max(estimated_steps(hmap, x_range, stride, robot) // quota, 1)
-            if every % 2 == 0:
-                every -= 1
+            path = _spread_path(terrains[t], y, quota, w, rough_only, options)
             rng = np.random.default_rng(np.random.SeedSequence(int(seed),
                                                                spawn_key=(t, round_, j)))
-            out += walk_demonstrations(hmap, expert, rng, quota, y=y, stride=stride,
-                                       source=source, x_range=x_range, robot=robot,
-                                       spacing=spacing, config=config, expert_info=info,
-                                       progress=progress, record_every=every,
-                                       record_phase=(every // 2 + w) % every)
+            out += walk_demonstrations(terrains[t], expert, rng, quota, path, options,
+                                       expert_info=info, progress=progress)
         if len(out) >= n or len(out) == before:
             break
     return out[:n]
+
+
+def _round_walks(terrains: Sequence[HeightMap], round_: int, robot: RobotDescription
+                 ) -> list[tuple[int, int, float]]:
+    """The walks of one round as (terrain index, path index, y [m]): path by path, terrain by
+    terrain, so that the shares even out over the terrains."""
+    paths = [lateral_paths(hmap, round_, robot) for hmap in terrains]
+    return [(t, j, ys[j]) for j in range(max(map(len, paths)))
+            for t, ys in enumerate(paths) if j < len(ys)]
+
+
+def _spread_path(hmap: HeightMap, y: float, quota: int, w: int, rough_only: bool,
+                 options: WalkOptions) -> WalkPath:
+    """The path of walk ``w`` of a round at ``y`` [m], recording ``quota`` of its eligible steps.
+
+    A small share is spread along the path: every m-th eligible step, m odd so
+    that the legs take turns, each walk starting at another phase.
+    """
+    x_range = rough_x_range(hmap) if rough_only else None
+    every = max(estimated_steps(hmap, x_range, options.stride, options.robot) // quota, 1)
+    if every % 2 == 0:
+        every -= 1
+    return WalkPath(y=y, x_range=x_range, record_every=every, record_phase=(every // 2 + w) % every)
 
 
 RECORDED_STEPS = ("rough", "all")  # a collection records the steps on non-flat modules, or all

@@ -30,7 +30,7 @@ from footfall.core.kinematics import (
     rotation_matrix,
     world_to_body,
 )
-from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
+from footfall.core.robot import LEG_NAMES, LITTLEDOG, Leg, RobotDescription
 from footfall.core.state import RobotState
 from footfall.features.config import FeatureConfig
 from footfall.features.family import Candidates, FeatureFamily, register_family
@@ -124,32 +124,47 @@ def pose_features(hmap: HeightMap, state: RobotState, footholds: np.ndarray,
         Candidate contact points [m] (x, y, terrain height) in the world frame.
     """
     f = np.asarray(footholds, dtype=np.float64).reshape(-1, 3)
-    n = f.shape[0]
     leg = robot.leg(state.swing_leg)
-    s = state.swing_index
-    feet = state.feet
-    stance = [k for k in range(4) if k != s]
+    out = {**_motion(state, f, leg, robot), **_heights(state, f, leg),
+           **_support(state, f, leg, robot), **_reach_and_leg_clearance(hmap, state, f, leg, robot),
+           **_body_and_swing(hmap, state, f, robot)}
+    return np.column_stack([out[name] for name in POSE_FEATURE_NAMES])
+
+
+def _heading_rotation(yaw: float) -> np.ndarray:
+    """The (2, 2) rotation by the body's heading ``yaw`` [rad]: heading frame -> world."""
+    return rotation_matrix(np.array([0.0, 0.0, yaw]))[:2, :2]
+
+
+def _motion(state: RobotState, f: np.ndarray, leg: Leg, robot: RobotDescription
+            ) -> dict[str, np.ndarray]:
+    """Progress toward the goal, lead, step length and the offsets from the nominal stance (n,)."""
+    s, feet = state.swing_index, state.feet
     yaw = state.yaw
     heading = np.array([np.cos(yaw), np.sin(yaw)])
     body_xy = state.body_position[:2]
     to_goal = state.goal - body_xy
     dist = np.linalg.norm(to_goal)
     goal_dir = to_goal / dist if dist > 1e-9 else heading
-
     out: dict[str, np.ndarray] = {}
     out["progress"] = (f[:, :2] - feet[s, :2]) @ goal_dir
     out["lead"] = (f[:, :2] - body_xy) @ goal_dir
     out["step_length"] = np.linalg.norm(f[:, :2] - feet[s, :2], axis=1)
-
     # Offsets from the nominal stance, in the heading frame, lateral sense mirrored.
-    rot_yaw = rotation_matrix(np.array([0.0, 0.0, yaw]))[:2, :2]
-    rel = (f[:, :2] - body_xy) @ rot_yaw  # heading-frame x, y
+    rel = (f[:, :2] - body_xy) @ _heading_rotation(yaw)  # heading-frame x, y
     nominal = np.array(robot.nominal_foot(leg.name)[:2])
     out["nominal_dx_abs"] = np.abs(rel[:, 0] - nominal[0])
     outward = leg.side * (rel[:, 1] - nominal[1])
     out["nominal_dy_out"] = np.maximum(outward, 0.0)
     out["nominal_dy_in"] = np.maximum(-outward, 0.0)
+    return out
 
+
+def _heights(state: RobotState, f: np.ndarray, leg: Leg) -> dict[str, np.ndarray]:
+    """Height differences (n,) [m] of the foothold from the feet and the body."""
+    s, feet = state.swing_index, state.feet
+    stance = [k for k in range(4) if k != s]
+    out: dict[str, np.ndarray] = {}
     dz = f[:, 2] - feet[s, 2]
     out["step_up"] = np.maximum(dz, 0.0)
     out["step_down"] = np.maximum(-dz, 0.0)
@@ -161,20 +176,31 @@ def pose_features(hmap: HeightMap, state: RobotState, footholds: np.ndarray,
     out["lateral_height_diff"] = np.abs(f[:, 2] - feet[same_end, 2])
     out["fore_aft_height_diff"] = np.abs(f[:, 2] - feet[same_side, 2])
     out["leg_drop"] = state.body_position[2] - f[:, 2]
+    return out
 
-    # Support triangles of the next two swings of the crawl gait, the swing foot at f.
+
+def _support(state: RobotState, f: np.ndarray, leg: Leg, robot: RobotDescription
+             ) -> dict[str, np.ndarray]:
+    """Margins (n,) [m] of the support triangles of the next two swings of the crawl gait, the
+    swing foot at f, and the support area (n,) [m^2] after the step."""
+    out: dict[str, np.ndarray] = {}
     order = list(robot.gait_order)
-    after = np.broadcast_to(feet[:, :2], (n, 4, 2)).copy()
-    after[:, s] = f[:, :2]
+    after = np.broadcast_to(state.feet[:, :2], (f.shape[0], 4, 2)).copy()
+    after[:, state.swing_index] = f[:, :2]
     for label, ahead in (("next", 1), ("second", 2)):
         lifted = LEG_NAMES.index(order[(order.index(leg.name) + ahead) % 4])
         tri = after[:, [k for k in range(4) if k != lifted]]
-        inradius, margin = triangle_margins(tri, body_xy)
+        inradius, margin = triangle_margins(tri, state.body_position[:2])
         out[f"{label}_inradius"] = inradius
         out[f"{label}_cog_margin"] = margin
     out["support_area"] = hull_area(after)
+    return out
 
-    # Reachability at the current body pose.
+
+def _reach_and_leg_clearance(hmap: HeightMap, state: RobotState, f: np.ndarray, leg: Leg,
+                             robot: RobotDescription) -> dict[str, np.ndarray]:
+    """Reachability at the current body pose, and the knee's and shin's clearance (n,)."""
+    out: dict[str, np.ndarray] = {}
     centre = f + np.array([0.0, 0.0, robot.foot_radius])
     local = world_to_body(centre, state.body_position, state.body_rpy)
     q, _ = inverse_kinematics(leg, local, robot)
@@ -182,8 +208,6 @@ def pose_features(hmap: HeightMap, state: RobotState, footholds: np.ndarray,
     out["reach_margin"] = robot.max_reach - np.linalg.norm(local - hip, axis=1)
     out["joint_margin"] = joint_limit_margin(leg, q)
     out["hip_roll_abs"] = np.abs(q[:, 0])
-
-    # Knee, shin and body clearance.
     rot = rotation_matrix(state.body_rpy)
     knee = knee_position(leg, q, robot) @ rot.T + state.body_position
     out["knee_clearance"] = np.minimum(_terrain_clear(hmap, knee), CLEARANCE_CAP)
@@ -192,12 +216,23 @@ def pose_features(hmap: HeightMap, state: RobotState, footholds: np.ndarray,
     shin = knee[:, None, :] + frac[None, :, None] * (centre - knee)[:, None, :]
     shin_clear = _terrain_clear(hmap, shin).min(axis=1) - robot.lower_leg_radius
     out["shin_clearance"] = np.minimum(shin_clear, CLEARANCE_CAP)
+    return out
+
+
+def _body_and_swing(hmap: HeightMap, state: RobotState, f: np.ndarray, robot: RobotDescription
+                    ) -> dict[str, np.ndarray]:
+    """The trunk's clearance over the new stance, the nearest other foot and the terrain along
+    the straight swing path (n,) [m]."""
+    s, feet = state.swing_index, state.feet
+    stance = [k for k in range(4) if k != s]
+    body_xy = state.body_position[:2]
+    out: dict[str, np.ndarray] = {}
     mean_feet_z = (feet[stance, 2].sum() + f[:, 2]) / 4.0
     body_z = mean_feet_z + robot.nominal_height
     lx, ly = robot.trunk_size[0] / 2, robot.trunk_size[1] / 2
     gx, gy = np.meshgrid(np.linspace(-lx, lx, _TRUNK_SAMPLES[0]),
                          np.linspace(-ly, ly, _TRUNK_SAMPLES[1]), indexing="ij")
-    under = np.column_stack([gx.ravel(), gy.ravel()]) @ rot_yaw.T + body_xy
+    under = np.column_stack([gx.ravel(), gy.ravel()]) @ _heading_rotation(state.yaw).T + body_xy
     ground = hmap.height_at(under)
     top = np.nanmax(ground) if np.isfinite(ground).any() else -np.inf
     out["body_clearance"] = np.minimum(body_z - robot.trunk_size[2] / 2 - top, BODY_CLEARANCE_CAP)
@@ -210,8 +245,7 @@ def pose_features(hmap: HeightMap, state: RobotState, footholds: np.ndarray,
                         np.nanmax(np.where(np.isnan(path_ground), -np.inf, path_ground), axis=1),
                         -np.inf)
     out["swing_obstacle"] = np.maximum(path_top - np.maximum(f[:, 2], feet[s, 2]), 0.0)
-
-    return np.column_stack([out[name] for name in POSE_FEATURE_NAMES])
+    return out
 
 
 @register_family

@@ -41,9 +41,10 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from footfall.control.body_path import BodyPath, BodyPathConfig, plan_body_path
-from footfall.control.cog import CogConfig, plan_cog, support_margin
+from footfall.control.cog import CogConfig, CogTrajectory, plan_cog, support_margin
 from footfall.control.footstep import (
     FootstepConfig,
+    FootstepPlan,
     FootstepPlanner,
     Judge,
     JudgedFootstepPlanner,
@@ -302,12 +303,27 @@ class Walk:
 
     # --------------------------------------------------------------- one step
     def _step(self, k: int) -> None:
-        """Plan step ``k``, log it, and execute it: shift, swing, touch-down."""
-        cfg, robot, sim = self.config, self.robot, self.sim
-        leg = robot.gait_order[k % 4]
+        """Step ``k`` in its phases: plan (foothold, COG, pose), shift, swing, touch-down, load."""
+        leg = self.robot.gait_order[k % 4]
         s = LEG_NAMES.index(leg)
         tp = time.perf_counter()
-        feet = sim.foot_positions() - self._lift  # where the feet stand now: contact points
+        feet, plan, record = self._plan(k, leg)
+        traj, times, positions, attitudes = self._body_motion(feet, s, plan)
+        self._plan_seconds.append(time.perf_counter() - tp)
+        t_begin = self.sim.time
+        if not self._shift_and_swing(s, plan, traj, times, positions, attitudes, record):
+            self._touch_down(s, plan)
+        self._load(k, s, record)
+        elapsed = min(self.sim.time - t_begin, float(traj.touch_down[0]))
+        self._cog = traj.position(elapsed), traj.velocity(elapsed)
+        self._desired[0][:2] = self._cog[0]
+
+    def _plan(self, k: int, leg: str) -> tuple[np.ndarray, FootstepPlan, dict]:
+        """Plan step ``k`` of ``leg`` from the feet where they stand now, and log it.
+
+        Returns the feet's contact points (4, 3) [m], the plan and the step's log record.
+        """
+        feet = self.sim.foot_positions() - self._lift  # where the feet stand now: contact points
         state = RobotState(feet, *self._pose, leg, self.goal)
         record = {"k": k, "plan": None, "t_liftoff": math.nan,
                   "t_touchdown": math.nan, "touchdown": np.full(3, np.nan), "slip": math.nan}
@@ -317,6 +333,16 @@ class Walk:
             raise _Failure(f"stuck: no foothold for {leg}") from None
         record["plan"] = plan
         self._steps.append(record)
+        return feet, plan, record
+
+    def _body_motion(self, feet: np.ndarray, s: int, plan: FootstepPlan
+                     ) -> tuple[CogTrajectory, np.ndarray, np.ndarray, np.ndarray]:
+        """The COG trajectory of the step, and the desired body pose at every control period of it.
+
+        Returns the trajectory, the times (n,) [s] from the start of the shift, and the body
+        positions (n, 3) [m] and attitudes (n, 3) [rad] at those times.
+        """
+        cfg, robot = self.config, self.robot
         traj = plan_cog(feet, plan.steps, self._cog[0], self._cog[1], cfg.cog, robot)
         after = feet.copy()
         after[s] = plan.foothold
@@ -334,50 +360,73 @@ class Walk:
         rpy1[2] = rpy0[2] + ((rpy1[2] - rpy0[2] + np.pi) % (2 * np.pi) - np.pi)
         positions = np.column_stack([traj.position(times), z0 + (pose.height - z0) * u[:, 0]])
         attitudes = rpy0 + (rpy1 - rpy0) * u
-        self._plan_seconds.append(time.perf_counter() - tp)
+        return traj, times, positions, attitudes
 
-        t_begin = sim.time
+    def _shift_and_swing(self, s: int, plan: FootstepPlan, traj: CogTrajectory,
+                         times: np.ndarray, positions: np.ndarray, attitudes: np.ndarray,
+                         record: dict) -> bool:
+        """Shift, then swing leg ``s`` along the planned trajectories, a control period at a time.
+
+        Returns whether the foot is down: it touched down near the end of the swing, close to
+        the foothold, or the step was too short to lift it.
+        """
+        cfg, sim = self.config, self.sim
+        t_lift, t_down = float(traj.lift_off[0]), float(traj.touch_down[0])
         swing_time = t_down - t_lift
         # The foot swings to a point `approach` above the foothold and comes down the rest of the
         # way slowly, so that a terrain a little higher or lower than the map meets it gently.
         descent = min(cfg.touchdown_approach / cfg.touchdown_speed, 0.5 * swing_time)
         reach = swing_time - descent  # [s] after lift-off: above the foothold
         above = plan.foothold + [0.0, 0.0, descent * cfg.touchdown_speed]
-        swing, path, i_lift = None, None, n
-        landed = False
-        for i in range(n):  # shift, then swing along the planned trajectories
+        path, i_lift = None, times.size
+        for i in range(times.size):  # control periods, each a simulated tick
             t = times[i]
-            if t > t_lift and swing is None:  # lift-off: this foot's last stance ends
-                centre = sim.foot_positions()[s]
-                if s in self._stood:
-                    j, down = self._stood.pop(s)
-                    self._steps[j]["slip"] = float(foot_slip(down, centre))
-                record["t_liftoff"] = sim.time
-                swing = swing_trajectory(self.hmap, centre - self._lift, above, reach, robot,
-                                         cfg.swing)
-                after_lift = times[i:] - t_lift
-                path = swing.position(after_lift) + self._lift
-                path[:, 2] -= cfg.touchdown_speed * np.maximum(after_lift - reach, 0.0)
+            if t > t_lift and path is None:  # lift-off: this foot's last stance ends
+                path = self._lift_off(s, above, reach, times[i:] - t_lift, record)
                 i_lift = i
-                self._set_role(s, stance=False)
-            if swing is not None:
+            if path is not None:
                 self._targets[s] = path[i - i_lift]
             self._desired = positions[i].copy(), attitudes[i].copy()
-            self._tick(*self._desired, s if swing is not None else None)
-            if swing is not None and t - t_lift > cfg.touchdown_early * reach \
+            self._tick(*self._desired, s if path is not None else None)
+            if path is not None and t - t_lift > cfg.touchdown_early * reach \
                     and self._touching_down(s) \
                     and np.hypot(*(sim.foot_positions()[s, :2] - above[:2])) < cfg.touchdown_reach:
-                landed = True
-                break
-        if swing is None:  # a step too short to lift: count it as landed where it stands
-            landed = True
-        bottom = plan.foothold[2] + robot.foot_radius - cfg.touchdown_search
-        while not landed:  # not down yet: keep going down at the foothold
+                return True
+        return path is None  # a step too short to lift: count it as landed where it stands
+
+    def _lift_off(self, s: int, above: np.ndarray, reach: float, after_lift: np.ndarray,
+                  record: dict) -> np.ndarray:
+        """Lift foot ``s`` now: log the slip of its last stance and plan its swing to ``above``
+        (3,) [m], reached ``reach`` [s] after lift-off; returns the foot-centre targets (m, 3)
+        [m] at the control periods ``after_lift`` (m,) [s] after lift-off."""
+        cfg, sim = self.config, self.sim
+        centre = sim.foot_positions()[s]
+        if s in self._stood:
+            j, down = self._stood.pop(s)
+            self._steps[j]["slip"] = float(foot_slip(down, centre))
+        record["t_liftoff"] = sim.time
+        swing = swing_trajectory(self.hmap, centre - self._lift, above, reach, self.robot,
+                                 cfg.swing)
+        path = swing.position(after_lift) + self._lift
+        path[:, 2] -= cfg.touchdown_speed * np.maximum(after_lift - reach, 0.0)
+        self._set_role(s, stance=False)
+        return path
+
+    def _touch_down(self, s: int, plan: FootstepPlan) -> None:
+        """Not down yet: keep foot ``s`` going down at its foothold until it feels the ground."""
+        cfg = self.config
+        bottom = plan.foothold[2] + self.robot.foot_radius - cfg.touchdown_search
+        landed = False
+        while not landed:
             self._targets[s, 2] -= cfg.touchdown_speed * self.period
             if self._targets[s, 2] < bottom:
                 break  # nothing there within reach: put the weight on it anyway
             self._tick(*self._desired, s)
             landed = self._touching_down(s)
+
+    def _load(self, k: int, s: int, record: dict) -> None:
+        """Foot ``s`` stands where it touched down and starts to take its load; log it."""
+        sim = self.sim
         centre = sim.foot_positions()[s]
         self._targets[s] = centre
         self._anchor[s] = centre
@@ -386,9 +435,6 @@ class Walk:
         record["t_touchdown"] = sim.time
         record["touchdown"] = centre.copy()
         self._stood[s] = (k, centre.copy())
-        elapsed = min(sim.time - t_begin, t_down)
-        self._cog = traj.position(elapsed), traj.velocity(elapsed)
-        self._desired[0][:2] = self._cog[0]
 
     # ------------------------------------------------------------------ a run
     def run(self) -> RunRecord:

@@ -4,7 +4,8 @@ A :class:`Simulation` holds a compiled model (see :mod:`footfall.sim.mjcf`)
 and its state. The controller talks to it as to the robot: joint set-points
 in (at 100 Hz), the 400 Hz PD servo runs inside the physics step, and out
 come the true body pose (the simulator stands in for motion capture), joint
-angles, foot force sensors and an IMU, the last two with seeded noise.
+angles, foot force sensors and an IMU, the last two with seeded noise
+(:mod:`footfall.sim.sensors`).
 A :class:`SimPerturbation` makes runs differ as real runs do; the same seed
 gives the same run, bit for bit.
 
@@ -29,9 +30,10 @@ from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import inverse_kinematics, rotation_matrix, world_to_body
 from footfall.core.params import Params, at_least, param, within
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
-from footfall.sim.mjcf import JOINTS, MAX_HFIELD_SPACING, SHIN_PIECES, compile_model
+from footfall.sim.mjcf import JOINTS, MAX_HFIELD_SPACING, compile_model
+from footfall.sim.sensors import LEG_PARTS, Sensors, model_ids
 
-LEG_PARTS = ("foot", "knee", "shin")  # parts of a leg that collide with the terrain
+__all__ = ["LEG_PARTS", "PerturbationConfig", "SimPerturbation", "Simulation", "bench_stepping"]
 
 
 # ----------------------------------------------------------------- perturbation
@@ -139,10 +141,6 @@ def _array(value, shape: tuple[int, ...], name: str) -> np.ndarray:
     return a
 
 
-def _ids(model: mujoco.MjModel, objtype: mujoco.mjtObj, names) -> np.ndarray:
-    return np.array([mujoco.mj_name2id(model, objtype, n) for n in names], dtype=np.intp)
-
-
 # ------------------------------------------------------------------- simulation
 class Simulation:
     """The robot on a terrain in MuJoCo, seen and driven as the real robot is.
@@ -171,6 +169,9 @@ class Simulation:
     data : mujoco.MjData
     timestep : float
         Physics step = PD servo period [s].
+    sensors : Sensors
+        The foot force sensors, the IMU and the contacts (also read through the
+        methods of the same names here).
     """
 
     def __init__(self, robot: RobotDescription = LITTLEDOG, hmap: HeightMap | None = None, *,
@@ -190,29 +191,16 @@ class Simulation:
                                    fixed_base=self.fixed_base, max_spacing=max_spacing)
         self.data = mujoco.MjData(self.model)
         self.timestep = float(self.model.opt.timestep)
-        self._rng = np.random.default_rng(rng)
+        self.sensors = Sensors(self.model, self.data, self.perturbation, np.random.default_rng(rng))
         self._renderer: mujoco.Renderer | None = None
         m, obj = self.model, mujoco.mjtObj
-        joints = _ids(m, obj.mjOBJ_JOINT, [f"{leg}_{j}" for leg in LEG_NAMES for j in JOINTS])
+        joints = model_ids(m, obj.mjOBJ_JOINT, [f"{leg}_{j}" for leg in LEG_NAMES for j in JOINTS])
         self._qadr = m.jnt_qposadr[joints].reshape(4, 3)
         self._vadr = m.jnt_dofadr[joints].reshape(4, 3)
-        self._act = _ids(m, obj.mjOBJ_ACTUATOR,
-                         [f"{leg}_{j}" for leg in LEG_NAMES for j in JOINTS]).reshape(4, 3)
+        self._act = model_ids(m, obj.mjOBJ_ACTUATOR,
+                              [f"{leg}_{j}" for leg in LEG_NAMES for j in JOINTS]).reshape(4, 3)
         self._trunk = mujoco.mj_name2id(m, obj.mjOBJ_BODY, "trunk")
-        self._feet = _ids(m, obj.mjOBJ_BODY, [f"{leg}_foot" for leg in LEG_NAMES])
-        self._foot_sites = _ids(m, obj.mjOBJ_SITE, [f"{leg}_foot" for leg in LEG_NAMES])
-        pieces = {"foot": [""], "knee": [""], "shin": [str(k) for k in range(SHIN_PIECES)]}
-        self._part_geoms = {part: _ids(m, obj.mjOBJ_GEOM, [f"{leg}_{part}{k}" for leg in LEG_NAMES
-                                                           for k in pieces[part]]).reshape(4, -1)
-                            for part in LEG_PARTS}
-        self._trunk_geom = mujoco.mj_name2id(m, obj.mjOBJ_GEOM, "trunk")
-
-        def sensor(name: str) -> np.ndarray:
-            i = mujoco.mj_name2id(m, obj.mjOBJ_SENSOR, name)
-            return m.sensor_adr[i] + np.arange(m.sensor_dim[i])
-
-        self._force_adr = np.stack([sensor(f"{leg}_foot_force") for leg in LEG_NAMES])
-        self._imu_adr = {k: sensor(f"imu_{k}") for k in ("quat", "gyro", "accel")}
+        self._feet = model_ids(m, obj.mjOBJ_BODY, [f"{leg}_foot" for leg in LEG_NAMES])
         self._qd_gain = robot.joint_kd / robot.joint_kp  # [s] see set_targets
         mujoco.mj_forward(self.model, self.data)
 
@@ -366,62 +354,26 @@ class Simulation:
         """World positions (4, 3) [m] of the ball-foot centres."""
         return self.data.xpos[self._feet].copy()
 
+    # --------------------------------------------------------------- sensing
     def foot_forces(self, frame: str = "world") -> np.ndarray:
-        """3-axis foot force sensor readings (4, 3) [N], with sensor noise.
-
-        The force the foot passes into the lower leg: in contact, the ground
-        reaction force on the foot less the foot's own weight and inertia
-        (``foot_mass``, 10 g). ``frame="sensor"``: in the foot's frame (which
-        turns with the shin), as the sensor reports it; ``"world"``: rotated
-        into the world frame, +z up for a foot pressed onto the ground.
-        """
-        if frame not in ("world", "sensor"):
-            raise FootfallError(f"frame must be 'world' or 'sensor', got {frame!r}")
-        # MuJoCo reports the force on the child body (the foot) from its parent; negate it.
-        local = -self.data.sensordata[self._force_adr]
-        local = local + self._rng.normal(0.0, 1.0, (4, 3)) * self.perturbation.force_noise
-        if frame == "sensor":
-            return local
-        rot = self.data.site_xmat[self._foot_sites].reshape(4, 3, 3)
-        return np.einsum("kij,kj->ki", rot, local)
+        """Foot force sensor readings (4, 3) [N], with noise: :meth:`Sensors.foot_forces`."""
+        return self.sensors.foot_forces(frame)
 
     def imu(self) -> dict[str, np.ndarray]:
-        """The trunk IMU, with sensor noise.
-
-        Returns
-        -------
-        dict
-            ``quat`` (4,) orientation (w, x, y, z) of the trunk in the world,
-            ``gyro`` (3,) [rad/s] angular rate and ``accel`` (3,) [m/s^2]
-            specific force (+9.81 up at rest), both in the trunk frame.
-        """
-        p, s = self.perturbation, self.data.sensordata
-        quat = s[self._imu_adr["quat"]].copy()
-        mujoco.mju_quatIntegrate(quat, self._rng.normal(0.0, p.orientation_noise, 3), 1.0)
-        return {"quat": quat,
-                "gyro": s[self._imu_adr["gyro"]] + self._rng.normal(0.0, p.gyro_noise, 3),
-                "accel": s[self._imu_adr["accel"]] + self._rng.normal(0.0, p.accel_noise, 3)}
-
-    def _touching(self) -> np.ndarray:
-        """Whether each geom is in contact now, (ngeom,) bool (robot geoms only touch the terrain)."""
-        touching = np.zeros(self.model.ngeom, dtype=bool)
-        touching[self.data.contact.geom[:self.data.ncon].ravel()] = True
-        return touching
+        """The trunk IMU (quat, gyro [rad/s], accel [m/s^2]), with noise: :meth:`Sensors.imu`."""
+        return self.sensors.imu()
 
     def touches_terrain(self, part: str) -> np.ndarray:
         """Whether each leg's ``part`` ("foot", "knee" or "shin") touches the terrain, (4,) bool."""
-        if part not in LEG_PARTS:
-            raise FootfallError(f"unknown leg part {part!r}; parts are {', '.join(LEG_PARTS)}")
-        return self._touching()[self._part_geoms[part]].any(axis=1)
+        return self.sensors.touches_terrain(part)
 
     def foot_contact(self) -> np.ndarray:
         """Whether each ball foot touches the terrain, (4,) bool (true geometric contact)."""
-        return self.touches_terrain("foot")
+        return self.sensors.touches_terrain("foot")
 
     def trunk_touches_terrain(self) -> bool:
         """Whether the trunk box touches the terrain (a fall, in a walking run)."""
-        # (checked every control period: no per-geom table as in _touching)
-        return bool((self.data.contact.geom[:self.data.ncon] == self._trunk_geom).any())
+        return self.sensors.trunk_touches_terrain()
 
     # --------------------------------------------------------------- rendering
     def render(self, camera: str = "track", width: int = 640, height: int = 480) -> np.ndarray:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import numbers
+from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
@@ -31,6 +32,18 @@ DEFAULT_DIFFICULTY = 0.5  # [-] difficulty of a spec such as "rocky" without ":<
 GENERATOR = "footfall.terrain"  # provenance tag stored in HeightMap.metadata["generator"]
 
 Generator = Callable[[float, np.random.Generator], np.ndarray]
+"""A module generator: ``(difficulty, rng) -> heights``. ``difficulty`` in [0, 1] [-] sets the
+obstacle sizes (each generator's docstring gives its mapping); ``rng`` (numpy.random.Generator)
+is the source of all randomness; ``heights`` (610, 610) [m] are indexed [x, y] in the module
+frame, cell centres at :data:`MODULE_ORIGIN` + index * :data:`MODULE_RESOLUTION`."""
+
+# Rocky modules (see :func:`rocky`).
+_ROCK_SPACING = 0.055  # [m] spacing of the jittered grid of rock seeds
+_ROCK_MERGE_SHARE = 0.3  # [-] share of seeds that join a neighbour's rock
+_ROCK_MAX_HEIGHT = 0.10  # [m] cap on rock heights
+_ROCK_STRIP = 0.01  # [m] bare board at both ends of the module
+_ROCK_HOLLOWS = 14  # mild hollows pressed into the rocks
+_ROCK_MAX_HOLES = 4  # holes drawn (1 + round(3 d) of them are pressed in)
 
 
 # --------------------------------------------------------------------- helpers
@@ -66,25 +79,12 @@ def _window(cx: float, cy: float, radius: float) -> tuple[slice, slice]:
 
 # ------------------------------------------------------------------ generators
 def flat(difficulty: float, rng: np.random.Generator) -> np.ndarray:
-    """A flat module: every height 0.
-
-    Parameters
-    ----------
-    difficulty : float
-        Ignored (a flat module has no obstacles) [-].
-    rng : numpy.random.Generator
-        Ignored.
-
-    Returns
-    -------
-    ndarray, shape (610, 610)
-        Heights [m], all zero.
-    """
+    """A flat module: every height 0 [m] (``difficulty`` and ``rng`` are ignored)."""
     return np.zeros((MODULE_CELLS, MODULE_CELLS))
 
 
 def steps(difficulty: float, rng: np.random.Generator) -> np.ndarray:
-    """Steps up onto a platform and back down to the ground.
+    """Steps up onto a platform and back down to the ground; heights in [0, 0.10] m.
 
     Flat approach, 1-3 steps up (number drawn from the seed), a platform,
     1-3 steps down (drawn independently), flat exit; the module starts and
@@ -98,18 +98,6 @@ def steps(difficulty: float, rng: np.random.Generator) -> np.ndarray:
       unequal height (each 0.6-1.4 x the mean riser).
     * tread depth U(0.05, 0.07) m, flat approach/exit U(0.07, 0.10) m,
       edge yaw U(-0.08, 0.08) rad: independent of d.
-
-    Parameters
-    ----------
-    difficulty : float
-        Difficulty in [0, 1] [-].
-    rng : numpy.random.Generator
-        Source of all randomness.
-
-    Returns
-    -------
-    ndarray, shape (610, 610)
-        Heights [m], in [0, 0.10].
     """
     x, y = _cell_centres()
     n_up, n_down = (int(n) for n in rng.integers(1, 4, size=2))
@@ -133,7 +121,7 @@ def steps(difficulty: float, rng: np.random.Generator) -> np.ndarray:
 
 
 def barrier(difficulty: float, rng: np.random.Generator) -> np.ndarray:
-    """Bars lying across the path, with 45-degree chamfered top edges.
+    """Bars lying across the path, with 45-degree chamfered top edges; heights in [0, 0.10] m.
 
     1-3 bars (number drawn from the seed), each in its own slot of the middle
     of the module ``x in [0.12, 0.49]`` m, slightly yawed; the module starts
@@ -145,18 +133,6 @@ def barrier(difficulty: float, rng: np.random.Generator) -> np.ndarray:
       up to 0.10 m at d = 1.
     * bar width U(0.02, 0.08) m, yaw U(-0.05, 0.05) rad, chamfer
       min(3 mm, width / 4, height / 2): independent of d.
-
-    Parameters
-    ----------
-    difficulty : float
-        Difficulty in [0, 1] [-].
-    rng : numpy.random.Generator
-        Source of all randomness.
-
-    Returns
-    -------
-    ndarray, shape (610, 610)
-        Heights [m], in [0, 0.10].
     """
     x, y = _cell_centres()
     n = int(rng.integers(1, 4))
@@ -178,7 +154,7 @@ def barrier(difficulty: float, rng: np.random.Generator) -> np.ndarray:
 
 
 def slope(difficulty: float, rng: np.random.Generator) -> np.ndarray:
-    """A ramp up, a plateau and a ramp down, tilted sideways.
+    """A ramp up, a plateau and a ramp down, tilted sideways; heights in [0, 0.102] m.
 
     The profile along x rises linearly from z = 0, holds, and falls back to
     z = 0 before the end of the module. A lateral tilt drawn from the seed
@@ -193,18 +169,6 @@ def slope(difficulty: float, rng: np.random.Generator) -> np.ndarray:
     * ramp angles ``(8 + 17 d) deg * U(0.8, 1.0)`` each: 6-8 deg at d = 0,
       20-25 deg (0.35-0.44 rad) at d = 1.
     * flat approach/exit U(0.04, 0.08) m: independent of d.
-
-    Parameters
-    ----------
-    difficulty : float
-        Difficulty in [0, 1] [-].
-    rng : numpy.random.Generator
-        Source of all randomness.
-
-    Returns
-    -------
-    ndarray, shape (610, 610)
-        Heights [m], in [0, 0.102].
     """
     x, y = _cell_centres()
     height = _lerp(difficulty, 0.015, 0.075)  # [m]
@@ -219,7 +183,7 @@ def slope(difficulty: float, rng: np.random.Generator) -> np.ndarray:
 
 
 def logs(difficulty: float, rng: np.random.Generator) -> np.ndarray:
-    """Half-cylinder logs lying across the path at slight random angles.
+    """Half-cylinder logs lying across the path at slight random angles; heights in [0, 0.09] m.
 
     1-3 logs (number drawn from the seed, reduced so that the logs fit with
     a gap of at least 3 cm), each centred in its own slot of
@@ -230,18 +194,6 @@ def logs(difficulty: float, rng: np.random.Generator) -> np.ndarray:
     * log radius = height ``(0.015 + 0.075 d) * U(0.8, 1.0)`` [m]:
       0.012-0.015 m at d = 0, up to 0.09 m at d = 1 (then at most 2 logs).
     * yaw U(-0.1, 0.1) rad: independent of d.
-
-    Parameters
-    ----------
-    difficulty : float
-        Difficulty in [0, 1] [-].
-    rng : numpy.random.Generator
-        Source of all randomness.
-
-    Returns
-    -------
-    ndarray, shape (610, 610)
-        Heights [m], in [0, 0.09].
     """
     x, y = _cell_centres()
     n_drawn = int(rng.integers(1, 4))
@@ -262,7 +214,7 @@ def logs(difficulty: float, rng: np.random.Generator) -> np.ndarray:
 
 
 def rocky(difficulty: float, rng: np.random.Generator) -> np.ndarray:
-    """A bed of irregular rocks with slanted faces, cracks, holes and hollows.
+    """A bed of irregular rocks with slanted faces, cracks, holes, hollows; heights in [0, 0.10] m.
 
     Rocks are the Voronoi cells (found with :class:`scipy.spatial.cKDTree`)
     of a jittered 5.5 cm grid of seed points plus 40 % more seeds scattered
@@ -291,25 +243,35 @@ def rocky(difficulty: float, rng: np.random.Generator) -> np.ndarray:
       ``0.0002 + 0.0004 d`` [m].
     * rock size, crack width, fillets, hole and hollow sizes: independent
       of d.
-
-    Parameters
-    ----------
-    difficulty : float
-        Difficulty in [0, 1] [-].
-    rng : numpy.random.Generator
-        Source of all randomness.
-
-    Returns
-    -------
-    ndarray, shape (610, 610)
-        Heights [m], in [0, 0.10].
     """
     x, y = _cell_centres()
-    spacing = 0.055  # [m] spacing of the jittered grid of rock seeds
-    merge_share = 0.3  # [-] share of seeds that join a neighbour's rock
-    max_height = 0.10  # [m] cap on rock heights
-    strip = 0.01  # [m] bare board at both ends of the module
+    rocks = _draw_rocks(difficulty, rng)
+    points = np.stack([a.ravel() for a in np.broadcast_arrays(x, y)], axis=1)  # (610 * 610, 2)
+    z = _rock_bed(rocks, points).reshape(MODULE_CELLS, MODULE_CELLS)
+    _press_hollows(z, x, y, rng)
+    _press_holes(z, x, y, difficulty, rng)
+    _add_texture(z, difficulty, rng)
+    on_board = (_from_ends(points) < 0.0).reshape(MODULE_CELLS, MODULE_CELLS)
+    return np.where(on_board, 0.0, np.clip(z, 0.0, _ROCK_MAX_HEIGHT))
 
+
+@dataclass(frozen=True, eq=False)
+class _Rocks:
+    """The rocks of a rocky module, one entry per seed point; a rock is the seeds that name it."""
+
+    seeds: np.ndarray  # (n, 2) [m] seed points: a jittered grid, then the scattered extra seeds
+    tree: cKDTree  # of the seeds
+    rock_of: np.ndarray  # (n,) the seed whose rock each seed's Voronoi cell belongs to
+    base: np.ndarray  # (n,) [m] height of the rock's face at its seed point
+    gradient: np.ndarray  # (n, 2) [-] slope of the face along x and y
+    fillet: np.ndarray  # (n,) [m] radius of the rounded edges
+    crack: np.ndarray  # (n,) [m] half-width of the crack around the rock
+    fill: np.ndarray  # (n,) [-] crack floor as a fraction of the rock height
+
+
+def _draw_rocks(difficulty: float, rng: np.random.Generator) -> _Rocks:
+    """The rocks' seed points, which rock each joins, and every rock's face (see :func:`rocky`)."""
+    spacing = _ROCK_SPACING
     # Seeds: a jittered grid reaching one spacing beyond the module, plus
     # scattered extra seeds that split rocks into smaller ones.
     gx = np.arange(-spacing, MODULE_SIZE + 1.5 * spacing, spacing)
@@ -323,21 +285,29 @@ def rocky(difficulty: float, rng: np.random.Generator) -> np.ndarray:
     # Rocks: most seeds make their own rock; some join their nearest neighbour's
     # rock, making larger, elongated rocks.
     nearest = tree.query(seeds, k=2)[1][:, 1]
-    joins = rng.uniform(0.0, 1.0, n_seeds) < merge_share
+    joins = rng.uniform(0.0, 1.0, n_seeds) < _ROCK_MERGE_SHARE
     rock_of = np.where(joins & ~joins[nearest], nearest, np.arange(n_seeds))
 
     base = 0.008 + _lerp(difficulty, 0.012, 0.057) * rng.uniform(0.0, 1.0, n_seeds)  # [m]
     tilt = np.radians(_lerp(difficulty, 4.0, 30.0)) * np.sqrt(rng.uniform(0.0, 1.0, n_seeds))
     heading = rng.uniform(0.0, 2 * np.pi, n_seeds)  # [rad] direction of steepest ascent
     gradient = np.tan(tilt)[:, None] * np.stack([np.cos(heading), np.sin(heading)], axis=1)
-    fillet = rng.uniform(0.004, 0.010, n_seeds)  # [m] radius of the rounded edges
-    crack = rng.uniform(0.0005, 0.0015, n_seeds)  # [m] half-width of the crack around a rock
-    fill = rng.uniform(0.0, 0.4, n_seeds)  # [-] crack floor as a fraction of the rock height
+    fillet = rng.uniform(0.004, 0.010, n_seeds)
+    crack = rng.uniform(0.0005, 0.0015, n_seeds)
+    fill = rng.uniform(0.0, 0.4, n_seeds)
+    return _Rocks(seeds, tree, rock_of, base, gradient, fillet, crack, fill)
 
+
+def _from_ends(points: np.ndarray) -> np.ndarray:
+    """Distance [m] of points (n, 2) [m] from the bare strips at the x ends (< 0: on a strip)."""
+    return np.minimum(points[:, 0], MODULE_SIZE - points[:, 0]) - _ROCK_STRIP
+
+
+def _rock_bed(rocks: _Rocks, points: np.ndarray) -> np.ndarray:
+    """Height [m] (n,) of the rock faces at points (n, 2) [m], with rounded edges and cracks."""
     # The three nearest seeds of every cell.
-    gx2, gy2 = np.broadcast_arrays(x, y)
-    points = np.stack([gx2.ravel(), gy2.ravel()], axis=1)
-    dist, idx = tree.query(points, k=3)
+    dist, idx = rocks.tree.query(points, k=3)
+    rock_of, seeds = rocks.rock_of, rocks.seeds
     own = rock_of[idx[:, 0]]
     # Distance to the rock's edge: the nearest bisector between the nearest
     # seed and a neighbour seed of another rock (a border inside a rock is none).
@@ -351,35 +321,41 @@ def rocky(difficulty: float, rng: np.random.Generator) -> np.ndarray:
         other = np.where(closer, rock_of[idx[:, j]], other)
     border = bisector  # [m], inf where the nearest seeds all belong to one rock
 
-    def face(rock: np.ndarray) -> np.ndarray:
-        """Height [m] of each cell on the plane of ``rock`` (one rock index per cell)."""
-        offset = points - seeds[rock]
-        return np.clip(base[rock] + np.einsum("ij,ij->i", gradient[rock], offset), 0.0, max_height)
-
-    top = face(own)
-    end_distance = np.minimum(points[:, 0], MODULE_SIZE - points[:, 0]) - strip  # [m]
-    edge = np.clip(np.minimum(border, end_distance), 0.0, None)  # [m] to the rock's edge
-    r = fillet[own]
+    top = _face(rocks, points, own)
+    edge = np.clip(np.minimum(border, _from_ends(points)), 0.0, None)  # [m] to the rock's edge
+    r = rocks.fillet[own]
     t = np.clip(1.0 - edge / r, 0.0, 1.0)
     drop = r * (1.0 - np.sqrt(1.0 - t * t))  # quarter-circle fillet: r at the edge, 0 inside
     z = top - np.minimum(drop, 0.7 * top)
-    in_crack = border < crack[own]
-    floor = fill[own] * np.minimum(top, face(other))
-    z = np.where(in_crack, np.minimum(z, floor), z).reshape(MODULE_CELLS, MODULE_CELLS)
+    in_crack = border < rocks.crack[own]
+    floor = rocks.fill[own] * np.minimum(top, _face(rocks, points, other))
+    return np.where(in_crack, np.minimum(z, floor), z)
 
-    # Mild hollows: shallow Gaussian dents.
-    n_hollows = 14
+
+def _face(rocks: _Rocks, points: np.ndarray, rock: np.ndarray) -> np.ndarray:
+    """Height [m] of each point (n, 2) [m] on the face of its rock, ``rock`` (n,) [index]."""
+    offset = points - rocks.seeds[rock]
+    return np.clip(rocks.base[rock] + np.einsum("ij,ij->i", rocks.gradient[rock], offset), 0.0,
+                   _ROCK_MAX_HEIGHT)
+
+
+def _press_hollows(z: np.ndarray, x: np.ndarray, y: np.ndarray, rng: np.random.Generator) -> None:
+    """Press mild hollows, shallow Gaussian dents, into heights ``z`` (610, 610) [m] in place."""
+    n_hollows = _ROCK_HOLLOWS
     hollow_x = rng.uniform(0.0, MODULE_SIZE, n_hollows)
     hollow_y = rng.uniform(-0.5 * MODULE_SIZE, 0.5 * MODULE_SIZE, n_hollows)
     hollow_depth = rng.uniform(0.002, 0.005, n_hollows)  # [m]
     hollow_sigma = rng.uniform(0.005, 0.015, n_hollows)  # [m]
-    for cx, cy, a, s in zip(hollow_x, hollow_y, hollow_depth, hollow_sigma):
+    for cx, cy, a, s in zip(hollow_x, hollow_y, hollow_depth, hollow_sigma):  # 14 small windows
         wi, wj = _window(cx, cy, 3 * s)
         rho2 = (x[wi] - cx) ** 2 + (y[:, wj] - cy) ** 2
         z[wi, wj] -= a * np.exp(-rho2 / (2 * s * s))
 
-    # Small holes: flat bottom, steep conical walls.
-    max_holes = 4
+
+def _press_holes(z: np.ndarray, x: np.ndarray, y: np.ndarray, difficulty: float,
+                 rng: np.random.Generator) -> None:
+    """Press small holes (flat bottom, steep conical walls) into ``z`` (610, 610) [m] in place."""
+    max_holes, strip = _ROCK_MAX_HOLES, _ROCK_STRIP
     hole_x = rng.uniform(strip + 0.03, MODULE_SIZE - strip - 0.03, max_holes)
     hole_y = rng.uniform(-0.5 * MODULE_SIZE + 0.03, 0.5 * MODULE_SIZE - 0.03, max_holes)
     hole_radius = rng.uniform(0.006, 0.012, max_holes)  # [m]
@@ -390,14 +366,13 @@ def rocky(difficulty: float, rng: np.random.Generator) -> np.ndarray:
         rho = np.sqrt((x[wi] - cx) ** 2 + (y[:, wj] - cy) ** 2)
         z[wi, wj] -= depth * np.clip((rad - rho) / (0.4 * rad), 0.0, 1.0)
 
-    # Fine texture: grain of a few cells plus gentle waviness of the faces.
+
+def _add_texture(z: np.ndarray, difficulty: float, rng: np.random.Generator) -> None:
+    """Add a fine texture to ``z`` [m] in place: grain of a few cells plus gentle waviness."""
     amplitude = _lerp(difficulty, 0.0002, 0.0006)  # [m] of the waviness; grain is half
     grain = gaussian_filter(rng.standard_normal(z.shape), sigma=1.5)
     wave = gaussian_filter(rng.standard_normal(z.shape), sigma=8.0)
     z += amplitude * (0.5 * grain / grain.std() + wave / wave.std())
-
-    on_board = (end_distance < 0.0).reshape(MODULE_CELLS, MODULE_CELLS)
-    return np.where(on_board, 0.0, np.clip(z, 0.0, max_height))
 
 
 KINDS: dict[str, Generator] = {

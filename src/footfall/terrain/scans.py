@@ -4,24 +4,31 @@ The bridge from the outside world (depth-camera clouds, DEM exports, 16-bit
 height images, raw arrays) to footfall's one terrain type. Every problem with
 an input file is reported as a :class:`FootfallError` naming that file.
 
-Supported suffixes (case-insensitive), see :func:`import_terrain`:
+Supported suffixes (case-insensitive), :data:`SUFFIXES`, read by :func:`import_terrain`:
 
 ``.npz``
-    A footfall height map written by :meth:`HeightMap.save`; carries its own
-    geometry, so none of the geometry/scaling arguments may be given.
+    A footfall height map written by :meth:`HeightMap.save`, read by
+    :meth:`HeightMap.load`; carries its own geometry and frame, so none of
+    the geometry/scaling arguments may be given.
 ``.npy``
-    A 2-D numeric array indexed ``[x, y]`` (footfall's own convention).
+    A 2-D integer or float array, read without pickle, indexed ``[x, y]``
+    exactly like :attr:`HeightMap.heights` (footfall's own convention).
 ``.png``
-    A 16-bit greyscale image; rows are y (row 0 at the top = largest y),
-    columns are x.
+    A 16-bit greyscale PNG (Pillow mode ``I;16``). Image rows are y with
+    row 0 at the top (largest y), columns are x, so
+    ``heights = img[::-1, :].T * z_scale``. 8-bit, palette and colour
+    PNGs are rejected: 256 levels are too coarse for footholds and such
+    images are usually renderings of terrain rather than elevation data.
 ``.ply``
-    A point cloud (ASCII or binary); the ``vertex`` element's x, y, z.
+    A point cloud, ASCII or binary PLY read with plyfile: the ``vertex``
+    element's scalar ``x``, ``y``, ``z`` properties; other elements are ignored.
 ``.xyz``
-    A text point cloud; the first three whitespace- or comma-separated
-    columns are x, y, z; lines starting with ``#`` are comments.
+    A text point cloud: UTF-8, one point per line, whitespace- and/or
+    comma-separated; the first three columns are x, y, z [m], further
+    columns are ignored, ``#`` starts a comment.
 
-Point clouds are rasterised keeping the highest point of each cell, see
-:func:`rasterize_points`.
+Point clouds are rasterised by :func:`rasterize_points` (the highest point
+per cell, empty cells NaN, points with non-finite coordinates dropped).
 """
 
 from __future__ import annotations
@@ -419,29 +426,7 @@ def import_terrain(path: str | os.PathLike, *, resolution: float | None = None,
 
     Notes
     -----
-    Formats:
-
-    ``.npz``
-        :meth:`HeightMap.load`, geometry and frame from the file.
-    ``.npy``
-        A 2-D integer or float array, read without pickle, indexed
-        ``[x, y]`` exactly like :attr:`HeightMap.heights`.
-    ``.png``
-        A 16-bit greyscale PNG (Pillow mode ``I;16``). Image rows are y with
-        row 0 at the top (largest y), columns are x, so
-        ``heights = img[::-1, :].T * z_scale``. 8-bit, palette and colour
-        PNGs are rejected: 256 levels are too coarse for footholds and such
-        images are usually renderings of terrain rather than elevation data.
-    ``.ply``
-        ASCII or binary PLY read with plyfile: the ``vertex`` element's
-        scalar ``x``, ``y``, ``z`` properties; other elements are ignored.
-    ``.xyz``
-        UTF-8 text, one point per line, whitespace- and/or comma-separated;
-        the first three columns are x, y, z [m], further columns are
-        ignored, ``#`` starts a comment.
-
-    Point clouds are rasterised by :func:`rasterize_points` (highest point
-    per cell, empty cells NaN, points with non-finite coordinates dropped).
+    The formats are described in the module's docstring (:mod:`footfall.terrain.scans`).
 
     Raises
     ------

@@ -284,3 +284,42 @@ def test_save_relief_writes_a_png_atomically(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["relief.png"]  # no temp file left
     with pytest.raises(FootfallError, match="does not exist"):
         save_relief(hmap, tmp_path / "missing" / "relief.png")
+
+
+# ----------------------------------------------------------- a kind of one's own
+def _craters(difficulty: float, rng: np.random.Generator) -> np.ndarray:
+    """A toy kind: round pits up to 1 + 3 d cm deep on a 2 cm plinth, flat edges."""
+    x = (np.arange(610) + 0.5) / 1000.0
+    xx, yy = np.meshgrid(x, x, indexing="ij")
+    z = np.where((xx > 0.1) & (xx < 0.51), 0.02, 0.0)
+    for cx, cy in rng.uniform(0.15, 0.46, size=(6, 2)):
+        pit = np.hypot(xx - cx, yy - cy) < 0.03
+        z[pit] = 0.02 - (0.01 + 0.03 * difficulty)
+    return np.clip(z, 0.0, None)
+
+
+def test_a_registered_kind_makes_modules_boards_and_specs_without_touching_the_others(tmp_path):
+    from footfall.cli import main
+    from footfall.terrain import register_kind, unregister_kind
+
+    register_kind("craters", _craters)
+    try:
+        a, b = make_module("craters", 0.6, 5), make_module("craters", 0.6, 5)
+        assert a.content_hash() == b.content_hash() and a.metadata["modules"][0]["kind"] == \
+            "craters"
+        assert a.heights.shape == (610, 610) and np.isfinite(a.heights).all()
+        assert np.allclose(a.heights[[0, -1], :], 0.0, atol=EDGE_TOLERANCE)
+        assert parse_module_spec("craters:0.3") == ("craters", 0.3)
+        board = make_board([("craters", 0.3), ("rocky", 0.5)], seed=2)
+        assert [m["kind"] for m in board.metadata["modules"]] == ["flat", "craters", "rocky",
+                                                                   "flat"]
+        assert main(["terrain", "make", "craters", "--seed", "1", "-o",
+                     str(tmp_path / "c.npz")]) == 0
+        with pytest.raises(ValueError, match="already registered"):
+            register_kind("craters", lambda d, rng: np.zeros((610, 610)))
+    finally:
+        unregister_kind("craters")
+    with pytest.raises(FootfallError, match="unknown terrain module kind 'craters'"):
+        make_module("craters", 0.5, 1)
+    unregister_kind("rocky")  # the paper's kinds cannot be removed
+    assert "rocky" in KINDS

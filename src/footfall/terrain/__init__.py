@@ -8,7 +8,9 @@ from footfall.terrain.modules import (
     make_board,
     make_module,
     parse_module_spec,
+    register_kind,
+    unregister_kind,
 )
 
 __all__ = ["KINDS", "MODULE_CELLS", "MODULE_RESOLUTION", "MODULE_SIZE", "make_board",
-           "make_module", "parse_module_spec"]
+           "make_module", "parse_module_spec", "register_kind", "unregister_kind"]

@@ -384,6 +384,32 @@ KINDS: dict[str, Generator] = {
     "rocky": rocky,
 }
 """Terrain module kinds: name -> generator ``(difficulty, rng) -> heights (610, 610) [m]``."""
+BUILTIN_KINDS = tuple(KINDS)  # the paper's module kinds (§IV-A)
+
+
+def register_kind(name: str, generator: Generator) -> Generator:
+    """Make a terrain module kind available by name (to modules, boards and the CLI).
+
+    ``generator(difficulty, rng)`` returns the module's heights, shape
+    (MODULE_CELLS, MODULE_CELLS) [m], for a difficulty in [0, 1], drawing
+    every random number from ``rng``; the edges that meet a neighbouring
+    module should be at height 0. Returns the generator (usable as a decorator
+    with :func:`functools.partial`).
+    """
+    if not isinstance(name, str) or not name.isidentifier():
+        raise ValueError(f"a terrain kind needs a name like 'craters', got {name!r}")
+    if name in KINDS and KINDS[name] is not generator:
+        raise ValueError(f"terrain kind {name!r} is already registered")
+    if not callable(generator):
+        raise ValueError(f"the generator of terrain kind {name!r} must be callable")
+    KINDS[name] = generator
+    return generator
+
+
+def unregister_kind(name: str) -> None:
+    """Forget a kind registered with :func:`register_kind` (the built-in ones stay)."""
+    if name not in BUILTIN_KINDS:
+        KINDS.pop(name, None)
 
 
 # ------------------------------------------------------------------ public API

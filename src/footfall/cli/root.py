@@ -18,6 +18,7 @@ from footfall.cli.learning import learn, rank_eval_cmd
 from footfall.cli.terrain import terrain
 from footfall.cli.walking import walk_cmd, walk_many_cmd
 from footfall.core.errors import FootfallError
+from footfall.core.plugins import load_plugins
 
 EXIT_USER_ERROR = 2  # a bad file or argument
 EXIT_INTERRUPTED = 130  # Ctrl-C, as a shell reports SIGINT
@@ -40,6 +41,7 @@ def main(argv: list[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in args
     try:
+        load_plugins()  # their learners, feature sets and terrain kinds become choices
         cli.main(args=args, prog_name="footfall", standalone_mode=False)
     except FootfallError as exc:
         if debug:

@@ -1,4 +1,4 @@
-"""The kinematic walker: robot states for demonstrations until the simulator exists.
+"""The kinematic walker: the synthetic expert's demonstrations without a simulator.
 
 The body glides along a straight line across a board in the crawl gait while
 an expert picks each swing leg's next foothold from the candidate set F; each

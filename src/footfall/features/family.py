@@ -25,6 +25,7 @@ import numpy as np
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
+from footfall.core.plugins import load_plugins
 from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState
 from footfall.features.config import FeatureConfig
@@ -266,5 +267,8 @@ PAPER_FEATURE_SETS = tuple(_BUILTIN_SETS)  # the sets the paper's tables compare
 
 
 def _load_builtin() -> None:
-    """Import the built-in families so that they register (they import this module)."""
+    """Import the built-in families so that they register (they import this module), then
+    the plugins (:mod:`footfall.core.plugins`)."""
     from footfall.features import terrain_features, templates, pose_features  # noqa: F401, I001
+
+    load_plugins()

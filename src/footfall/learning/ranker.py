@@ -26,6 +26,7 @@ from sklearn.svm import LinearSVC
 from sklearn.utils.validation import check_is_fitted
 
 from footfall.core.errors import FootfallError
+from footfall.core.plugins import load_plugins
 
 SELECTIONS = ("1se", "min")  # lambda: one-standard-error rule, or the smallest CV error
 L2_LOG_C = (-6.0, 0.0)  # log10 of the smallest and largest C on the L2 / SVM path
@@ -64,7 +65,8 @@ def register_learner(learner: Learner) -> Learner:
 
 
 def get_learner(name: str) -> Learner:
-    """The registered learner called ``name``."""
+    """The registered learner called ``name`` (plugins included: :mod:`footfall.core.plugins`)."""
+    load_plugins()
     if name not in LEARNERS:
         raise FootfallError(f"unknown learner {name!r}; use one of {', '.join(LEARNERS)}")
     return LEARNERS[name]

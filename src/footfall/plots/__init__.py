@@ -1,0 +1,1 @@
+"""Pictures: shaded relief of height maps, reward and feature maps, kept templates."""

@@ -1,4 +1,4 @@
-"""The main job until the learner and the simulator land: a board, scored densely, drawn.
+"""``footfall demo``: a board scored densely with the hand-tuned reward, drawn.
 
 Builds a flat | rocky | rocky | flat board, scores every 5 mm lattice point
 with the hand-tuned default reward, computes dense maps of a few terrain

@@ -22,6 +22,7 @@ from scipy.spatial import cKDTree
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
+from footfall.core.plugins import load_plugins
 
 MODULE_SIZE = 0.61  # [m] side length of a square terrain module (61 cm)
 MODULE_RESOLUTION = 0.001  # [m/cell] scan resolution (1 mm)
@@ -414,6 +415,7 @@ def unregister_kind(name: str) -> None:
 
 # ------------------------------------------------------------------ public API
 def _check_kind(kind: object) -> str:
+    load_plugins()  # a kind may come from a plugin (footfall.core.plugins)
     if not isinstance(kind, str) or kind not in KINDS:
         raise FootfallError(f"unknown terrain module kind {kind!r}; "
                             f"known kinds: {', '.join(KINDS)}")

@@ -1,0 +1,78 @@
+"""Plugins: a package's parts, named by an entry point, reach every registry and the CLI."""
+
+import importlib.metadata
+import sys
+
+import numpy as np
+import pytest
+
+from cli_helpers import assert_user_error, run
+from footfall.core import plugins
+from footfall.core.errors import FootfallError
+from footfall.learning.ranker import LEARNERS, get_learner
+from footfall.terrain import KINDS, make_module, unregister_kind
+
+PLUGIN = '''
+import numpy as np
+from sklearn.linear_model import RidgeClassifier
+
+from footfall.learning.ranker import Learner, register_learner
+from footfall.terrain import register_kind
+
+
+def table(difficulty, rng):
+    """A 2 cm table in the middle of the module, its edges at 0."""
+    z = np.zeros((610, 610))
+    z[200:410, 200:410] = 0.02
+    return z
+
+
+register_kind("table", table)
+register_learner(Learner("plugin-ridge", "ridge (a plugin's)",
+                         lambda C, tol, max_iter: RidgeClassifier(alpha=1 / C,
+                                                                  fit_intercept=False),
+                         lambda pairs, labels, n: np.logspace(-2, 1, n), logistic=False))
+'''
+
+
+@pytest.fixture
+def plugin(tmp_path, monkeypatch):
+    """A plugin module on sys.path, named by a fake entry point; forgotten afterwards."""
+    (tmp_path / "footfall_test_parts.py").write_text(PLUGIN)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    entry = importlib.metadata.EntryPoint("table-parts", "footfall_test_parts", plugins.GROUP)
+    monkeypatch.setattr(plugins, "_entry_points", lambda: [entry])
+    monkeypatch.setattr(plugins, "_done", False)
+    monkeypatch.setattr(plugins, "_loaded", [])
+    yield
+    unregister_kind("table")
+    LEARNERS.pop("plugin-ridge", None)
+    sys.modules.pop("footfall_test_parts", None)
+
+
+def test_a_plugin_registers_its_parts_before_any_registry_answers(plugin):
+    assert "table" not in KINDS
+    module = make_module("table", 0.5, 0)  # the terrain registry loads the plugins first
+    assert np.max(module.heights) == pytest.approx(0.02)
+    assert get_learner("plugin-ridge").name == "plugin-ridge"
+    assert plugins.load_plugins() == ["table-parts"]  # imported once
+
+
+def test_the_command_line_offers_a_plugins_parts(plugin, tmp_path, capsys):
+    code, out, _ = run(capsys, "terrain", "make", "table", "--seed", "1", "-o",
+                       tmp_path / "t.npz", "--json")
+    assert code == 0 and '"table"' in out
+
+
+def test_a_broken_plugin_is_one_line_naming_it(tmp_path, monkeypatch, capsys):
+    (tmp_path / "footfall_broken_parts.py").write_text("raise RuntimeError('no GPU here')\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    entry = importlib.metadata.EntryPoint("broken", "footfall_broken_parts", plugins.GROUP)
+    monkeypatch.setattr(plugins, "_entry_points", lambda: [entry])
+    monkeypatch.setattr(plugins, "_done", False)
+    monkeypatch.setattr(plugins, "_loaded", [])
+    with pytest.raises(FootfallError, match="plugin 'broken' .* failed to load"):
+        plugins.load_plugins()
+    monkeypatch.setattr(plugins, "_done", False)
+    code, _, err = run(capsys, "terrain", "make", "flat", "--seed", "1", "-o", tmp_path / "f.npz")
+    assert_user_error(code, err, "plugin 'broken'")

@@ -118,7 +118,20 @@ def _intro(results: dict) -> list[str]:
             "Kalakrishnan et al., *Learning Locomotion over Rough Terrain using Terrain "
             "Templates* (IROS 2009), §II-B and §V, on the simulated LittleDog. "
             f"Seed {c['seed']}; every setting in `config.json`, every number in `results.json`, "
-            f"every run and demonstration in `reproduce.sqlite`.", ""]
+            f"every run and demonstration in `reproduce.sqlite`.", ""] + _boards(results)
+
+
+def _boards(results: dict) -> list[str]:
+    """The boards and their seeds (drawn from the reproduction's named streams), to remake one."""
+    boards = results.get("boards", {})
+    if not boards:
+        return []
+    lines = ["| board | modules (kind difficulty) | seed (`footfall terrain board ... --seed`) |",
+             "| --- | --- | --- |"]
+    for name, b in boards.items():
+        modules = ", ".join(f"{kind} {d:g}" for kind, d in b["modules"])
+        lines.append(f"| {name} | {modules} | {b['seed']} |")
+    return lines + [""]
 
 
 def _demonstration_rounds(results: dict) -> list[str]:

@@ -13,16 +13,17 @@ import os
 from collections import Counter
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
 from footfall.core.errors import FootfallError
-from footfall.core.files import plain_json, writable_path
+from footfall.core.files import writable_path
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState, nominal_state
 from footfall.data.store import Demonstration, DemoStore
+from footfall.expert.protocol import Expert, expert_settings
 from footfall.features.candidates import DEFAULT_SPACING, reachable_footholds
 from footfall.features.config import FeatureConfig
 
@@ -31,36 +32,6 @@ EDGE_MARGIN = 0.15  # [m] the hips stay this far inside the board's x ends (star
 PATH_OFFSETS = (-0.15, -0.05, 0.05, 0.15)  # [m] lateral paths, relative to the board's centre
 MAX_PATH_ROUNDS = 6  # rounds of ever denser lateral paths before collect gives up
 PATH_HALF_WIDTH = 0.15  # [m] the lateral paths cover the board's centre +- this
-
-
-class Expert(Protocol):
-    """What the walker needs of an expert (e.g. :class:`footfall.expert.synthetic.SyntheticExpert`)."""
-
-    def choose(self, hmap: HeightMap, state: RobotState, candidates: np.ndarray,
-               rng: np.random.Generator) -> int:
-        """Index of the chosen foothold in ``candidates`` (n, 3) [m]."""
-
-    def values(self, hmap: HeightMap, state: RobotState, candidates: np.ndarray) -> np.ndarray:
-        """Noiseless value of each candidate, shape (n,), higher is better."""
-
-
-def expert_settings(expert: Any) -> dict:
-    """JSON settings of an expert, recorded with each demonstration it makes.
-
-    ``{"class": "<module>.<name>", "config": ...}``: the config is
-    ``expert.to_dict()`` if the expert has it, else its ``config``
-    attribute (through ``to_dict()`` or as a dataclass) if it has one.
-    """
-    cls = type(expert)
-    settings: dict[str, Any] = {"class": f"{cls.__module__}.{cls.__qualname__}"}
-    to_dict = getattr(expert, "to_dict", None)
-    config = getattr(expert, "config", None)
-    if callable(to_dict):
-        settings["config"] = to_dict()
-    elif config is not None:
-        config_to_dict = getattr(config, "to_dict", None)
-        settings["config"] = config_to_dict() if callable(config_to_dict) else config
-    return plain_json(settings, nonfinite="keep", other="repr")
 
 
 def _check_rng(rng: Any) -> np.random.Generator:

@@ -20,7 +20,7 @@ from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.data.runlog import RunRecord
 from footfall.data.store import Demonstration
-from footfall.expert.collect import Expert, expert_settings
+from footfall.expert.protocol import Expert, expert_settings
 
 DEFAULT_MARGIN = 1.0  # [value units; 1 unit = 1 cm of progress for the synthetic expert] a choice
 # this much worse than the expert's best is corrected: about the value spread of footholds a few

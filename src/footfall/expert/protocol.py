@@ -1,0 +1,46 @@
+"""What footfall asks of an expert, and what it records about one with each demonstration.
+
+An expert -- the synthetic one (:class:`footfall.expert.synthetic.SyntheticExpert`),
+or any other -- values the candidate set F of a robot state and chooses one
+foothold; the kinematic walker and the corrections of run logs need nothing more.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Protocol
+
+import numpy as np
+
+from footfall.core.files import plain_json
+from footfall.core.heightmap import HeightMap
+from footfall.core.state import RobotState
+
+
+class Expert(Protocol):
+    """An expert: values and a choice over the candidate set F of a state."""
+
+    def choose(self, hmap: HeightMap, state: RobotState, candidates: np.ndarray,
+               rng: np.random.Generator) -> int:
+        """Index of the chosen foothold in ``candidates`` (n, 3) [m]."""
+
+    def values(self, hmap: HeightMap, state: RobotState, candidates: np.ndarray) -> np.ndarray:
+        """Noiseless value of each candidate, shape (n,), higher is better."""
+
+
+def expert_settings(expert: Any) -> dict:
+    """JSON settings of an expert, recorded with each demonstration it makes.
+
+    ``{"class": "<module>.<name>", "config": ...}``: the config is
+    ``expert.to_dict()`` if the expert has it, else its ``config``
+    attribute (through ``to_dict()`` or as a dataclass) if it has one.
+    """
+    cls = type(expert)
+    settings: dict[str, Any] = {"class": f"{cls.__module__}.{cls.__qualname__}"}
+    to_dict = getattr(expert, "to_dict", None)
+    config = getattr(expert, "config", None)
+    if callable(to_dict):
+        settings["config"] = to_dict()
+    elif config is not None:
+        config_to_dict = getattr(config, "to_dict", None)
+        settings["config"] = config_to_dict() if callable(config_to_dict) else config
+    return plain_json(settings, nonfinite="keep", other="repr")

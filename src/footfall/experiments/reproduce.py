@@ -245,12 +245,9 @@ class Workspace:
     config: ReproduceConfig
     paths: dict[str, Path]  # board name -> height map file
     maps: dict[str, HeightMap]  # board name -> height map
+    by_hash: dict[str, HeightMap]  # the boards by content hash (how runs and demonstrations
+    # name their terrain), hashed once
     streams: SeedStreams
-
-    @property
-    def by_hash(self) -> dict[str, HeightMap]:
-        """The boards by content hash (how runs and demonstrations name their terrain)."""
-        return {m.content_hash(): m for m in self.maps.values()}
 
     def model_path(self, name: str) -> Path:
         """Where the model ``name`` (a round's or a final function's) is kept."""
@@ -270,7 +267,8 @@ def open_workspace(out: str | os.PathLike, config: ReproduceConfig) -> Workspace
         raise FootfallError(f"{out} holds a reproduction with other settings; use another --out")
     write_text_atomic(settings_path, mine)
     paths = _make_terrain(out, config)
-    return Workspace(out, config, paths, {n: HeightMap.load(p) for n, p in paths.items()},
+    maps = {n: HeightMap.load(p) for n, p in paths.items()}
+    return Workspace(out, config, paths, maps, {m.content_hash(): m for m in maps.values()},
                      seed_streams(config))
 
 

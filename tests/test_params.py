@@ -18,6 +18,7 @@ from footfall.control.pose_finder import PoseConfig
 from footfall.control.swing import SwingConfig
 from footfall.core.errors import FootfallError
 from footfall.core.files import plain_json
+from footfall.core.limits import Limits
 from footfall.core.params import (
     Interval,
     Params,
@@ -39,7 +40,7 @@ from footfall.features.config import FeatureConfig
 from footfall.sim.episode import WalkConfig
 from footfall.sim.simulation import PerturbationConfig
 
-CONFIGS = (FeatureConfig, PerturbationConfig, WalkConfig, LowLevelConfig, BodyPathConfig,
+CONFIGS = (Limits, FeatureConfig, PerturbationConfig, WalkConfig, LowLevelConfig, BodyPathConfig,
            FootstepConfig, CogConfig, SwingConfig, PoseConfig, ExpertConfig, ReproduceConfig,
            OfflineConfig)
 """Every declared config of footfall (test_every_declared_config_is_listed keeps it whole)."""

@@ -18,6 +18,7 @@ from footfall.cli.learning import learn, rank_eval_cmd
 from footfall.cli.terrain import terrain
 from footfall.cli.walking import walk_cmd, walk_many_cmd
 from footfall.core.errors import FootfallError
+from footfall.core.limits import apply_assignments
 from footfall.core.plugins import load_plugins
 
 EXIT_USER_ERROR = 2  # a bad file or argument
@@ -26,9 +27,13 @@ EXIT_INTERRUPTED = 130  # Ctrl-C, as a shell reports SIGINT
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.option("--debug", is_flag=True, help="Show tracebacks for errors.")
+@click.option("--limit", "limits", multiple=True, metavar="NAME=VALUE",
+              help="Raise (or lower) a size limit, e.g. max_map_cells=400000000; "
+                   "see docs/configuration.md.")
 @click.version_option(package_name="footfall")
-def cli(debug: bool) -> None:
+def cli(debug: bool, limits: tuple[str, ...]) -> None:
     """footfall: learning where a legged robot should put its feet, with terrain templates."""
+    apply_assignments(limits)
 
 
 for _command in (terrain, features, demos, learn, rank_eval_cmd, walk_cmd, walk_many_cmd,

@@ -27,7 +27,6 @@ from dataclasses import dataclass
 from typing import Any
 
 from footfall.core.errors import FootfallError
-from footfall.core.files import write_text_atomic
 
 _KEY = "footfall.param"  # where a field's Param sits in its dataclass metadata
 
@@ -358,6 +357,8 @@ def main(argv: list[str] | None = None) -> int:
         if fresh != text:
             stale.append(path)
             if not args.check:
+                from footfall.core.files import write_text_atomic  # files reads core.limits
+
                 write_text_atomic(path, fresh)
     for path in stale:
         print(f"{path}: {'out of date' if args.check else 'tables rewritten'}")

@@ -58,3 +58,20 @@ def bench_expert_cmd(states: int, as_json: bool) -> None:
 
     result = bench_expert(states=states)
     emit(as_json, result, format_expert(result))
+
+
+@bench.command("fuzz")
+@click.option("--minutes", type=click.FloatRange(min=0.05, max=24 * 60), default=10.0,
+              show_default=True, help="Time budget [min] (the base files are made first).")
+@click.option("--seed", type=click.IntRange(0, 2 ** 31 - 1), default=0, show_default=True)
+@click.option("--target", "targets", multiple=True,
+              type=click.Choice(["map-file", "model-file", "store", "scan-import", "cli"]),
+              help="Fuzz only these targets (default: all).")
+@json_option
+def bench_fuzz_cmd(minutes: float, seed: int, targets: tuple[str, ...], as_json: bool) -> None:
+    """Hostile files and arguments at every loader and command: inputs tried, failures found."""
+    from footfall.cli.output import progress_log
+    from footfall.experiments.fuzz.campaign import format_campaign, run_campaign
+
+    result = run_campaign(minutes, seed, targets or None, log=progress_log(as_json))
+    emit(as_json, result, format_campaign(result))

@@ -17,7 +17,7 @@ from footfall.cli.features import features
 from footfall.cli.learning import learn, rank_eval_cmd
 from footfall.cli.terrain import terrain
 from footfall.cli.walking import walk_cmd, walk_many_cmd
-from footfall.core.errors import FootfallError
+from footfall.core.errors import FootfallError, one_line
 from footfall.core.limits import apply_assignments
 from footfall.core.plugins import load_plugins
 
@@ -51,7 +51,7 @@ def main(argv: list[str] | None = None) -> int:
     except FootfallError as exc:
         if debug:
             raise
-        click.echo(f"footfall: error: {exc}", err=True)
+        click.echo(f"footfall: error: {one_line(str(exc))}", err=True)
         return EXIT_USER_ERROR
     except click.exceptions.Abort:
         click.echo("footfall: interrupted", err=True)
@@ -59,13 +59,12 @@ def main(argv: list[str] | None = None) -> int:
     except click.ClickException as exc:
         if debug:
             raise
-        message = " ".join(exc.format_message().split())
-        click.echo(f"footfall: error: {message} (see --help)", err=True)
+        click.echo(f"footfall: error: {one_line(exc.format_message())} (see --help)", err=True)
         return EXIT_USER_ERROR
     except (OSError, MemoryError) as exc:
         if debug:
             raise
-        click.echo(f"footfall: error: {exc}", err=True)
+        click.echo(f"footfall: error: {one_line(str(exc)) or type(exc).__name__}", err=True)
         return EXIT_USER_ERROR
     return 0
 

@@ -1,0 +1,85 @@
+"""The valid files every mutation starts from, made once per fuzz session in a work directory.
+
+A height map (a rocky module at 2 mm, with the board metadata footfall writes), a store of
+the synthetic expert's demonstrations on it, a model learned from them, the scan formats a
+user imports (``.npy``, 16-bit PNG, PLY, XYZ) and junk (an empty file, a text file).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from footfall.core.errors import FootfallError
+
+
+@dataclass(frozen=True)
+class Bases:
+    """Paths of the valid files in the work directory ``root``."""
+
+    root: Path
+    map: Path  # a rocky module's height map (.npz)
+    small_map: Path  # the same at 4 mm: cheap to load many times
+    store: Path  # demonstrations on ``map`` (.sqlite)
+    model: Path  # learned from ``store`` (.npz)
+    scans: dict  # {".npy": path, ".png": ..., ".ply": ..., ".xyz": ...}
+    empty: Path
+    text: Path
+
+    def fill(self, template: str, suffix: str = "") -> str:
+        """A path template of :mod:`.values` with this session's files put in."""
+        return template.format(missing=self.root / "missing", dir=self.root, empty=self.empty,
+                               text=self.text, map=self.small_map, model=self.model,
+                               store=self.store, suffix=suffix)
+
+
+def _cli(*argv: str) -> None:
+    from footfall.cli import main
+
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        if main([str(a) for a in argv]) != 0:
+            raise FootfallError(f"fuzz: could not make a base file: footfall {' '.join(argv)}")
+
+
+def make_bases(root: str | Path) -> Bases:
+    """Make (or reuse) the base files in ``root``."""
+    from PIL import Image
+
+    from footfall.core.heightmap import HeightMap
+
+    root = Path(root)
+    root.mkdir(parents=True, exist_ok=True)
+    paths = {name: root / name for name in ("map.npz", "small.npz", "store.sqlite", "model.npz")}
+    if not paths["map.npz"].exists():
+        _cli("terrain", "make", "rocky", "--seed", "1", "-o", paths["map.npz"])
+    full = HeightMap.load(paths["map.npz"])
+    if not paths["small.npz"].exists():
+        HeightMap(full.heights[::4, ::4], full.resolution * 4, full.origin, full.frame,
+                  full.metadata).save(paths["small.npz"])
+    if not paths["store.sqlite"].exists():
+        _cli("demos", "collect", "--terrain", paths["map.npz"], "-n", "8", "--seed", "0",
+             "-o", paths["store.sqlite"])
+    if not paths["model.npz"].exists():
+        _cli("learn", paths["store.sqlite"], "--features", "both", "--cv", "2",
+             "--library-size", "30", "-o", paths["model.npz"])
+    grid = full.heights[::8, ::8]
+    scans = {".npy": root / "scan.npy", ".png": root / "scan.png", ".ply": root / "scan.ply",
+             ".xyz": root / "scan.xyz"}
+    np.save(scans[".npy"], grid)
+    Image.fromarray((grid / max(grid.max(), 1e-9) * 60000).astype(np.uint16)).save(scans[".png"])
+    ii, jj = np.meshgrid(np.arange(grid.shape[0]), np.arange(grid.shape[1]), indexing="ij")
+    points = np.column_stack([ii.ravel() * 0.008, jj.ravel() * 0.008, grid.ravel()])[::3]
+    np.savetxt(scans[".xyz"], points, fmt="%.5f")
+    header = ("ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\n"
+              "property float z\nend_header\n").format(len(points))
+    scans[".ply"].write_text(header + "\n".join(" ".join(f"{v:.5f}" for v in p)
+                                                for p in points) + "\n")
+    empty, text = root / "empty.npz", root / "notes.npz"
+    empty.write_bytes(b"")
+    text.write_text("these are not the heights you are looking for\n")
+    return Bases(root, paths["map.npz"], paths["small.npz"], paths["store.sqlite"],
+                 paths["model.npz"], scans, empty, text)

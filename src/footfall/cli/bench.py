@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import click
 
+from footfall.cli.choices import SEED
 from footfall.cli.output import emit, json_option
 
 
@@ -39,7 +40,7 @@ def bench_learning_cmd(n_demos: int, library_size: int, as_json: bool) -> None:
 
 
 @bench.command("sim")
-@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True)
+@click.option("--seed", type=SEED, default=0, show_default=True)
 @json_option
 def bench_sim_cmd(seed: int, as_json: bool) -> None:
     """Real-time factor of the walking stack against bare MuJoCo stepping."""

@@ -105,3 +105,45 @@ TERRAIN_KIND = RegistryChoice(  # footfall.terrain.KINDS, refused in the generat
     _terrain_kinds, invalid="unknown terrain module kind {value!r}; known kinds: {choices}")
 RECORDED_STEP = RegistryChoice(_recorded_steps)  # footfall.expert.collect.RECORDED_STEPS
 FEATURE_SET = FeatureSetChoice()  # footfall.features.family: FEATURE_SETS and family names
+
+
+# A seed: a whole number in [0, 2**63), what footfall.core.seeds keeps exactly in every file.
+SEED = click.IntRange(0, 2 ** 63 - 1)
+
+
+def count(minimum: int = 1) -> click.IntRange:
+    """A count option's type: from ``minimum`` to the ``max_count`` limit (read when parsed)."""
+    return _Count(minimum)
+
+
+class _Count(click.IntRange):
+    """An integer from a minimum to the max_count limit in force when the command is parsed."""
+
+    def __init__(self, minimum: int) -> None:
+        super().__init__(min=minimum)
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None
+                ) -> Any:
+        from footfall.core.limits import current_limits
+
+        number = super().convert(value, param, ctx)
+        limit = current_limits().max_count
+        if number > limit:
+            self.fail(f"{number} is above the limit of {limit} (raise it with "
+                      f"footfall --limit max_count=N)", param, ctx)
+        return number
+
+
+class Finite(click.FloatRange):
+    """A finite number (no nan, inf or 1e400) in a range [its unit in the option's help]."""
+
+    name = "number"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None
+                ) -> Any:
+        import math
+
+        number = super().convert(value, param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return number

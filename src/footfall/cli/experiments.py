@@ -7,12 +7,13 @@ from pathlib import Path
 
 import click
 
+from footfall.cli.choices import SEED
 from footfall.cli.output import emit, json_option, progress_log
 
 
 @click.command()
 @click.option("--out", "out", default="out/offline", show_default=True, help="Report folder.")
-@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--seed", type=SEED, default=0, show_default=True)
 @click.option("--quick", is_flag=True,
               help="A small version (fewer demonstrations, L1 only) for a smoke test.")
 @json_option
@@ -35,9 +36,9 @@ def _table2_line(name: str, row: dict) -> str:
 @click.command()
 @click.option("--out", "out", default="out/reproduce", show_default=True, help="Report folder "
               "(and the store of every run; run again with the same arguments to resume).")
-@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True)
+@click.option("--seed", type=SEED, default=0, show_default=True)
 @click.option("--quick", is_flag=True, help="A small version (a few minutes) for a smoke test.")
-@click.option("--processes", type=click.IntRange(min=1), default=None,
+@click.option("--processes", type=click.IntRange(1, 1024), default=None,
               help="Parallel runs [default: the available cores].")
 @json_option
 def reproduce(out: str, seed: int, quick: bool, processes: int | None, as_json: bool) -> None:
@@ -52,7 +53,7 @@ def reproduce(out: str, seed: int, quick: bool, processes: int | None, as_json: 
 
 @click.command()
 @click.option("--out", "out", default="out/demo", show_default=True, help="Output folder.")
-@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--seed", type=SEED, default=0, show_default=True)
 @json_option
 def demo(out: str, seed: int, as_json: bool) -> None:
     """Build a board, score it densely and draw the terrain, features and templates."""

@@ -2,21 +2,23 @@
 
 from __future__ import annotations
 
+import math
+
 import click
 
-from footfall.cli.choices import LEG
+from footfall.cli.choices import LEG, Finite
 from footfall.cli.output import emit, json_option
 
 
 @click.command()
 @click.argument("source")
-@click.option("--at", "at", nargs=2, type=float, required=True, metavar="X Y",
+@click.option("--at", "at", nargs=2, type=Finite(-1e6, 1e6), required=True, metavar="X Y",
               help="Foothold position [m].")
-@click.option("--yaw", type=float, default=0.0, show_default=True,
-              help="Body heading [rad] that orients the patches.")
+@click.option("--yaw", type=Finite(-2 * math.pi, 2 * math.pi), default=0.0, show_default=True,
+              help="Body heading [rad] that orients the patches, in [-2 pi, 2 pi].")
 @click.option("--leg", type=LEG, default="LF", show_default=True,
               help="Swing leg (right legs see mirrored patches).")
-@click.option("--template-resolution", type=float, default=None,
+@click.option("--template-resolution", type=Finite(min=0, min_open=True), default=None,
               help="Patch sample spacing [m] (default 0.003).")
 @json_option
 def features(source: str, at: tuple[float, float], yaw: float, leg: str,

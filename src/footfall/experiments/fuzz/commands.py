@@ -26,7 +26,7 @@ class Slot:
     """One argument of a command: ``option`` (None for a positional), its kind and valid value."""
 
     option: str | None
-    kind: str  # "count", "seed", "unit" (in [0, 1]), "positive", "input", "output"
+    kind: str  # "count", "seed", "unit" (in [0, 1]), "positive", "input", "output", "folder"
     valid: str  # a template of :meth:`Bases.fill`
     suffix: str = ""  # the output's expected suffix
 
@@ -34,7 +34,8 @@ class Slot:
 BAD = {"count": values.BAD_COUNTS, "seed": values.BAD_SEEDS,
        "unit": values.BAD_NUMBERS + ("-0.5", "1.5"),
        "positive": values.BAD_NUMBERS + ("0", "-1", "1e-400", "1e-300", "1e300"),
-       "input": values.BAD_INPUT, "output": values.BAD_OUTPUT}
+       "input": values.BAD_INPUT, "output": values.BAD_OUTPUT,
+       "folder": ("{text}", "{empty}", "/proc/footfall", "/dev/null/out", "/proc/version")}
 
 
 @dataclass(frozen=True)
@@ -76,6 +77,13 @@ COMMANDS = (
                         Slot("--seed", "seed", "0"), Slot("--search-radius", "positive", "0.03"),
                         Slot("--frames", "count", "4"), _out("--video", ".mp4"),
                         _out("--snapshots", ".png")), heavy=True),
+    Command(("reproduce", "--quick"), (Slot("--out", "folder", "{dir}/out"),
+                                       Slot("--seed", "seed", "0"),
+                                       Slot("--processes", "count", "1")), heavy=True),
+    Command(("offline", "--quick"), (Slot("--out", "folder", "{dir}/out"),
+                                     Slot("--seed", "seed", "0")), heavy=True),
+    Command(("demo",), (Slot("--out", "folder", "{dir}/out"), Slot("--seed", "seed", "0")),
+            heavy=True),
     Command(("walk-many",), (Slot("--terrain", "input", "{map}"), Slot("--runs", "count", "2"),
                              Slot("--seed", "seed", "0"),
                              Slot("--search-radius", "positive", "0.03")), heavy=True),

@@ -21,7 +21,7 @@ from typing import Any
 
 from footfall.core.errors import FootfallError
 from footfall.data import rows, schema
-from footfall.data.connection import one_line, read_only_uri
+from footfall.data.connection import decode_text, one_line, read_only_uri
 
 SHOWN_PROBLEMS = 20  # problems listed in a one-line-each report; the rest are counted
 
@@ -84,6 +84,7 @@ def check_store(path: str | os.PathLike) -> StoreReport:
     try:
         schema.check_header(p)
         con = sqlite3.connect(read_only_uri(p), uri=True, isolation_level=None)
+        con.text_factory = decode_text
     except FootfallError as exc:
         report.problems.append(str(exc).removeprefix(f"{p}: "))
         return report
@@ -141,12 +142,12 @@ def _check_rows(con: sqlite3.Connection, report: StoreReport, version: int) -> N
         for row in con.execute(f"SELECT {rows.TERRAIN_COLUMNS} FROM terrains ORDER BY rowid"):
             report.terrains += 1
             hashes.add(row[0])
-            _row(report, "terrains", row[0], rows.terrain, row)
+            _row(report, "terrains", repr(row[0]), rows.terrain, row)
     with _sqlite_errors(report, "table demonstrations"):
         for row in con.execute(f"SELECT {rows.DEMONSTRATION_COLUMNS} FROM demonstrations "
                                "ORDER BY id"):
             report.demonstrations += 1
-            if _row(report, "demonstrations", row[0], rows.demonstration, row):
+            if _row(report, "demonstrations", repr(row[0]), rows.demonstration, row):
                 _reference(report, "demonstrations", row[0], row[1], hashes)
     if version >= 2:
         _check_runs(con, report, hashes)
@@ -159,7 +160,7 @@ def _check_runs(con: sqlite3.Connection, report: StoreReport, hashes: set[Any]) 
         for row in con.execute(f"SELECT {rows.RUN_COLUMNS} FROM runs ORDER BY id"):
             report.runs += 1
             n_steps[row[0]] = row[6]
-            if _row(report, "runs", row[0], rows.run_head, row):
+            if _row(report, "runs", repr(row[0]), rows.run_head, row):
                 _reference(report, "runs", row[0], row[2], hashes)
     found: dict[Any, list[Any]] = {}
     with _sqlite_errors(report, "table run_steps"):
@@ -180,13 +181,13 @@ def _check_runs(con: sqlite3.Connection, report: StoreReport, hashes: set[Any]) 
                                    f"numbered {_range(ks)}")
 
 
-def _row(report: StoreReport, table: str, key: Any, decode: Callable[[tuple], Any],
+def _row(report: StoreReport, table: str, key: str, decode: Callable[[tuple], Any],
          row: tuple) -> bool:
     """Decode one row; a problem naming the table and the row's key if it is not sound."""
     try:
         decode(row)
     except FootfallError as exc:
-        report.problems.append(f"{table} row {key!r}: {exc}")
+        report.problems.append(f"{table} row {key}: {exc}")
         return False
     return True
 

@@ -70,11 +70,14 @@ class StoreConnection:
         try:
             # isolation_level=None: no implicit transactions; each write opens its own.
             if self.read_only:
-                return sqlite3.connect(read_only_uri(self.path), uri=True, timeout=busy_timeout,
-                                       isolation_level=None)
-            return sqlite3.connect(self.path, timeout=busy_timeout, isolation_level=None)
+                con = sqlite3.connect(read_only_uri(self.path), uri=True, timeout=busy_timeout,
+                                      isolation_level=None)
+            else:
+                con = sqlite3.connect(self.path, timeout=busy_timeout, isolation_level=None)
         except sqlite3.Error as exc:
             raise FootfallError(f"{self.path}: cannot open ({one_line(exc)})") from None
+        con.text_factory = decode_text
+        return con
 
     # -------------------------------------------------------------- lifecycle
     def close(self) -> None:
@@ -214,3 +217,23 @@ def read_only_uri(path: Path) -> str:
     if wal_empty and not os.access(path.resolve().parent, os.W_OK):
         return uri + "?immutable=1"
     return uri + "?mode=ro"
+
+
+class UndecodableText:
+    """A TEXT value that is not UTF-8 (a damaged row): neither text nor bytes, so every check
+    of a column's type refuses it, naming the column."""
+
+    def __init__(self, raw: bytes) -> None:
+        self.raw = raw
+
+    def __repr__(self) -> str:
+        return f"<{len(self.raw)} bytes of text that is not UTF-8>"
+
+
+def decode_text(raw: bytes) -> str | UndecodableText:
+    """SQLite's TEXT values as ``str``; one that is not UTF-8 as :class:`UndecodableText`
+    (instead of an error that would stop a whole query at one bad row)."""
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        return UndecodableText(raw)

@@ -469,7 +469,7 @@ def collect_into_store(terrains: Sequence[str | os.PathLike], path: str | os.Pat
         For a bad output path, a terrain file or an existing store that cannot
         be read (all checked before walking), or when no demonstration was recorded.
     """
-    n = check_count(n, "-n (demonstrations)", minimum=1)  # before any file is read
+    n = check_count(n, "the number of demonstrations", minimum=1)  # before any file is read
     if steps not in RECORDED_STEPS:
         raise FootfallError(f"steps must be one of {', '.join(RECORDED_STEPS)}, got {steps!r}")
     out = writable_path(path)

@@ -1,7 +1,7 @@
 """The ``footfall`` command group and its entry point: user errors become one line and status 2.
 
-Every command lives in the module of its group (terrain, features, demos, learning, walking,
-experiments, bench) and is added here.
+Every command lives in the module of its group (terrain, features, demos, store, learning,
+walking, experiments, bench) and is added here.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from footfall.cli.demos import demos
 from footfall.cli.experiments import demo, offline, reproduce
 from footfall.cli.features import features
 from footfall.cli.learning import learn, rank_eval_cmd
+from footfall.cli.store import store
 from footfall.cli.terrain import terrain
 from footfall.cli.walking import walk_cmd, walk_many_cmd
 from footfall.core.errors import FootfallError, one_line
@@ -36,8 +37,8 @@ def cli(debug: bool, limits: tuple[str, ...]) -> None:
     apply_assignments(limits)
 
 
-for _command in (terrain, features, demos, learn, rank_eval_cmd, walk_cmd, walk_many_cmd,
-                 offline, reproduce, demo, bench):
+for _command in (terrain, features, demos, store, learn, rank_eval_cmd, walk_cmd,
+                 walk_many_cmd, offline, reproduce, demo, bench):
     cli.add_command(_command)
 
 

@@ -27,12 +27,33 @@ class StoreConnection:
     """
 
     def __init__(self, path: str | os.PathLike, create: bool = False,
-                 busy_timeout: float = DEFAULT_BUSY_TIMEOUT) -> None:
+                 busy_timeout: float = DEFAULT_BUSY_TIMEOUT, read_only: bool = False) -> None:
         self.path = Path(path)
+        self.read_only = bool(read_only)
         self.schema_version = schema.SCHEMA_VERSION  # of the open file, set by _check_meta
         self._con: sqlite3.Connection | None = None
         if not (isinstance(busy_timeout, numbers.Real) and busy_timeout >= 0):
             raise FootfallError(f"busy timeout must be >= 0 s, got {busy_timeout!r}")
+        if create and read_only:
+            raise FootfallError("a store opened read-only cannot be created")
+        self._check_path(create)
+        self._con = self._connect(float(busy_timeout))
+        try:
+            with self._errors():
+                self._con.execute("PRAGMA foreign_keys = ON")
+                if not schema.has_table(self._con, "meta"):
+                    self._initialise(create)
+                self._check_meta()
+                # Persistent: WAL lets readers and one writer work at the same time.
+                if not self.read_only and \
+                        self._con.execute("PRAGMA journal_mode").fetchone()[0].lower() != "wal":
+                    self._con.execute("PRAGMA journal_mode = WAL")
+        except BaseException:
+            self.close()
+            raise
+
+    def _check_path(self, create: bool) -> None:
+        """Refuse a missing file (unless ``create``), a directory, or a file that is not SQLite."""
         exists = self.path.exists()
         if exists and not self.path.is_file():
             raise FootfallError(f"{self.path}: not a file")
@@ -43,24 +64,20 @@ class StoreConnection:
                 raise FootfallError(f"output directory does not exist: {self.path.parent}")
         else:
             schema.check_header(self.path)
+
+    def _connect(self, busy_timeout: float) -> sqlite3.Connection:
+        """The SQLite connection: read-write, or read-only (:func:`read_only_uri`)."""
         try:
             # isolation_level=None: no implicit transactions; each write opens its own.
-            self._con = sqlite3.connect(self.path, timeout=float(busy_timeout),
-                                        isolation_level=None)
+            if self.read_only:
+                con = sqlite3.connect(read_only_uri(self.path), uri=True, timeout=busy_timeout,
+                                      isolation_level=None)
+            else:
+                con = sqlite3.connect(self.path, timeout=busy_timeout, isolation_level=None)
         except sqlite3.Error as exc:
-            raise FootfallError(f"{self.path}: cannot open ({exc})") from None
-        try:
-            with self._errors():
-                self._con.execute("PRAGMA foreign_keys = ON")
-                if not schema.has_table(self._con, "meta"):
-                    self._initialise(create)
-                self._check_meta()
-                # Persistent: WAL lets readers and one writer work at the same time.
-                if self._con.execute("PRAGMA journal_mode").fetchone()[0].lower() != "wal":
-                    self._con.execute("PRAGMA journal_mode = WAL")
-        except BaseException:
-            self.close()
-            raise
+            raise FootfallError(f"{self.path}: cannot open ({one_line(exc)})") from None
+        con.text_factory = decode_text
+        return con
 
     # -------------------------------------------------------------- lifecycle
     def close(self) -> None:
@@ -105,8 +122,15 @@ class StoreConnection:
             schema.create(con, f"footfall {__version__}")
 
     def _check_meta(self) -> None:
-        """Refuse a foreign or newer file; bring an older one to the current schema."""
+        """Refuse a foreign or newer file, or one with objects footfall does not make (a trigger,
+        a view, an unknown table); bring an older one to the current schema (read-write only)."""
         version = schema.stored_version(self._connection, self.path)
+        problems = schema.schema_problems(self._connection, version)
+        if problems:
+            raise FootfallError(f"{self.path}: {problems[0]}")
+        if self.read_only:
+            self.schema_version = version  # read as it is: its queries know the older tables
+            return
         for old in range(version, schema.SCHEMA_VERSION):
             with self._write() as con:  # one version per transaction; data untouched
                 schema.migrate(con, old)
@@ -119,9 +143,10 @@ class StoreConnection:
         try:
             yield
         except (sqlite3.OperationalError, sqlite3.IntegrityError) as exc:  # locked, read-only, ...
-            raise FootfallError(f"{self.path}: {exc}") from None
+            raise FootfallError(f"{self.path}: {one_line(exc)}") from None
         except sqlite3.DatabaseError as exc:  # malformed image, not a database, ...
-            raise FootfallError(f"{self.path}: corrupt demonstration store ({exc})") from None
+            raise FootfallError(f"{self.path}: corrupt demonstration store "
+                                f"({one_line(exc)})") from None
 
     @property
     def _connection(self) -> sqlite3.Connection:
@@ -159,9 +184,56 @@ class StoreConnection:
             if con.in_transaction:
                 con.execute("COMMIT")
 
+    def _has_table(self, name: str) -> bool:
+        """Whether the open file has table ``name`` (an older store read as it is may not)."""
+        with self._errors():
+            return schema.has_table(self._connection, name)
+
     @staticmethod
     def _check_id(i: Any) -> int:
         """A row id given by a caller: an integer (a bool is refused)."""
         if isinstance(i, bool) or not isinstance(i, numbers.Integral):
             raise FootfallError(f"demonstration ids are integers, got {i!r}")
         return int(i)
+
+
+def one_line(exc: BaseException) -> str:
+    """An exception's message on one line (SQLite quotes multi-line SQL and constraints)."""
+    return " ".join(str(exc).split())
+
+
+def read_only_uri(path: Path) -> str:
+    """The SQLite URI that opens ``path`` without writing to it.
+
+    ``mode=ro`` reads a store that another process may be writing (it shares
+    the WAL index, the ``-shm`` file, which it creates if missing). In a
+    folder the user cannot write, that file cannot be made: there, and only
+    when no write-ahead log holds committed pages (no ``-wal`` file, or an
+    empty one), the file is opened ``immutable``: read as it is on disk.
+    """
+    uri = path.resolve().as_uri()
+    wal = Path(f"{path}-wal")
+    wal_empty = not wal.exists() or wal.stat().st_size == 0
+    if wal_empty and not os.access(path.resolve().parent, os.W_OK):
+        return uri + "?immutable=1"
+    return uri + "?mode=ro"
+
+
+class UndecodableText:
+    """A TEXT value that is not UTF-8 (a damaged row): neither text nor bytes, so every check
+    of a column's type refuses it, naming the column."""
+
+    def __init__(self, raw: bytes) -> None:
+        self.raw = raw
+
+    def __repr__(self) -> str:
+        return f"<{len(self.raw)} bytes of text that is not UTF-8>"
+
+
+def decode_text(raw: bytes) -> str | UndecodableText:
+    """SQLite's TEXT values as ``str``; one that is not UTF-8 as :class:`UndecodableText`
+    (instead of an error that would stop a whole query at one bad row)."""
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        return UndecodableText(raw)

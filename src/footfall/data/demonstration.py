@@ -5,6 +5,7 @@ robot's state at the decision and the terrain it stood on. Stored by
 
 from __future__ import annotations
 
+import hashlib
 import numbers
 import re
 from collections.abc import Iterable
@@ -95,6 +96,24 @@ class Demonstration:
     def foothold(self) -> np.ndarray:
         """The chosen foothold, shape (3,): x, y, terrain height [m]."""
         return self.candidates[self.chosen]
+
+    def content_hash(self) -> str:
+        """The demonstration's identity: :func:`decision_hash` on its terrain. Two with the same
+        hash are the same demonstration, whatever their id, source or expert settings."""
+        return decision_hash(self.state, self.candidates, self.chosen, self.terrain_hash)
+
+
+def decision_hash(state: RobotState, candidates: np.ndarray, chosen: int,
+                  terrain_hash: str = "") -> str:
+    """SHA-256 of a foothold decision: the swing leg, the state vector, the candidates (n, 3)
+    [m] as float64 and the chosen index (and the terrain's hash, if given)."""
+    digest = hashlib.sha256()
+    digest.update(f"{terrain_hash}|{state.swing_leg}|{int(chosen)}|".encode())
+    digest.update(np.ascontiguousarray(state.to_vector(), dtype="<f8").tobytes())
+    cand = np.ascontiguousarray(candidates, dtype="<f8")
+    digest.update(repr(cand.shape).encode())
+    digest.update(cand.tobytes())
+    return digest.hexdigest()
 
 
 def as_demonstrations(items: Iterable) -> list[Demonstration]:

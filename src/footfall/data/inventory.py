@@ -1,7 +1,8 @@
 """What a demonstration store holds: counts by terrain, leg and source, and each terrain's label.
 
-The store's whole file is checked first, so an inventory is also a health check
-(``footfall demos info``).
+The store's whole file is checked first -- every page, the schema and every row
+(:func:`footfall.data.check.check_store`) -- so an inventory is also a health check
+(``footfall demos info``); the file is only read.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ import os
 from dataclasses import dataclass
 from typing import Any
 
+from footfall.data.check import checked_store
 from footfall.data.store import DemoStore
 
 
@@ -46,10 +48,11 @@ def store_inventory(path: str | os.PathLike) -> StoreInventory:
     Raises
     ------
     FootfallError
-        If ``path`` is missing, not a store, or damaged.
+        If ``path`` is missing, not a store, or damaged (a page, the schema or
+        a row: the first problem, and how many more).
     """
-    with DemoStore(path) as store:
-        store.check()
+    checked_store(path)
+    with DemoStore(path, read_only=True) as store:
         summary = store.summary()
         terrains = store.terrain_info()
     labelled = {h: {k: v for k, v in t.items() if k != "metadata"} | {"label": terrain_label(t)}

@@ -13,16 +13,10 @@ from typing import Any
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.core.robot import LEG_NAMES
-from footfall.core.state import RobotState
-from footfall.data import codec
+from footfall.data import codec, rows
 from footfall.data.demonstration import Demonstration, as_demonstrations
-from footfall.data.runlog import RunRecord, RunStep
+from footfall.data.runlog import RunRecord
 from footfall.data.terrain_queries import TerrainQueries
-
-_STEP_COLUMNS = ("k, swing_leg, state, state_shape, state_dtype, candidates, candidates_shape, "
-                 "candidates_dtype, rewards, rewards_shape, rewards_dtype, chosen, t_liftoff, "
-                 "t_touchdown, touchdown, touchdown_shape, touchdown_dtype, slip")
 
 
 class RunQueries(TerrainQueries):
@@ -76,39 +70,40 @@ class RunQueries(TerrainQueries):
 
         ``key_prefix`` keeps only runs whose key starts with it. In creation order.
         """
-        sql = "SELECT id, key, terrain_hash, seed, settings, result, n_steps FROM runs"
+        if not self._has_table("runs"):
+            return []  # a version-1 store, read as it is, has no run logs
+        sql = f"SELECT {rows.RUN_COLUMNS} FROM runs"
         params: list[Any] = []
         if key_prefix is not None:
             sql += " WHERE key IS NOT NULL AND substr(key, 1, length(?)) = ?"
             params = [key_prefix, key_prefix]
         with self._errors():
-            rows = self._connection.execute(sql + " ORDER BY id", params).fetchall()
+            found = self._connection.execute(sql + " ORDER BY id", params).fetchall()
         out = []
-        for id_, key, th, seed, settings, result, n in rows:
+        for row in found:
             try:
-                out.append({"id": int(id_), "key": key, "terrain_hash": th, "seed": int(seed),
-                            "settings": json.loads(settings), "result": json.loads(result),
-                            "n_steps": int(n)})
-            except (TypeError, ValueError) as exc:
-                raise FootfallError(f"{self.path}: run {id_} is corrupt ({exc})") from None
+                out.append(rows.run_head(row))
+            except FootfallError as exc:
+                raise FootfallError(f"{self.path}: run {row[0]!r} is corrupt ({exc})") from None
         return out
 
     def run(self, run_id: int) -> RunRecord:
         """The stored run ``run_id`` with all its steps, validated."""
         run_id = self._check_id(run_id)
+        if not self._has_table("runs"):
+            raise FootfallError(f"run {run_id} is not in the store")
         with self._errors(), self._read() as con:
-            head = con.execute("SELECT key, terrain_hash, seed, settings, result FROM runs "
-                               "WHERE id = ?", (run_id,)).fetchone()
-            rows = con.execute(f"SELECT {_STEP_COLUMNS} FROM run_steps WHERE run_id = ? "
-                               "ORDER BY k", (run_id,)).fetchall()
+            head = con.execute(f"SELECT {rows.RUN_COLUMNS} FROM runs WHERE id = ?",
+                               (run_id,)).fetchone()
+            steps = con.execute(f"SELECT {rows.STEP_COLUMNS} FROM run_steps WHERE run_id = ? "
+                                "ORDER BY k", (run_id,)).fetchall()
         if head is None:
             raise FootfallError(f"run {run_id} is not in the store")
         try:
-            steps = tuple(_step_from_row(row) for row in rows)
-            key, th, seed, settings, result = head
-            return RunRecord(th, int(seed), json.loads(settings), json.loads(result), steps,
-                             key, run_id)
-        except (FootfallError, TypeError, ValueError) as exc:
+            run = rows.run_head(head)
+            return RunRecord(run["terrain_hash"], run["seed"], run["settings"], run["result"],
+                             tuple(rows.run_step(row) for row in steps), run["key"], run_id)
+        except FootfallError as exc:
             raise FootfallError(f"{self.path}: run {run_id} is corrupt ({exc})") from None
 
 
@@ -121,23 +116,10 @@ def _insert_run(con: sqlite3.Connection, run: RunRecord) -> int:
          json.dumps(run.result, sort_keys=True), len(run.steps)))
     run_id = int(cur.lastrowid)
     con.executemany(
-        f"INSERT INTO run_steps (run_id, {_STEP_COLUMNS}) VALUES ({', '.join(['?'] * 19)})",
+        f"INSERT INTO run_steps (run_id, {rows.STEP_COLUMNS}) VALUES ({', '.join(['?'] * 19)})",
         [(run_id, st.k, st.swing_leg, *codec.encode(st.state.to_vector()),
           *codec.encode(st.candidates), *codec.encode(st.rewards), st.chosen,
           float(st.t_liftoff), None if math.isnan(st.t_touchdown) else float(st.t_touchdown),
           *codec.encode(st.touchdown), None if math.isnan(st.slip) else float(st.slip))
          for st in run.steps])
     return run_id
-
-
-def _step_from_row(row: tuple) -> RunStep:
-    """A run step from its ``run_steps`` row (the columns of ``_STEP_COLUMNS``)."""
-    k, leg, st, st_s, st_d, c, c_s, c_d, r, r_s, r_d, chosen, t0, t1, td, td_s, td_d, slip = row
-    if leg not in LEG_NAMES:
-        raise FootfallError(f"unknown swing leg {leg!r}")
-    state = RobotState.from_vector(codec.decode(st, st_s, st_d, "a state"), leg)
-    return RunStep(int(k), state, codec.decode(c, c_s, c_d, "candidates"),
-                   codec.decode(r, r_s, r_d, "rewards"), int(chosen), float(t0),
-                   math.nan if t1 is None else float(t1),
-                   codec.decode(td, td_s, td_d, "a touch-down"),
-                   math.nan if slip is None else float(slip))

@@ -7,6 +7,7 @@ The functions take an open connection and leave transactions to the caller
 
 from __future__ import annotations
 
+import functools
 import sqlite3
 from collections.abc import Callable
 from pathlib import Path
@@ -201,3 +202,64 @@ def check_pages(con: sqlite3.Connection, path: Path) -> None:
     problems = [r[0] for r in con.execute("PRAGMA quick_check")]
     if problems != ["ok"]:
         raise FootfallError(f"{path}: corrupt demonstration store ({problems[0]})")
+
+
+# ---------------------------------------------------------- the schema's objects
+def _tables(version: int) -> tuple[str, ...]:
+    """The CREATE statements of a version-``version`` store."""
+    return DEMONSTRATION_TABLES + (RUN_LOG_TABLES if version >= 2 else ())
+
+
+def _objects(con: sqlite3.Connection) -> dict[tuple[str, str], tuple]:
+    """Every object of a database as {(type, name): its shape}: a table's columns (name,
+    declared type, NOT NULL, default, primary-key position) and foreign keys, an index's table
+    and columns; a trigger's or view's table."""
+    out: dict[tuple[str, str], tuple] = {}
+    for kind, name, table in con.execute("SELECT type, name, tbl_name FROM sqlite_master"):
+        if kind == "table":
+            columns = tuple(con.execute('SELECT name, upper(type), "notnull", dflt_value, pk '
+                                        "FROM pragma_table_info(?)", (name,)))
+            keys = tuple(con.execute('SELECT "table", "from", "to" FROM pragma_foreign_key_list(?)',
+                                     (name,)))
+            out[(kind, name)] = (columns, keys)
+        elif kind == "index":
+            out[(kind, name)] = (table, tuple(c for (c,) in con.execute(
+                "SELECT name FROM pragma_index_info(?) ORDER BY seqno", (name,))))
+        else:
+            out[(kind, name)] = (table,)
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def expected_objects(version: int) -> dict[tuple[str, str], tuple]:
+    """The objects (:func:`_objects`) footfall makes in a store of schema ``version``."""
+    con = sqlite3.connect(":memory:")
+    try:
+        for statement in _tables(version):
+            con.execute(statement)
+        return _objects(con)
+    finally:
+        con.close()
+
+
+def schema_problems(con: sqlite3.Connection, version: int) -> list[str]:
+    """What differs from the schema footfall makes: one message per object, naming it.
+
+    A trigger or a view is never part of a store (a trigger could delete or
+    rewrite rows behind a writer's back); neither is any table or index
+    footfall did not make, and each of footfall's must have its columns.
+    """
+    expected, found = expected_objects(version), _objects(con)
+    problems = []
+    for (kind, name), shape in found.items():
+        if kind in ("trigger", "view"):
+            on = f" on table {shape[0]!r}" if kind == "trigger" else ""
+            problems.append(f"{kind} {name!r}{on} is not part of a footfall store "
+                            f"(remove it: DROP {kind.upper()} \"{name}\")")
+        elif (kind, name) not in expected:
+            problems.append(f"unknown {kind} {name!r} is not part of a footfall store")
+        elif shape != expected[(kind, name)]:
+            problems.append(f"{kind} {name!r} does not have the columns footfall makes")
+    problems += [f"{kind} {name!r} is missing" for kind, name in expected
+                 if (kind, name) not in found]
+    return problems

@@ -23,8 +23,7 @@ from typing import Any
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LEG_NAMES
-from footfall.core.state import RobotState
-from footfall.data import codec
+from footfall.data import codec, rows, schema
 from footfall.data.connection import DEFAULT_BUSY_TIMEOUT
 from footfall.data.demonstration import Demonstration, as_demonstrations
 from footfall.data.run_queries import RunQueries
@@ -53,6 +52,10 @@ class DemoStore(RunQueries, TerrainQueries):
         missing file is an error.
     busy_timeout : float
         How long [s] an operation waits for another process's lock before failing.
+    read_only : bool
+        Open the file without writing to it, not even to upgrade an older
+        schema (:func:`footfall.data.connection.read_only_uri`): for commands
+        that only read. A write then fails.
 
     Raises
     ------
@@ -133,20 +136,18 @@ class DemoStore(RunQueries, TerrainQueries):
             demonstration (the message names its id).
         """
         where, params = _where(terrain_hash, source_prefix)
-        columns = ("SELECT id, terrain_hash, swing_leg, state, state_shape, state_dtype, "
-                   "candidates, candidates_shape, candidates_dtype, chosen, source, expert "
-                   "FROM demonstrations")
+        columns = f"SELECT {rows.DEMONSTRATION_COLUMNS} FROM demonstrations"
         with self._errors():
             if ids is None:
-                rows = self._connection.execute(columns + where + " ORDER BY id",
-                                                params).fetchall()
+                found = self._connection.execute(columns + where + " ORDER BY id",
+                                                 params).fetchall()
             else:
                 wanted = [self._check_id(i) for i in ids]
                 extra = where.replace(" WHERE ", " AND ", 1)
-                rows = self._connection.execute(
+                found = self._connection.execute(
                     columns + " WHERE id IN (SELECT value FROM json_each(?))" + extra,
                     [json.dumps(wanted), *params]).fetchall()
-        demos = [self._row_to_demo(row) for row in rows]
+        demos = [self._row_to_demo(row) for row in found]
         if ids is None:
             return demos
         by_id = {d.id: d for d in demos}
@@ -157,19 +158,12 @@ class DemoStore(RunQueries, TerrainQueries):
         return [by_id[i] for i in wanted]
 
     def _row_to_demo(self, row: tuple) -> Demonstration:
-        (id_, terrain_hash, leg, state, state_shape, state_dtype, cand, cand_shape, cand_dtype,
-         chosen, source, expert) = row
-        what = f"{self.path}: demonstration {id_}"
+        """A demonstration from its row (:func:`footfall.data.rows.demonstration`)."""
         try:
-            if leg not in LEG_NAMES:
-                raise FootfallError(f"unknown swing leg {leg!r}")
-            vector = codec.decode(state, state_shape, state_dtype, "its state")
-            candidates = codec.decode(cand, cand_shape, cand_dtype, "its candidates")
-            settings = json.loads(codec.text(expert, "its expert settings"))
-            return Demonstration(terrain_hash, RobotState.from_vector(vector, leg), candidates,
-                                 chosen, codec.text(source, "its source"), settings, id_)
-        except (FootfallError, TypeError, ValueError) as exc:
-            raise FootfallError(f"{what} is corrupt ({exc})") from None
+            return rows.demonstration(row)
+        except FootfallError as exc:
+            raise FootfallError(f"{self.path}: demonstration {row[0]!r} is corrupt ({exc})") \
+                from None
 
     def count(self, terrain_hash: str | None = None, source_prefix: str | None = None) -> int:
         """Number of stored demonstrations (matching the filters of :meth:`demonstrations`)."""
@@ -201,7 +195,8 @@ class DemoStore(RunQueries, TerrainQueries):
                 "ON d.terrain_hash = t.hash GROUP BY t.hash ORDER BY t.rowid"))
             legs = dict(con.execute(
                 "SELECT swing_leg, count(*) FROM demonstrations GROUP BY swing_leg"))
-            n_runs = int(con.execute("SELECT count(*) FROM runs").fetchone()[0])
+            n_runs = (int(con.execute("SELECT count(*) FROM runs").fetchone()[0])
+                      if schema.has_table(con, "runs") else 0)  # a version-1 store read as it is
             by_source = dict(con.execute(
                 "SELECT substr(source, 1, instr(source || ':', ':') - 1) AS kind, count(*) "
                 "FROM demonstrations GROUP BY kind ORDER BY kind"))

@@ -16,7 +16,7 @@ from typing import Any
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.data import codec
+from footfall.data import codec, rows
 from footfall.data.connection import DEFAULT_BUSY_TIMEOUT, StoreConnection
 
 
@@ -24,9 +24,9 @@ class TerrainQueries(StoreConnection):
     """Add and read the terrains of a store (part of :class:`footfall.data.store.DemoStore`)."""
 
     def __init__(self, path: str | os.PathLike, create: bool = False,
-                 busy_timeout: float = DEFAULT_BUSY_TIMEOUT) -> None:
+                 busy_timeout: float = DEFAULT_BUSY_TIMEOUT, read_only: bool = False) -> None:
         self._terrains: dict[str, HeightMap] = {}  # verified terrains, by hash: hashed once
-        super().__init__(path, create, busy_timeout)
+        super().__init__(path, create, busy_timeout, read_only)
 
     def add_terrain(self, hmap: HeightMap) -> str:
         """Store a terrain once (its first metadata wins); return its content hash.
@@ -57,23 +57,15 @@ class TerrainQueries(StoreConnection):
         if terrain_hash in self._terrains:
             return self._terrains[terrain_hash]
         with self._errors():
-            row = self._connection.execute(
-                "SELECT heights, shape, dtype, resolution, origin_x, origin_y, frame, metadata "
-                "FROM terrains WHERE hash = ?", (terrain_hash,)).fetchone()
+            row = self._connection.execute(f"SELECT {rows.TERRAIN_COLUMNS} FROM terrains "
+                                           "WHERE hash = ?", (terrain_hash,)).fetchone()
         if row is None:
             raise FootfallError(f"terrain {terrain_hash} is not in the store")
-        what = f"{self.path}: terrain {terrain_hash}"
-        blob, shape, dtype, resolution, ox, oy, frame, metadata = row
         try:
-            heights = codec.decode(blob, shape, dtype, what)
-            meta = json.loads(codec.text(metadata, "its metadata"))
-            if not isinstance(meta, dict):
-                raise FootfallError("its metadata is not a JSON object")
-            hmap = HeightMap(heights, resolution, (ox, oy), codec.text(frame, "its frame"), meta)
-        except (FootfallError, TypeError, ValueError) as exc:
-            raise FootfallError(f"{what} is corrupt ({exc})") from None
-        if hmap.content_hash() != terrain_hash:
-            raise FootfallError(f"{what} is corrupt (its content hash does not match)")
+            hmap = rows.terrain(row)
+        except FootfallError as exc:
+            raise FootfallError(f"{self.path}: terrain {terrain_hash} is corrupt ({exc})") \
+                from None
         self._terrains[terrain_hash] = hmap
         return hmap
 
@@ -93,17 +85,20 @@ class TerrainQueries(StoreConnection):
             "origin": [x, y] [m], "frame", "metadata"}}, in the order added.
         """
         with self._errors():
-            rows = self._connection.execute(
+            found = self._connection.execute(
                 "SELECT hash, shape, resolution, origin_x, origin_y, frame, metadata "
                 "FROM terrains ORDER BY rowid").fetchall()
         info = {}
-        for digest, shape, resolution, ox, oy, frame, metadata in rows:
+        for digest, shape, resolution, ox, oy, frame, metadata in found:
             try:
-                info[digest] = {"shape": json.loads(shape), "resolution": float(resolution),
-                                "origin": [float(ox), float(oy)], "frame": str(frame),
-                                "metadata": json.loads(metadata)}
-            except (TypeError, ValueError) as exc:
-                raise FootfallError(f"{self.path}: terrain {digest} is corrupt ({exc})") from None
+                info[digest] = {"shape": json.loads(codec.text(shape, "shape")),
+                                "resolution": rows.real(resolution, "resolution"),
+                                "origin": [rows.real(ox, "origin_x"), rows.real(oy, "origin_y")],
+                                "frame": codec.text(frame, "frame"),
+                                "metadata": rows.json_object(metadata, "metadata")}
+            except (FootfallError, ValueError) as exc:
+                raise FootfallError(f"{self.path}: terrain {digest!r} is corrupt ({exc})") \
+                    from None
         return info
 
     # ------------------------------------------------ for the other queries

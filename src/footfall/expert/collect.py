@@ -20,6 +20,7 @@ import numpy as np
 from footfall.core.errors import FootfallError
 from footfall.core.files import writable_path
 from footfall.core.heightmap import HeightMap
+from footfall.core.limits import check_count
 from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState, nominal_state
 from footfall.data.store import Demonstration, DemoStore
@@ -32,6 +33,7 @@ EDGE_MARGIN = 0.15  # [m] the hips stay this far inside the board's x ends (star
 PATH_OFFSETS = (-0.15, -0.05, 0.05, 0.15)  # [m] lateral paths, relative to the board's centre
 MAX_PATH_ROUNDS = 6  # rounds of ever denser lateral paths before collect gives up
 PATH_HALF_WIDTH = 0.15  # [m] the lateral paths cover the board's centre +- this
+MAX_START_SHIFT = 0.25  # [steps] a collection's walks start up to this much of a step late
 
 
 def _check_rng(rng: Any) -> np.random.Generator:
@@ -70,6 +72,8 @@ class WalkPath:
     record_every: int = 1  # [steps] record only eligible steps (those x_range keeps) number
     record_phase: int = 0  # record_phase, record_phase + record_every, ... (counting from 0), to
     # spread a few demonstrations along the path; an odd record_every rotates them through the legs
+    start_shift: float = 0.0  # [m] added to the start along x (a collection draws it per walk
+    # from its seed, so that another seed walks through other states)
 
 
 def walk_demonstrations(hmap: HeightMap, expert: Expert, rng: np.random.Generator, n_max: int,
@@ -189,6 +193,7 @@ def _checked_walk(hmap: HeightMap, rng: Any, n_max: Any, path: WalkPath, options
         raise FootfallError(f"stride must be > 0 m, got {stride}")
     y = _finite(path.y, "y")
     robot, x_range = options.robot, path.x_range
+    shift = _finite(path.start_shift, "start_shift")
     default_start = path.start_x is None
     start_x = (hmap.bounds[0] + robot.hip_x + EDGE_MARGIN if default_start
                else _finite(path.start_x, "start_x"))
@@ -201,6 +206,7 @@ def _checked_walk(hmap: HeightMap, rng: Any, n_max: Any, path: WalkPath, options
             # approach of APPROACH metres before the front feet reach it.
             start_x = max(start_x, lo - robot.hip_x - APPROACH)
         x_range = (lo, hi)
+    start_x += shift
     every, phase = path.record_every, path.record_phase
     for value, what in ((every, "record_every"), (phase, "record_phase")):
         if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 0:
@@ -208,7 +214,7 @@ def _checked_walk(hmap: HeightMap, rng: Any, n_max: Any, path: WalkPath, options
     if not 0 <= phase < every:
         raise FootfallError(f"record_phase must be in [0, record_every), got {phase} "
                             f"with record_every {every}")
-    return rng, stride, WalkPath(y, start_x, x_range, every, phase)
+    return rng, stride, WalkPath(y, start_x, x_range, every, phase)  # start_x includes the shift
 
 
 def _start_state(hmap: HeightMap, path: WalkPath, robot: RobotDescription) -> RobotState:
@@ -336,8 +342,11 @@ def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, s
     n : int
         Demonstrations wanted (>= 1).
     seed : int
-        Each walk gets its own generator, seeded from ``(seed, terrain,
-        round, path)``: the result is the same for the same arguments.
+        Each walk gets its own generators, seeded from ``(seed, terrain,
+        round, path)``: one for the expert, one for where the walk starts
+        along x (up to :data:`MAX_START_SHIFT` of a step after the default
+        start), so that every seed walks through other states -- even with
+        an expert that draws nothing -- and the same arguments give the same result.
     rough_only : bool
         Record only footholds on a board's non-flat modules
         (:func:`rough_x_range`; boards without module metadata count whole).
@@ -353,8 +362,7 @@ def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, s
     list of Demonstration
         At most ``n``, in walking order.
     """
-    if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 1:
-        raise FootfallError(f"the number of demonstrations must be >= 1, got {n!r}")
+    n = check_count(n, "the number of demonstrations", minimum=1)
     if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
         raise FootfallError(f"seed must be a non-negative integer, got {seed!r}")
     unique: dict[str, HeightMap] = {}
@@ -374,7 +382,8 @@ def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, s
             if remaining <= 0:
                 break
             quota = -(-remaining // (len(walks) - w))  # an equal share; later walks make up
-            path = _spread_path(terrains[t], y, quota, w, rough_only, options)
+            path = _spread_path(terrains[t], y, quota, w, rough_only, options,
+                                _start_shift(seed, (t, round_, j), stride))
             rng = np.random.default_rng(np.random.SeedSequence(int(seed),
                                                                spawn_key=(t, round_, j)))
             out += walk_demonstrations(terrains[t], expert, rng, quota, path, options,
@@ -382,6 +391,13 @@ def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, s
         if len(out) >= n or len(out) == before:
             break
     return out[:n]
+
+
+def _start_shift(seed: int, walk: tuple[int, int, int], stride: float) -> float:
+    """Where walk ``walk`` (terrain, round, path) starts after the default start [m]: drawn from
+    its own stream of ``seed`` (not the expert's), in [0, MAX_START_SHIFT * stride / 4)."""
+    rng = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(*walk, 1)))
+    return float(rng.uniform(0.0, MAX_START_SHIFT * stride / 4))
 
 
 def _round_walks(terrains: Sequence[HeightMap], round_: int, robot: RobotDescription
@@ -394,7 +410,7 @@ def _round_walks(terrains: Sequence[HeightMap], round_: int, robot: RobotDescrip
 
 
 def _spread_path(hmap: HeightMap, y: float, quota: int, w: int, rough_only: bool,
-                 options: WalkOptions) -> WalkPath:
+                 options: WalkOptions, start_shift: float = 0.0) -> WalkPath:
     """The path of walk ``w`` of a round at ``y`` [m], recording ``quota`` of its eligible steps.
 
     A small share is spread along the path: every m-th eligible step, m odd so
@@ -404,7 +420,8 @@ def _spread_path(hmap: HeightMap, y: float, quota: int, w: int, rough_only: bool
     every = max(estimated_steps(hmap, x_range, options.stride, options.robot) // quota, 1)
     if every % 2 == 0:
         every -= 1
-    return WalkPath(y=y, x_range=x_range, record_every=every, record_phase=(every // 2 + w) % every)
+    return WalkPath(y=y, x_range=x_range, record_every=every,
+                    record_phase=(every // 2 + w) % every, start_shift=start_shift)
 
 
 RECORDED_STEPS = ("rough", "all")  # a collection records the steps on non-flat modules, or all
@@ -452,6 +469,7 @@ def collect_into_store(terrains: Sequence[str | os.PathLike], path: str | os.Pat
         For a bad output path, a terrain file or an existing store that cannot
         be read (all checked before walking), or when no demonstration was recorded.
     """
+    n = check_count(n, "the number of demonstrations", minimum=1)  # before any file is read
     if steps not in RECORDED_STEPS:
         raise FootfallError(f"steps must be one of {', '.join(RECORDED_STEPS)}, got {steps!r}")
     out = writable_path(path)

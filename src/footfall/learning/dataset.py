@@ -22,6 +22,7 @@ from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState
+from footfall.data.demonstration import decision_hash
 from footfall.features.config import FeatureConfig
 from footfall.features.family import (
     FEATURE_SETS,
@@ -34,7 +35,7 @@ from footfall.features.family import (
 DEFAULT_TRAINING_CANDIDATES = 100  # other candidates per demonstration used for training pairs
 
 __all__ = ["FEATURE_SETS", "Example", "check_feature_set", "column_names", "create_families",
-           "design_matrix", "make_example", "stack", "training_rows"]
+           "design_matrix", "distinct_examples", "make_example", "stack", "training_rows"]
 
 
 def check_feature_set(feature_set: str) -> str:
@@ -59,6 +60,8 @@ class Example:
     chosen: int  # index of the demonstrated foothold among the n rows
     front: bool  # a front-leg demonstration
     rows: np.ndarray  # (n,) indices of these rows in the demonstration's full candidate set
+    key: str = ""  # the demonstration's decision_hash (state, all candidates, choice): examples
+    # with the same key are the same demonstration, stacked once; "" = unique
 
 
 def make_example(hmap: HeightMap, state: RobotState, candidates: np.ndarray, chosen: int,
@@ -72,7 +75,8 @@ def make_example(hmap: HeightMap, state: RobotState, candidates: np.ndarray, cho
     if not c.patches.valid.all():
         raise FootfallError("a candidate has too little terrain data for its features")
     return Example(tuple(f.prepare(c) for f in families), int(rows.size),
-                   int(np.flatnonzero(rows == chosen)[0]), robot.leg(state.swing_leg).front, rows)
+                   int(np.flatnonzero(rows == chosen)[0]), robot.leg(state.swing_leg).front, rows,
+                   decision_hash(state, candidates, chosen))
 
 
 def training_rows(n: int, chosen: int, k: int, rng: np.random.Generator) -> np.ndarray:
@@ -96,8 +100,28 @@ def column_names(families: Sequence[FeatureFamily]) -> tuple[str, ...]:
 
 def stack(examples: Sequence[Example], families: Sequence[FeatureFamily]
           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Stacked X (N, d), y (N,) (1 = chosen) and groups (N,) of examples."""
+    """Stacked X (N, d), y (N,) (1 = chosen) and groups (N,) of distinct examples.
+
+    The groups number the demonstrations: the units of the pairwise
+    transform (one chosen row each) and of the cross-validation folds. A
+    store may hold one demonstration twice (collected twice, or copied by
+    hand): its copies are stacked once (:func:`distinct_examples`), so that no
+    fold tests on a demonstration it also trained on.
+    """
+    examples = distinct_examples(examples)
     X = np.concatenate([design_matrix(e, families) for e in examples])
     y = np.concatenate([np.eye(1, e.n, e.chosen, dtype=int)[0] for e in examples])
     groups = np.concatenate([np.full(e.n, k) for k, e in enumerate(examples)])
     return X, y, groups
+
+
+def distinct_examples(examples: Sequence[Example]) -> list[Example]:
+    """The examples without repeats: the first of those with the same ``key`` (one
+    demonstration's copies; an example without a key is always kept)."""
+    seen: set[str] = set()
+    out = []
+    for e in examples:
+        if not e.key or e.key not in seen:
+            seen.add(e.key)
+            out.append(e)
+    return out

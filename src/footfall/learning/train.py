@@ -163,7 +163,7 @@ def store_demonstrations(path: str | os.PathLike, source: str | None = None
     FootfallError
         If the store cannot be read or holds no such demonstration.
     """
-    with DemoStore(path) as store:
+    with DemoStore(path, read_only=True) as store:  # learning only reads
         demos = store.demonstrations(source_prefix=source)
         if not demos:
             raise FootfallError(f"{path}: the store holds no demonstrations"

@@ -313,8 +313,9 @@ def _store_work(case: tuple, bases: Bases, scratch: Path) -> Callable[[], None]:
             path.write_bytes(craft.patch_zip(path.read_bytes(), edit, k))
         if action == "read":
             check_demonstrations(path)
-        elif action == "check":
+        elif action == "check":  # a store the check passes must read as valid
             cli_work(["store", "check", str(path)], must_refuse=foreign)()
+            check_demonstrations(path)
         elif action == "info":
             cli_work(["demos", "info", str(path)], must_refuse=False)()
         else:

@@ -127,6 +127,17 @@ def _read_header(p: Path, member: str, fh: IO[bytes]
 def _read_member(p: Path, archive: zipfile.ZipFile, info: zipfile.ZipInfo, name: str,
                  limits: Limits, check: MemberCheck | None) -> np.ndarray:
     """One member's array: header checked, then exactly the declared bytes read."""
+    try:
+        return _read_member_stream(p, archive, info, name, limits, check)
+    except FootfallError:
+        raise
+    except _ZIP_ERRORS as exc:
+        raise FootfallError(f"{p}: member {info.filename!r} is corrupt ({_describe(exc)})"
+                            ) from None
+
+
+def _read_member_stream(p: Path, archive: zipfile.ZipFile, info: zipfile.ZipInfo, name: str,
+                        limits: Limits, check: MemberCheck | None) -> np.ndarray:
     member = info.filename
     with archive.open(info) as fh:
         shape, fortran, dtype = _read_header(p, member, fh)

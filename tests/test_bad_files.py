@@ -454,7 +454,9 @@ def test_npy_above_the_cell_limit_is_refused_from_its_header(tmp_path):
     assert peak < 20 << 20
 
 
-def test_png_above_the_cell_limit_is_one_line_without_pillow_warning(tmp_path, capsys):
+def test_png_above_the_cell_limit_is_one_line_without_pillow_warning(tmp_path, capsys,
+                                                                     monkeypatch):
+    monkeypatch.setenv("FOOTFALL_MAX_MAP_CELLS", "50000000")  # --limit sets it: undone after
     path = tmp_path / "big.png"
     Image.fromarray(np.zeros((300, 300), dtype=np.uint16)).save(path)
     with warnings.catch_warnings():

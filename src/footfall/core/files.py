@@ -135,8 +135,8 @@ def save_npz(path: str | os.PathLike, fmt: str, version: int, arrays: dict[str, 
 
 
 def load_npz(path: str | os.PathLike, fmt: str, max_version: int, *,
-             check_member: Callable[[str, tuple[int, ...], np.dtype], None] | None = None
-             ) -> tuple[int, dict[str, np.ndarray], dict[str, Any]]:
+             check_member: Callable[[str, tuple[int, ...], np.dtype], None] | None = None,
+             allow_nonfinite: bool = False) -> tuple[int, dict[str, np.ndarray], dict[str, Any]]:
     """Load a file written by :func:`save_npz`, checking its format and version.
 
     Returns ``(version, arrays, meta)``. The archive is inspected before
@@ -144,6 +144,8 @@ def load_npz(path: str | os.PathLike, fmt: str, max_version: int, *,
     oversized or foreign file fails before it can allocate more than the
     limits allow. ``check_member(name, shape, dtype)``, if given, may refuse
     an array by raising :class:`FootfallError` before the array is read.
+    ``meta`` is strict JSON: NaN and infinity are refused unless
+    ``allow_nonfinite`` (for a format that records undefined figures as NaN).
 
     Raises
     ------
@@ -168,7 +170,8 @@ def load_npz(path: str | os.PathLike, fmt: str, max_version: int, *,
     if version < 1 or version > max_version:
         raise FootfallError(f"{p}: {fmt} version {version} is not supported "
                             f"(this footfall reads versions 1..{max_version})")
-    meta = parse_json_text(_header_string(p, "meta", header["meta"]), f"{p}: meta")
+    meta = parse_json_text(_header_string(p, "meta", header["meta"]), f"{p}: meta",
+                           allow_nonfinite=allow_nonfinite)
     if not isinstance(meta, dict):
         raise FootfallError(f"{p}: meta must be a JSON object, got {type(meta).__name__}")
     return version, arrays, meta
@@ -209,11 +212,12 @@ def json_depth(text: str) -> int:
     return deepest
 
 
-def parse_json_text(text: str, what: str) -> Any:
+def parse_json_text(text: str, what: str, allow_nonfinite: bool = False) -> Any:
     """Strict JSON: bounded length and nesting (the limits), no NaN, infinity or overflow.
 
-    Raises :class:`FootfallError` naming ``what`` for text that is too long,
-    too deeply nested or not strict JSON.
+    ``allow_nonfinite`` lets NaN and infinity through (for old files that
+    record undefined figures so). Raises :class:`FootfallError` naming
+    ``what`` for text that is too long, too deeply nested or not strict JSON.
     """
     limits = current_limits()
     size = len(text.encode("utf-8", "surrogatepass"))
@@ -227,6 +231,8 @@ def parse_json_text(text: str, what: str) -> Any:
                             f"{limits.max_metadata_depth} (raise it with "
                             f"--limit max_metadata_depth=N)")
     try:
+        if allow_nonfinite:
+            return json.loads(text)
         return json.loads(text, parse_constant=_refuse_constant, parse_float=_finite_float)
     except (ValueError, RecursionError) as exc:
         raise FootfallError(f"{what} is not valid JSON ({exc})") from None

@@ -29,6 +29,13 @@ Supported suffixes (case-insensitive), :data:`SUFFIXES`, read by :func:`import_t
 
 Point clouds are rasterised by :func:`rasterize_points` (the highest point
 per cell, empty cells NaN, points with non-finite coordinates dropped).
+
+Sizes are checked before anything is allocated, against the limits in force
+(:mod:`footfall.core.limits`): the file against ``max_file_bytes``, a
+``.npy`` header's shape and a PNG's width x height against
+``max_map_cells``, a PLY header's element counts and an ``.xyz`` file's lines
+against ``max_scan_points``, and the grid a cloud rasterises to against
+``max_map_cells``.
 """
 
 from __future__ import annotations

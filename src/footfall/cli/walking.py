@@ -35,6 +35,17 @@ def _run_text(result: dict) -> str:
             f"{result['real_time_factor']:.1f}")
 
 
+def _check_picture_outputs(snapshots: str | None, video: str | None) -> None:
+    """Refuse a --snapshots or --video path that could not be written, before the walk."""
+    from footfall.core.files import writable_path
+    from footfall.experiments.batch import SNAPSHOT_SUFFIXES, VIDEO_SUFFIXES
+
+    if snapshots is not None:
+        writable_path(snapshots, SNAPSHOT_SUFFIXES, what="--snapshots", kind="picture")
+    if video is not None:
+        writable_path(video, VIDEO_SUFFIXES, what="--video", kind="video")
+
+
 @click.command("walk")
 @TERRAIN_OPTION
 @MODEL_OPTION
@@ -53,6 +64,7 @@ def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: st
     """One run of the simulated robot across a board (success, slip, speed)."""
     from footfall.experiments.batch import walk_once
 
+    _check_picture_outputs(snapshots, video)
     outcome = walk_once(terrain_path, seed, model_path=model_path, expert=expert,
                         search_radius=search_radius, snapshots=snapshots, frames=frames,
                         video=video, log_path=log_path)

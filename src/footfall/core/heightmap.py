@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import numbers
 import os
 import struct
 from dataclasses import dataclass, field
@@ -22,6 +23,7 @@ import numpy as np
 
 from footfall.core.errors import FootfallError
 from footfall.core.files import load_npz, save_npz
+from footfall.core.limits import check_cells
 
 FORMAT = "footfall.heightmap"
 VERSION = 1
@@ -84,6 +86,128 @@ def _as_points(positions: Any) -> np.ndarray:
     return p[..., :2]
 
 
+MIN_RESOLUTION = 1e-5  # [m/cell] finest resolution accepted (10 um)
+MAX_RESOLUTION = 10.0  # [m/cell] coarsest resolution accepted
+MAX_COORDINATE = 1e6  # [m] a map must lie within this distance of its frame's origin
+MAX_HEIGHT = 1e5  # [m] largest |height| accepted (far beyond any terrain; keeps sums finite)
+MAX_FRAME_LENGTH = 256  # [characters] longest frame name
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _real(value: Any, what: str) -> float:
+    """``value`` as a finite float; bools, strings, complex numbers and NaN/inf are refused."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise FootfallError(f"{what} must be a number, got {_short(value)}")
+    out = float(value)
+    if not math.isfinite(out):
+        raise FootfallError(f"{what} must be a finite number, got {_short(value)}")
+    return out
+
+
+def _checked_heights(heights: Any) -> np.ndarray:
+    """A private float64 copy of the heights: 2-D, real numbers, finite or NaN, within limits."""
+    h = np.asarray(heights)
+    if h.ndim != 2:
+        raise FootfallError(f"height map must be 2-D, got shape {h.shape}")
+    if h.shape[0] < 2 or h.shape[1] < 2:
+        raise FootfallError(f"height map must be at least 2 x 2 cells, got {h.shape}")
+    if h.dtype.kind not in "iuf":
+        raise FootfallError(f"height map must hold numbers (float or integer heights [m]), "
+                            f"got dtype {h.dtype}")
+    check_cells(h.shape, "the height map")
+    with np.errstate(over="ignore", invalid="ignore"):
+        h = np.array(h, dtype=np.float64)  # private copy: nobody else can change it
+    if np.isinf(h).any():
+        raise FootfallError("height map holds infinite heights")
+    if np.isnan(h).all():
+        raise FootfallError("height map holds no data (all cells are NaN)")
+    if float(np.nanmax(np.abs(h))) > MAX_HEIGHT:
+        raise FootfallError(f"height map holds heights beyond +-{MAX_HEIGHT:g} m "
+                            f"(largest {float(np.nanmax(np.abs(h))):.3g} m)")
+    return h
+
+
+def _checked_resolution(value: Any) -> float:
+    try:
+        res = _real(value, "resolution")
+    except FootfallError:
+        res = math.nan
+    if not MIN_RESOLUTION <= res <= MAX_RESOLUTION:
+        raise FootfallError(f"resolution must be > 0: a finite number of {MIN_RESOLUTION:g} .. "
+                            f"{MAX_RESOLUTION:g} m/cell, got {_short(value)}")
+    return res
+
+
+def _checked_origin(value: Any) -> tuple[float, float]:
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:
+        raise FootfallError(f"origin must be two finite numbers (x, y) [m], got {_short(value)}")
+    origin = (_real(value[0], "origin x [m]"), _real(value[1], "origin y [m]"))
+    if max(abs(o) for o in origin) > MAX_COORDINATE:
+        raise FootfallError(f"origin must be within +-{MAX_COORDINATE:g} m, got {origin}")
+    return origin
+
+
+def _checked_metadata(metadata: Any) -> dict:
+    """A shallow copy of the metadata, which must be a dict (a JSON object)."""
+    if not isinstance(metadata, dict):
+        raise FootfallError(f"metadata must be a JSON object, got {type(metadata).__name__}")
+    return dict(metadata)
+
+
+def module_records(metadata: Any, what: str = "metadata") -> list[dict]:
+    """The module records of a board's metadata (``metadata["modules"]``), checked.
+
+    A board made by :func:`footfall.terrain.make_board` lists its modules in
+    order along x, each ``{"kind": str, "x_start": m, "x_end": m}`` and
+    usually ``"difficulty"`` in [0, 1] and ``"seed"`` >= 0. Code that walks a
+    board relies on these types; a file holding something else is refused
+    here, by field, rather than failing deep inside with a TypeError.
+    Returns ``[]`` when the metadata lists no modules.
+
+    Raises
+    ------
+    FootfallError
+        Naming ``what`` and the field: ``modules`` not a list, a record not an
+        object, a missing or mistyped field, or ``x_start >= x_end``.
+    """
+    if not isinstance(metadata, dict) or "modules" not in metadata:
+        return []
+    modules = metadata["modules"]
+    if not isinstance(modules, list):
+        raise FootfallError(f"{what}.modules must be a list of module records, got "
+                            f"{_short(modules)}")
+    for k, record in enumerate(modules):
+        _check_module_record(record, f"{what}.modules[{k}]")
+    return modules
+
+
+def _check_module_record(record: Any, what: str) -> None:
+    """One module record: {"kind", "x_start", "x_end"[, "difficulty", "seed"]} of the right types."""
+    if not isinstance(record, dict):
+        raise FootfallError(f"{what} must be a module record (an object with kind, x_start, "
+                            f"x_end), got {_short(record)}")
+    missing = [k for k in ("kind", "x_start", "x_end") if k not in record]
+    if missing:
+        raise FootfallError(f"{what} lacks {', '.join(missing)}")
+    if not isinstance(record["kind"], str):
+        raise FootfallError(f"{what}.kind must be a string, got {_short(record['kind'])}")
+    seed = record.get("seed", 0)
+    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, numbers.Integral) or seed < 0:
+        raise FootfallError(f"{what}.seed must be a whole number >= 0, got {_short(seed)}")
+    difficulty = record.get("difficulty", 0.0)
+    if not 0.0 <= _real(difficulty, f"{what}.difficulty") <= 1.0:
+        raise FootfallError(f"{what}.difficulty must be in [0, 1], got {difficulty}")
+    x_start = _real(record["x_start"], f"{what}.x_start")
+    x_end = _real(record["x_end"], f"{what}.x_end")
+    if not (x_start < x_end and max(abs(x_start), abs(x_end)) <= MAX_COORDINATE):
+        raise FootfallError(f"{what}: x_start {x_start:g} must be below x_end {x_end:g} "
+                            f"[m], both within +-{MAX_COORDINATE:g} m")
+
+
 @dataclass(frozen=True, eq=False)
 class HeightMap:
     """Heights [m] on a regular grid; NaN marks a cell with no data.
@@ -110,29 +234,22 @@ class HeightMap:
     metadata: dict = field(default_factory=dict)  # provenance, JSON-serialisable
 
     def __post_init__(self) -> None:
-        h = np.asarray(self.heights)
-        if h.ndim != 2:
-            raise FootfallError(f"height map must be 2-D, got shape {h.shape}")
-        if h.shape[0] < 2 or h.shape[1] < 2:
-            raise FootfallError(f"height map must be at least 2 x 2 cells, got {h.shape}")
-        if not np.issubdtype(h.dtype, np.floating) and not np.issubdtype(h.dtype, np.integer):
-            raise FootfallError(f"height map must hold numbers, got dtype {h.dtype}")
-        h = np.array(h, dtype=np.float64)  # private copy: nobody else can change it
-        if np.isinf(h).any():
-            raise FootfallError("height map holds infinite heights")
-        if np.isnan(h).all():
-            raise FootfallError("height map holds no data (all cells are NaN)")
-        res = float(self.resolution)
-        if not (math.isfinite(res) and res > 0):
-            raise FootfallError(f"resolution must be > 0, got {self.resolution}")
-        origin = tuple(float(o) for o in self.origin)
-        if len(origin) != 2 or not all(math.isfinite(o) for o in origin):
-            raise FootfallError(f"origin must be two finite numbers, got {self.origin}")
+        h = _checked_heights(self.heights)
+        res = _checked_resolution(self.resolution)
+        origin = _checked_origin(self.origin)
+        for k in (0, 1):
+            if abs(origin[k]) + h.shape[k] * res > MAX_COORDINATE:
+                raise FootfallError(f"the map reaches beyond {MAX_COORDINATE:g} m from its frame's "
+                                    f"origin (origin {origin}, {h.shape} cells of {res:g} m)")
+        if not isinstance(self.frame, str) or not 0 < len(self.frame) <= MAX_FRAME_LENGTH:
+            raise FootfallError(f"frame must be a name of 1 to {MAX_FRAME_LENGTH} characters, "
+                                f"got {_short(self.frame)}")
+        metadata = _checked_metadata(self.metadata)
         h.setflags(write=False)
         object.__setattr__(self, "heights", h)
         object.__setattr__(self, "resolution", res)
         object.__setattr__(self, "origin", origin)
-        object.__setattr__(self, "metadata", dict(self.metadata))
+        object.__setattr__(self, "metadata", metadata)
 
     # ----------------------------------------------------------------- geometry
     @property
@@ -280,13 +397,38 @@ class HeightMap:
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> "HeightMap":
-        """Read a map written by :meth:`save`; bad files raise :class:`FootfallError`."""
-        _, arrays, meta = load_npz(path, FORMAT, VERSION)
+        """Read a map written by :meth:`save`; bad files raise :class:`FootfallError`.
+
+        The heights must be a 2-D float32/float64 array within the
+        ``max_map_cells`` limit (checked before it is read); ``meta`` must
+        hold ``resolution`` [m/cell], ``origin`` [m], ``frame`` and optionally
+        ``metadata``, each of the right JSON type; the message names the file
+        and the field.
+        """
+        _, arrays, meta = load_npz(path, FORMAT, VERSION, check_member=_check_heights_member)
+        if "heights" not in arrays:
+            raise FootfallError(f"{path}: the file holds no heights array")
+        missing = [k for k in ("resolution", "origin", "frame") if k not in meta]
+        if missing:
+            raise FootfallError(f"{path}: meta lacks {', '.join(missing)}")
+        fields = {"heights": arrays["heights"], "resolution": meta["resolution"],
+                  "origin": meta["origin"], "frame": meta["frame"],
+                  "metadata": meta.get("metadata", {})}
+        if not isinstance(fields["origin"], list):
+            raise FootfallError(f"{path}: meta.origin must be a list of two numbers [m], got "
+                                f"{_short(fields['origin'])}")
         try:
-            heights = arrays["heights"]
-            return cls(heights, float(meta["resolution"]), tuple(meta["origin"]),
-                       str(meta["frame"]), dict(meta.get("metadata", {})))
-        except (KeyError, TypeError, ValueError) as exc:
-            if isinstance(exc, FootfallError):
-                raise FootfallError(f"{path}: {exc}") from None
-            raise FootfallError(f"{path}: malformed height map ({exc})") from None
+            return cls(**fields)
+        except FootfallError as exc:
+            raise FootfallError(f"{path}: {exc}") from None
+
+
+def _check_heights_member(name: str, shape: tuple[int, ...], dtype: np.dtype) -> None:
+    """Refuse a heights array of another dtype, dimension or too many cells, before reading it."""
+    if name != "heights":
+        return
+    if dtype not in (np.dtype("<f4"), np.dtype(">f4"), np.dtype("<f8"), np.dtype(">f8")):
+        raise FootfallError(f"heights must be float32 or float64 [m], got dtype {dtype}")
+    if len(shape) != 2:
+        raise FootfallError(f"heights must be 2-D, got shape {shape}")
+    check_cells(shape, "the height map")

@@ -20,7 +20,7 @@ import numpy as np
 from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
 from footfall.core.files import writable_path
-from footfall.core.heightmap import HeightMap
+from footfall.core.heightmap import HeightMap, module_records
 from footfall.core.robot import LITTLEDOG
 from footfall.core.stats import wilson_interval
 from footfall.data.runlog import RunRecord
@@ -146,6 +146,10 @@ def summarise(records: list[RunRecord]) -> RunSummary:
                       float(np.mean(bl)) if bl else None, reasons)
 
 
+SNAPSHOT_SUFFIXES = (".png",)  # what save_strip writes
+VIDEO_SUFFIXES = (".mp4",)  # what save_video writes (H.264 in an MP4 container)
+
+
 def save_strip(frames: list, path: str | os.PathLike, title: str | None = None) -> None:
     """A strip of snapshot frames [(time [s], image)] side by side (as the paper's Fig. 4)."""
     import matplotlib
@@ -190,7 +194,9 @@ def load_board(path: str | os.PathLike) -> HeightMap:
     """The board height map at ``path``; a missing file is refused by name."""
     if not Path(path).exists():
         raise FootfallError(f"no such terrain file: {path}")
-    return HeightMap.load(path)
+    hmap = HeightMap.load(path)
+    module_records(hmap.metadata, f"{path}: metadata")  # what a walk relies on, checked by field
+    return hmap
 
 
 def walk_config(model_path: str | os.PathLike | None = None, expert: bool = False,
@@ -261,9 +267,10 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
     config = walk_config(model_path, expert, search_radius)
     hmap = load_board(terrain_path)
     reward_for = reward_source(model_path, hmap)
-    for p in (snapshots, video):
-        if p is not None:
-            writable_path(p)
+    if snapshots is not None:
+        writable_path(snapshots, SNAPSHOT_SUFFIXES, what="snapshots", kind="picture")
+    if video is not None:
+        writable_path(video, VIDEO_SUFFIXES, what="video", kind="video")
     store = _open_log(log_path)
     pictures = None
     if snapshots or video:

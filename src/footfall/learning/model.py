@@ -151,7 +151,8 @@ class FootholdModel:
     @classmethod
     def load(cls, path: str | os.PathLike) -> FootholdModel:
         """Read a model written by :meth:`save` (or by footfall's version 1 format)."""
-        version, arrays, meta = load_npz(path, FORMAT, VERSION)
+        version, arrays, meta = load_npz(path, FORMAT, VERSION, allow_nonfinite=True)  # NaN:
+        # an undefined figure of the training info (an SVM's log loss)
         try:
             config = FeatureConfig.from_dict(meta["config"])
             robot = RobotDescription.from_dict(meta["robot"])

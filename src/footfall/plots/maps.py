@@ -45,8 +45,9 @@ def draw_score_map(ax: Axes, grid: ScoreGrid, *, title: str = "", label: str = "
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     if title:
-        ax.set_title(title)
-    ax.figure.colorbar(image, ax=ax, label=label, shrink=0.85)
+        ax.set_title(title, parse_math=False)  # names may come from files: text, not mathtext
+    bar = ax.figure.colorbar(image, ax=ax, shrink=0.85)
+    bar.ax.set_ylabel(label, parse_math=False)
 
 
 def save_score_maps(grids: Sequence[ScoreGrid], titles: Sequence[str], labels: Sequence[str],
@@ -90,9 +91,9 @@ def save_template_figure(patches: Sequence[Sequence[np.ndarray]], grids: Sequenc
             ax.set_yticks([-int(hv * 1000), 0, int(hv * 1000)])
             if r == 0:
                 ax.set_title(f"{scale_names[s]} ({grid.length_x * 1000:.0f} x "
-                             f"{grid.length_y * 1000:.0f} mm)")
+                             f"{grid.length_y * 1000:.0f} mm)", parse_math=False)
             if s == 0:
-                ax.set_ylabel(f"{row_titles[r]}\nv [mm]")
+                ax.set_ylabel(f"{row_titles[r]}\nv [mm]", parse_math=False)
             if r == rows - 1:
                 ax.set_xlabel("u [mm] (forward)")
     if image is not None:

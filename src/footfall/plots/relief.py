@@ -77,7 +77,7 @@ def draw_relief(ax: Axes, hmap: HeightMap, *, vmin: float | None = None,
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     if title is not None:
-        ax.set_title(title)
+        ax.set_title(title, parse_math=False)  # a file name is text, not mathtext
     if colorbar:
         mappable = ScalarMappable(norm=norm, cmap=RELIEF_CMAP)
         ax.figure.colorbar(mappable, ax=ax, label="height [mm]", shrink=0.9)
@@ -119,6 +119,6 @@ def save_relief_of_file(source: str | os.PathLike, path: str | os.PathLike) -> P
     Returns the path written. Raises :class:`FootfallError` for a bad output
     path (checked first) or a file that is not a readable height map.
     """
-    out = writable_path(path)
+    out = writable_path(path, (".png",), kind="picture")
     save_relief(HeightMap.load(source), out, title=Path(source).name)
     return out

@@ -63,7 +63,7 @@ from footfall.control.pose_finder import PoseConfig, find_pose
 from footfall.control.swing import SwingConfig, swing_trajectory
 from footfall.core.errors import FootfallError
 from footfall.core.files import plain_json
-from footfall.core.heightmap import HeightMap
+from footfall.core.heightmap import HeightMap, module_records
 from footfall.core.params import Params, at_least, param, within
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState, nominal_state
@@ -193,8 +193,8 @@ def board_line(hmap: HeightMap, robot: RobotDescription, config: WalkConfig
     module spanning the whole map.
     """
     x0, x1, y0, y1 = hmap.bounds
-    modules = hmap.metadata.get("modules") if isinstance(hmap.metadata, dict) else None
-    if modules and len(modules) >= 2:
+    modules = module_records(hmap.metadata)
+    if len(modules) >= 2:
         first_end = x0 + float(modules[0]["x_end"]) - float(modules[0]["x_start"])
         last_start = x0 + float(modules[-1]["x_start"])
     else:

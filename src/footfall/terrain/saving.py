@@ -19,6 +19,8 @@ from footfall.core.heightmap import HeightMap
 from footfall.terrain.modules import make_board, make_module, parse_module_spec
 from footfall.terrain.scans import import_terrain
 
+MAP_SUFFIXES = (".npz",)  # what HeightMap.save writes
+
 
 @dataclass(frozen=True)
 class MapSummary:
@@ -68,9 +70,9 @@ def save_module(kind: str, difficulty: float, seed: int, path: str | os.PathLike
     Raises
     ------
     FootfallError
-        For a bad output path, an unknown kind, a difficulty outside [0, 1] or a bad seed.
+        For a bad output path (or one not ending in .npz), an unknown kind, a difficulty outside [0, 1] or a bad seed.
     """
-    out = writable_path(path)
+    out = writable_path(path, MAP_SUFFIXES, kind="height map")
     return _save(make_module(kind, difficulty, seed), out)
 
 
@@ -84,9 +86,9 @@ def save_board(specs: Sequence[str], seed: int, path: str | os.PathLike,
     Raises
     ------
     FootfallError
-        For a bad output path, a malformed spec or a bad seed.
+        For a bad output path (or one not ending in .npz), a malformed spec or a bad seed.
     """
-    out = writable_path(path)
+    out = writable_path(path, MAP_SUFFIXES, kind="height map")
     return _save(make_board([parse_module_spec(s) for s in specs], seed, flat_ends=flat_ends), out)
 
 
@@ -103,6 +105,6 @@ def save_imported(source: str | os.PathLike, path: str | os.PathLike,
     FootfallError
         For a bad output path or a source the import refuses.
     """
-    out = writable_path(path)
+    out = writable_path(path, MAP_SUFFIXES, kind="height map")
     return _save(import_terrain(source, resolution=resolution, z_scale=z_scale, nodata=nodata),
                  out)

@@ -29,15 +29,23 @@ Supported suffixes (case-insensitive), :data:`SUFFIXES`, read by :func:`import_t
 
 Point clouds are rasterised by :func:`rasterize_points` (the highest point
 per cell, empty cells NaN, points with non-finite coordinates dropped).
+
+Sizes are checked before anything is allocated, against the limits in force
+(:mod:`footfall.core.limits`): the file against ``max_file_bytes``, a
+``.npy`` header's shape and a PNG's width x height against
+``max_map_cells``, a PLY header's element counts and an ``.xyz`` file's lines
+against ``max_scan_points``, and the grid a cloud rasterises to against
+``max_map_cells``.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import math
 import os
+import tokenize
 import warnings
-import zipfile
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,11 +54,17 @@ from typing import Any, Callable
 import numpy as np
 
 from footfall.core.errors import FootfallError
-from footfall.core.heightmap import HeightMap
+from footfall.core.files import readable_file
+from footfall.core.heightmap import MAX_COORDINATE, HeightMap
+from footfall.core.limits import Limits, current_limits
 
 __all__ = ["import_terrain", "rasterize_points", "SUFFIXES", "MAX_CELLS"]
 
-MAX_CELLS = 100_000_000  # largest grid a point cloud may be rasterised to (800 MB of float64)
+MAX_CELLS = Limits().max_map_cells  # the default of the limit on rasterised grids (raise the
+# limit max_map_cells, not this constant: the limit in force is current_limits().max_map_cells)
+PLY_HEADER_BYTES = 1 << 16  # [bytes] the longest PLY header read
+_NPY_HEADER_ERRORS = (ValueError, SyntaxError, tokenize.TokenError, EOFError, OSError,
+                      KeyError, TypeError)
 
 
 @dataclass(frozen=True)
@@ -137,7 +151,8 @@ def _grid_to_map(path: Path, raw: np.ndarray, fmt: str, opts: _Options,
     heights = raw.astype(np.float64)
     if opts.nodata is not None:
         heights[raw == opts.nodata] = np.nan
-    heights *= z_scale
+    with np.errstate(over="ignore"):  # an overflow gives inf, which HeightMap refuses by name
+        heights *= z_scale
     if np.isnan(heights).all():
         raise FootfallError(f"{path}: no data (every cell is NaN"
                             + (f" or equal to nodata={opts.nodata:g})" if opts.nodata is not None
@@ -153,18 +168,35 @@ def _read_npz(path: Path, opts: _Options) -> HeightMap:
     if given:
         raise FootfallError(f"{path}: a .npz footfall height map carries its own geometry; "
                             f"do not pass {', '.join(given)}")
-    # Checked here because np.load leaks its file handle when the zip cannot be opened.
-    if not zipfile.is_zipfile(path):
-        raise FootfallError(f"{path}: not a readable footfall .npz file (not a zip archive)")
     return HeightMap.load(path)
+
+
+def _npy_header(path: Path, fh: Any) -> tuple[tuple[int, ...], np.dtype]:
+    """Shape and dtype from a ``.npy`` header, parsed without reading the data."""
+    fmt = np.lib.format
+    version = fmt.read_magic(fh)
+    if version == (1, 0):
+        shape, _, dtype = fmt.read_array_header_1_0(fh)
+    elif version == (2, 0):
+        shape, _, dtype = fmt.read_array_header_2_0(fh)
+    else:
+        raise ValueError(f"unsupported .npy format version {version}")
+    return tuple(shape), dtype
 
 
 def _read_npy(path: Path, opts: _Options) -> HeightMap:
     try:
         with open(path, "rb") as fh:
+            shape, dtype = _npy_header(path, fh)
+            if len(shape) == 2 and not dtype.hasobject:
+                _check_cells(path, shape, "the .npy array")
+            fh.seek(0)
             raw = np.lib.format.read_array(fh, allow_pickle=False)
-    except (ValueError, EOFError, OSError) as exc:
-        raise FootfallError(f"{path}: not a readable .npy array ({exc})") from None
+    except FootfallError:
+        raise
+    except _NPY_HEADER_ERRORS as exc:
+        raise FootfallError(f"{path}: not a readable .npy array ({exc or type(exc).__name__})"
+                            ) from None
     if raw.dtype.names is not None or not (np.issubdtype(raw.dtype, np.integer)
                                            or np.issubdtype(raw.dtype, np.floating)):
         raise FootfallError(f"{path}: .npy must hold integer or float heights, "
@@ -178,21 +210,51 @@ def _read_npy(path: Path, opts: _Options) -> HeightMap:
 _PNG_16BIT_MODES = ("I;16", "I;16B", "I;16L", "I")  # "I": how older Pillows open 16-bit grey
 
 
+def _check_cells(path: Path, shape: tuple[int, ...], what: str) -> None:
+    """Refuse a grid above the ``max_map_cells`` limit, before it is read."""
+    cells = math.prod(int(n) for n in shape)
+    limit = current_limits().max_map_cells
+    if cells > limit:
+        raise FootfallError(f"{path}: {what} has {cells} cells, above the limit of {limit} "
+                            f"(raise it with --limit max_map_cells=N)")
+
+
+@contextlib.contextmanager
+def _pillow_limit(cells: int) -> Any:
+    """Pillow's decompression-bomb check at our limit, and without its warning (one line)."""
+    from PIL import Image
+
+    before = Image.MAX_IMAGE_PIXELS
+    Image.MAX_IMAGE_PIXELS = cells  # Pillow raises above twice this, warns above it
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            yield
+    finally:
+        Image.MAX_IMAGE_PIXELS = before
+
+
 def _read_png(path: Path, opts: _Options) -> HeightMap:
     from PIL import Image, UnidentifiedImageError
 
     if opts.z_scale is None:
         raise FootfallError(f"{path}: z_scale [m per count] is required to import a 16-bit PNG")
     try:
-        with Image.open(path) as img:
+        with _pillow_limit(current_limits().max_map_cells), Image.open(path) as img:
             fmt, mode = img.format, img.mode
             if fmt == "PNG" and mode in _PNG_16BIT_MODES:
+                _check_cells(path, img.size, "the PNG image")  # before decoding a pixel
                 img.load()
                 raw = np.array(img)
+    except FootfallError:
+        raise
     except UnidentifiedImageError:
         raise FootfallError(f"{path}: not a readable PNG image") from None
-    except (OSError, SyntaxError, ValueError, EOFError, zlib.error,
-            Image.DecompressionBombError) as exc:
+    except Image.DecompressionBombError:
+        raise FootfallError(f"{path}: the PNG image has more pixels than the limit of "
+                            f"{current_limits().max_map_cells} (raise it with "
+                            f"--limit max_map_cells=N)") from None
+    except (OSError, SyntaxError, ValueError, EOFError, zlib.error) as exc:
         raise FootfallError(f"{path}: corrupt or truncated PNG ({exc})") from None
     if fmt != "PNG":
         raise FootfallError(f"{path}: holds a {fmt} image, not a PNG")
@@ -207,9 +269,37 @@ def _read_png(path: Path, opts: _Options) -> HeightMap:
     return _grid_to_map(path, raw[::-1, :].T, "png", opts, opts.z_scale)
 
 
+def _check_ply_counts(path: Path) -> None:
+    """Refuse a PLY whose header declares more points (or other elements) than the limit.
+
+    Read before plyfile, which allocates every element's declared count up front.
+    """
+    with open(path, "rb") as fh:
+        head = fh.read(PLY_HEADER_BYTES)
+    end = head.find(b"end_header")
+    if end < 0:
+        return  # plyfile reports the malformed header
+    limit = current_limits().max_scan_points
+    for line in head[:end].splitlines():
+        words = line.split()
+        if len(words) == 3 and words[0] == b"element":
+            name = words[1].decode("ascii", "replace")
+            try:
+                count = int(words[2])
+            except ValueError:
+                raise FootfallError(f"{path}: PLY element {name!r} has a count that is not a "
+                                    f"whole number: {words[2].decode('ascii', 'replace')!r}"
+                                    ) from None
+            if count > limit:
+                raise FootfallError(f"{path}: PLY element {name!r} declares {count} items, "
+                                    f"above the limit of {limit} (raise it with "
+                                    f"--limit max_scan_points=N)")
+
+
 def _read_ply(path: Path, opts: _Options) -> np.ndarray:
     from plyfile import PlyData, PlyParseError
 
+    _check_ply_counts(path)
     try:
         with open(path, "rb") as fh:
             lines = fh.read(256).splitlines()
@@ -238,12 +328,24 @@ def _read_ply(path: Path, opts: _Options) -> np.ndarray:
     return np.stack(columns, axis=1) if len(data) else np.empty((0, 3))
 
 
+def _bounded_lines(path: Path, fh: Any) -> Any:
+    """The lines of an .xyz file (commas as blanks), refused beyond ``max_scan_points``."""
+    limit = current_limits().max_scan_points
+    for n, line in enumerate(fh):
+        if n >= limit and line.split("#", 1)[0].strip():
+            raise FootfallError(f"{path}: more than {limit} points (lines), the limit "
+                                f"(raise it with --limit max_scan_points=N)")
+        yield line.replace(",", " ")
+
+
 def _read_xyz(path: Path, opts: _Options) -> np.ndarray:
     try:
         with open(path, encoding="utf-8") as fh, warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # "input contained no data"
-            points = np.loadtxt((line.replace(",", " ") for line in fh), dtype=np.float64,
+            points = np.loadtxt(_bounded_lines(path, fh), dtype=np.float64,
                                 comments="#", usecols=(0, 1, 2), ndmin=2)
+    except FootfallError:
+        raise
     except (ValueError, OSError) as exc:  # UnicodeDecodeError is a ValueError
         raise FootfallError(f"{path}: not a readable .xyz text file of x y z columns "
                             f"({exc})") from None
@@ -300,10 +402,15 @@ def _rasterize(points: np.ndarray, resolution: float, z_scale: float, nodata: fl
         is_nd = keep & (pts[:, 2] == nodata)
         n_nodata = int(is_nd.sum())
         keep &= ~is_nd
-    x, y, z = pts[keep, 0], pts[keep, 1], pts[keep, 2] * z_scale
+    with np.errstate(over="ignore"):  # an overflow gives inf, which HeightMap refuses by name
+        x, y, z = pts[keep, 0], pts[keep, 1], pts[keep, 2] * z_scale
     if x.size == 0:
         raise FootfallError(f"no usable points among {n_read} ({n_nonfinite} non-finite, "
                             f"{n_nodata} equal to nodata)")
+    far = max(float(np.abs(x).max()), float(np.abs(y).max()))
+    if far > MAX_COORDINATE:
+        raise FootfallError(f"the points reach {far:.3g} m from the frame's origin, beyond "
+                            f"+-{MAX_COORDINATE:g} m")
     x0, y0 = float(x.min()), float(y.min())
     fi = np.floor((x - x0) / resolution + 0.5)  # cell index, same rule as position_to_index
     fj = np.floor((y - y0) / resolution + 0.5)
@@ -312,9 +419,11 @@ def _rasterize(points: np.ndarray, resolution: float, z_scale: float, nodata: fl
         raise FootfallError(f"the points span only {nx_f:.0f} x {ny_f:.0f} cells at resolution "
                             f"{resolution:g} m/cell; a height map needs at least 2 x 2 "
                             "(use a finer resolution)")
-    if nx_f * ny_f > MAX_CELLS:
+    limit = current_limits().max_map_cells
+    if nx_f * ny_f > limit:
         raise FootfallError(f"rasterising at {resolution:g} m/cell would make {nx_f:.0f} x "
-                            f"{ny_f:.0f} cells (more than {MAX_CELLS}); use a coarser resolution")
+                            f"{ny_f:.0f} cells (more than {limit}, the max_map_cells limit); "
+                            f"use a coarser resolution")
     nx, ny = int(nx_f), int(ny_f)
     i, j = fi.astype(np.int64), fj.astype(np.int64)
     grid = np.full(nx * ny, -np.inf)
@@ -369,7 +478,7 @@ def rasterize_points(points: Any, resolution: float, *, z_scale: float = 1.0,
     ------
     FootfallError
         If the cloud is empty, has no usable point, spans fewer than 2 x 2
-        cells or more than :data:`MAX_CELLS`, or an argument is invalid.
+        cells or more than the ``max_map_cells`` limit, or an argument is invalid.
     """
     label = Path("<points>")
     opts = _validate(label, resolution, z_scale, nodata, None, frame)
@@ -441,9 +550,6 @@ def import_terrain(path: str | os.PathLike, *, resolution: float | None = None,
     if reader is None:
         raise FootfallError(f"{p}: unknown terrain file type {suffix or '(no suffix)'!r}; "
                             f"known: {', '.join(SUFFIXES)}")
-    if not p.exists():
-        raise FootfallError(f"no such file: {p}")
-    if not p.is_file():
-        raise FootfallError(f"{p}: not a regular file")
+    readable_file(p)  # missing, not a file, permission denied, too large
     opts = _validate(p, resolution, z_scale, nodata, origin, frame)
     return reader(p, opts)

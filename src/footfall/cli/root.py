@@ -19,7 +19,7 @@ from footfall.cli.store import store
 from footfall.cli.terrain import terrain
 from footfall.cli.walking import walk_cmd, walk_many_cmd
 from footfall.core.errors import FootfallError, one_line
-from footfall.core.limits import apply_assignments
+from footfall.core.limits import apply_assignments, limits_of_one_command
 from footfall.core.plugins import load_plugins
 
 EXIT_USER_ERROR = 2  # a bad file or argument
@@ -46,6 +46,11 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point: run the CLI, turning user errors into one line and exit status 2."""
     args = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in args
+    with limits_of_one_command():  # --limit holds for this command (and its workers) only
+        return _run(args, debug)
+
+
+def _run(args: list[str], debug: bool) -> int:
     try:
         load_plugins()  # their learners, feature sets and terrain kinds become choices
         cli.main(args=args, prog_name="footfall", standalone_mode=False)

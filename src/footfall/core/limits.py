@@ -124,6 +124,21 @@ def apply_assignments(assignments: tuple[str, ...] | list[str]) -> Limits:
     return current_limits()
 
 
+@contextlib.contextmanager
+def limits_of_one_command() -> Iterator[None]:
+    """Undo, after the block, what :func:`apply_assignments` put in the environment."""
+    names = [ENV_PREFIX + f.name.upper() for f in dataclasses.fields(Limits)]
+    before = {n: os.environ.get(n) for n in names}
+    try:
+        yield
+    finally:
+        for n, value in before.items():
+            if value is None:
+                os.environ.pop(n, None)
+            else:
+                os.environ[n] = value
+
+
 def check_count(value: Any, what: str, minimum: int = 0) -> int:
     """``value`` as a count from ``minimum`` to the ``max_count`` limit.
 

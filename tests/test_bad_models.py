@@ -354,3 +354,112 @@ def test_the_extremes_a_model_file_admits_still_score_finite(board, tmp_path):
         near[:, 2] = hmap.height_at(near[:, :2])
         r = score_footholds(hmap, state, near, reward)
         assert np.isfinite(r).all(), r
+
+
+# ------------------------------------------------------------------ footfall learn arguments
+@pytest.mark.parametrize("args, match", [
+    (["--bandwidth-rms", "1e-300", "1e-300", "1e-300"],
+     "Invalid value for '--bandwidth-rms': 1e-300 is not in the range 1e-05<=x<=1.0"),
+    (["--bandwidth-rms", "nan", "0.004", "0.004"], "'nan' is not a finite number"),
+    (["--bandwidth-rms", "0.004", "inf", "0.004"], "Invalid value for '--bandwidth-rms'"),
+    (["--bandwidth-rms", "0.004", "abc", "0.004"], "Invalid value for '--bandwidth-rms'"),
+    (["--seed", "-1"], "Invalid value for '--seed': -1 is not in the range 0<=x<="),
+    (["--seed", str(10 ** 30)], "Invalid value for '--seed'"),
+    (["--library-size", "1000000"], "--library-size = 1000000 is above the limit of 100000"),
+    (["--library-size", "2"], "Invalid value for '--library-size'"),
+    (["--training-candidates", "1000000"], "--training-candidates = 1000000 is above the limit"),
+    (["--training-candidates", "0"], "Invalid value for '--training-candidates'"),
+    (["--cv", "1"], "Invalid value for '--cv'"),
+    (["-o", "{tmp}/model.txt"], "output model {tmp}/model.txt must end in .npz"),
+    (["-o", "{tmp}/missing/model.npz"], "output directory does not exist: {tmp}/missing"),
+    (["-o", "{tmp}/dir.npz"], "output path is a directory: {tmp}/dir.npz"),
+])
+def test_learn_arguments_are_checked_before_anything_is_read(tmp_path, capsys, args, match):
+    (tmp_path / "dir.npz").mkdir()
+    args = [a.replace("{tmp}", str(tmp_path)) for a in args]
+    if "-o" not in args:
+        args += ["-o", str(tmp_path / "m.npz")]
+    # The store does not exist: each bad argument is found first, before the store is opened.
+    code, out, err = run(capsys, "learn", tmp_path / "none.sqlite", "--features", "terrain", *args)
+    assert_user_error(code, err, match.replace("{tmp}", str(tmp_path)))
+    assert out == "" and not (tmp_path / "m.npz").exists()
+
+
+def test_learn_counts_follow_the_max_count_limit(tmp_path, capsys):
+    code, _, err = run(capsys, "--limit", "max_count=2000000", "learn", tmp_path / "none.sqlite",
+                       "--features", "terrain", "--library-size", "1000000", "-o",
+                       tmp_path / "m.npz")
+    assert_user_error(code, err, "none.sqlite")  # the count passed: the missing store is next
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "geteuid") or __import__("os").geteuid() == 0,
+                    reason="root may write anywhere")
+def test_learn_refuses_an_output_directory_it_cannot_write(tmp_path, capsys):
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    try:
+        code, _, err = run(capsys, "learn", tmp_path / "none.sqlite", "--features", "terrain",
+                           "-o", locked / "m.npz")
+    finally:
+        locked.chmod(0o700)
+    assert_user_error(code, err, f"output directory is not writable: {locked}")
+
+
+def test_learning_settings_are_checked_by_the_library_too():
+    from footfall.features.templates import bandwidth_for_rms
+    from footfall.learning.train import learn_model
+
+    for kwargs, match in (({"seed": -1}, "seed must be >= 0, got -1"),
+                          ({"seed": 1.5}, "seed must be an integer, got float 1.5"),
+                          ({"library_size": 10 ** 9}, "library_size = 1000000000 is above"),
+                          ({"training_candidates": True}, "training_candidates must be a whole"),
+                          ({"cv": 1}, "cv must be >= 2")):
+        with pytest.raises(FootfallError, match=match):
+            learn_model([], "terrain", **kwargs)
+    for rms in (1e-300, 0.0, float("nan"), float("inf"), 2.0, "abc"):
+        with pytest.raises(FootfallError, match="RMS height difference"):
+            bandwidth_for_rms(rms, CONFIG.grids[0])
+    with pytest.raises(FootfallError, match="bandwidths must hold one bandwidth per scale"):
+        TemplateFeatures(CONFIG).with_rms((0.004, 0.004))
+
+
+def test_the_cli_rms_range_is_the_template_family_s():
+    from footfall.cli.learning import RMS_RANGE
+    from footfall.features import templates
+
+    assert RMS_RANGE == templates.RMS_RANGE
+
+
+# ------------------------------------------------------------- rank-eval without the expert
+@pytest.fixture(scope="module")
+def small_store(tmp_path_factory):
+    from footfall.expert.collect import collect_demonstrations
+    from footfall.expert.synthetic import SyntheticExpert
+    from footfall.terrain import make_board
+
+    board = make_board([("flat", 0.3)], seed=11)
+    demos = collect_demonstrations([board], SyntheticExpert(), 2, seed=3)
+    path = tmp_path_factory.mktemp("store") / "demos.sqlite"
+    with DemoStore(path, create=True) as store:
+        store.add_demonstrations(demos, terrains=[board])
+    return path
+
+
+def test_rank_eval_without_the_expert_prints_null_and_n_a(good, small_store, capsys):
+    code, out, err = run(capsys, "rank-eval", good, small_store, "--no-expert", "--json")
+    assert code == 0, err
+    data = json.loads(out)  # strict JSON: no NaN token
+    assert "NaN" not in out and data["n"] >= 1
+    assert data["reward_loss"] is None and data["reward_loss_std"] is None
+    assert data["reward_loss_ci"] == [None, None] and data["losses"] == []
+    assert 0 <= data["percentile"] <= 1
+    code, out, err = run(capsys, "rank-eval", good, small_store, "--no-expert")
+    assert code == 0 and "reward loss n/a (95 % CI n/a to n/a)" in out and "nan" not in out
+
+
+def test_emit_prints_a_non_finite_number_as_null(capsys):
+    from footfall.cli.output import emit
+
+    emit(True, {"a": float("nan"), "b": [float("inf"), 1.5], "c": np.float64("-inf")}, "")
+    assert json.loads(capsys.readouterr().out) == {"a": None, "b": [None, 1.5], "c": None}

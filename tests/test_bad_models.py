@@ -164,9 +164,14 @@ BAD_FILES = {
     "family a string": (_set(lambda m: m["groups"]["front"]["families"], 0, "terrain"),
                         "groups.front.families[0] must be an object"),
     "family name an int": (_set(lambda m: _front_family(m, 0), "name", 3),
-                           "groups.front.families must be the feature set's families"),
+                           "groups.front.families must be of the feature set's families"),
     "family names swapped": (lambda raw, meta: meta["groups"]["front"]["families"].reverse(),
-                             "must be the feature set's families ['terrain', 'templates', 'pose']"),
+                             "must be of the feature set's families ['terrain', 'templates', "
+                             "'pose'], each at most once and in that order"),
+    "family repeated": (lambda raw, meta: meta["groups"]["front"]["families"].append(
+        _front_family(meta, 0)), "each at most once"),
+    "no families": (_set(lambda m: m["groups"]["front"], "families", []),
+                    "groups.front.families must be of the feature set's families"),
     "columns of ints": (_set(lambda m: _front_family(m, 2), "columns", [1, 2]),
                         "groups.front.families[2].columns[0] must be a string"),
     "columns mismatched": (lambda raw, meta: _front_family(meta, 2)["columns"].pop(),
@@ -463,3 +468,13 @@ def test_emit_prints_a_non_finite_number_as_null(capsys):
 
     emit(True, {"a": float("nan"), "b": [float("inf"), 1.5], "c": np.float64("-inf")}, "")
     assert json.loads(capsys.readouterr().out) == {"a": None, "b": [None, 1.5], "c": None}
+
+
+def test_an_object_array_is_refused_without_unpickling(good, tmp_path):
+    raw, meta = read_raw(good)
+    raw[COEF] = np.array([{"a": 1}] * 27, dtype=object)
+    path = tmp_path / "object.npz"
+    np.savez(path, meta=np.array(json.dumps(meta)), allow_pickle=True, **raw)
+    with pytest.raises(FootfallError) as info:
+        FootholdModel.load(path)
+    assert str(info.value).startswith(str(path)) and "\n" not in str(info.value)

@@ -230,9 +230,10 @@ def _read_group(group: str, meta: Any, arrays: dict, config: FeatureConfig,
     entries = require_type(meta["families"], list, f"{where}.families")
     found = [require_keys(e, f"{where}.families[{k}]", ("name", "columns", "params")).get("name")
              for k, e in enumerate(entries)]
-    if found != list(names):
-        raise FootfallError(f"{where}.families must be the feature set's families "
-                            f"{list(names)}, got {shown(found)}")
+    if not found or found != [n for n in names if n in found]:
+        raise FootfallError(f"{where}.families must be of the feature set's families "
+                            f"{list(names)}, each at most once and in that order, "
+                            f"got {shown(found)}")
     families, coef, scale = [], [], []
     for k, entry in enumerate(entries):
         field_path, prefix = f"{where}.families[{k}]", f"{group}.{entry['name']}."

@@ -3,12 +3,51 @@ with the expert on demonstrations."""
 
 from __future__ import annotations
 
+import math
+import os
+from pathlib import Path
+from typing import Any
+
 import click
 
 from footfall.cli.choices import FEATURE_SET, LEARNER, SELECTION
 from footfall.cli.output import emit, json_option, progress_log
+from footfall.core.errors import FootfallError
 
 SOURCE_HELP = "Only demonstrations whose source starts with this (e.g. walker:train)."
+RMS_RANGE = (1e-5, 1.0)  # [m] = footfall.features.templates.RMS_RANGE (not imported: --help stays light)
+MAX_SEED = 2 ** 63 - 1  # seeds are stored in SQLite and JSON as 64-bit integers
+
+
+class FiniteFloatRange(click.FloatRange):
+    """A float within a range that is also finite: click's FloatRange lets NaN through."""
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> Any:
+        number = super().convert(value, param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return number
+
+
+def model_output(path: str) -> Path:
+    """The output model path, refused before learning starts if the model could not be written.
+
+    Raises
+    ------
+    FootfallError
+        If ``path`` is a directory, its directory does not exist or is not writable, or it
+        does not end in ``.npz``.
+    """
+    from footfall.core.files import writable_path
+
+    out = writable_path(path)
+    if out.suffix.lower() != ".npz":
+        raise FootfallError(f"output model {out} must end in .npz")
+    directory = out.parent if str(out.parent) else Path(".")
+    if not os.access(directory, os.W_OK | os.X_OK):
+        raise FootfallError(f"output directory is not writable: {directory}")
+    return out
 
 
 @click.command()
@@ -18,27 +57,37 @@ SOURCE_HELP = "Only demonstrations whose source starts with this (e.g. walker:tr
                    "by '+' (e.g. terrain+pose).")
 @click.option("--learner", type=LEARNER, default="l1", show_default=True,
               help="L1 / L2 logistic regression or a linear SVM.")
-@click.option("--library-size", type=click.IntRange(3, 100000), default=1000, show_default=True,
-              help="Templates in the library, over the three scales.")
-@click.option("--training-candidates", type=click.IntRange(1, 100000), default=100,
-              show_default=True, help="Other candidates per demonstration used for pairs.")
-@click.option("--bandwidth-rms", type=float, nargs=3, default=None, metavar="S M L",
-              help="Fix the RBF bandwidths as RMS height differences [m] per scale "
-                   "(default: chosen by cross-validation).")
-@click.option("--cv", type=click.IntRange(2, 50), default=5, show_default=True)
+@click.option("--library-size", type=click.IntRange(min=3), default=1000, show_default=True,
+              help="Templates in the library, over the three scales (at most the max_count "
+                   "limit).")
+@click.option("--training-candidates", type=click.IntRange(min=1), default=100,
+              show_default=True, help="Other candidates per demonstration used for pairs (at "
+                                      "most the max_count limit).")
+@click.option("--bandwidth-rms", type=FiniteFloatRange(*RMS_RANGE), nargs=3, default=None,
+              metavar="S M L",
+              help="Fix the RBF bandwidths as RMS height differences [m] per scale, each from "
+                   f"{RMS_RANGE[0]:g} to {RMS_RANGE[1]:g} (default: chosen by cross-validation).")
+@click.option("--cv", type=click.IntRange(2, 50), default=5, show_default=True,
+              help="Cross-validation folds (grouped by demonstration).")
 @click.option("--selection", type=SELECTION, default="1se", show_default=True,
               help="Lambda: one-standard-error rule (sparser) or the smallest CV error.")
 @click.option("--source", default=None, help=SOURCE_HELP)
-@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--seed", type=click.IntRange(0, MAX_SEED), default=0, show_default=True,
+              help="Seed of the template library's sample and the training candidates.")
 @click.option("-o", "--output", required=True, help="Output model (.npz).")
 @json_option
 def learn(store_path: str, feature_set: str, learner: str, library_size: int,
           training_candidates: int, bandwidth_rms: tuple[float, float, float] | None, cv: int,
           selection: str, source: str | None, seed: int, output: str, as_json: bool) -> None:
     """Learn front- and hind-leg foothold ranking functions from demonstrations."""
+    from footfall.core.limits import check_count
+
+    check_count(library_size, "--library-size", 3)
+    check_count(training_candidates, "--training-candidates", 1)
+    out = model_output(output)
     from footfall.learning.train import learn_from_store
 
-    learned = learn_from_store(store_path, output, feature_set, learner, source=source,
+    learned = learn_from_store(store_path, out, feature_set, learner, source=source,
                                log=progress_log(as_json), library_size=library_size,
                                training_candidates=training_candidates,
                                bandwidth_rms=bandwidth_rms, cv=cv, seed=seed,
@@ -66,6 +115,11 @@ def rank_eval_cmd(model_path: str, store_path: str, no_expert: bool, source: str
     s = agreement.scores
     emit(as_json, agreement.as_dict(),
          f"{agreement.feature_set}/{agreement.learner} on {s.n} demonstrations: "
-         f"top-1 {s.top1:.3f}, within 1 cm {s.top1_near:.3f}, percentile {s.percentile:.3f}, "
-         f"reward loss {s.reward_loss:.3f} "
-         f"(95 % CI {s.reward_loss_ci[0]:.3f} to {s.reward_loss_ci[1]:.3f})")
+         f"top-1 {s.top1:.3f}, within 1 cm {_number(s.top1_near)}, "
+         f"percentile {s.percentile:.3f}, reward loss {_number(s.reward_loss)} "
+         f"(95 % CI {_number(s.reward_loss_ci[0])} to {_number(s.reward_loss_ci[1])})")
+
+
+def _number(value: float) -> str:
+    """A measure for the text output: three decimals, or "n/a" where it is not defined (NaN)."""
+    return f"{value:.3f}" if math.isfinite(value) else "n/a"

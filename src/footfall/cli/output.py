@@ -17,9 +17,15 @@ json_option = click.option("--json", "as_json", is_flag=True, help="Print machin
 
 
 def emit(as_json: bool, data: dict[str, Any], text: str) -> None:
-    """Print a command's result: ``data`` as JSON, or ``text``."""
+    """Print a command's result: ``data`` as JSON, or ``text``.
+
+    JSON has no NaN or infinity: a figure that is not defined (NaN) or not finite is
+    printed as null, never as the invalid token ``NaN`` and never as a traceback.
+    """
     if as_json:
-        click.echo(json.dumps(data, indent=2, allow_nan=False))
+        from footfall.core.files import plain_json
+
+        click.echo(json.dumps(plain_json(data, nonfinite="null"), indent=2, allow_nan=False))
     else:
         click.echo(text)
 

@@ -14,10 +14,12 @@ so a positive hip pitch swings the foot backward.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from footfall.core.errors import FootfallError
+from footfall.core.validate import require_number, require_type, shown
 
 LEG_NAMES = ("LF", "RF", "LH", "RH")  # left-front, right-front, left-hind, right-hind
 DEFAULT_STRIDE = 0.08  # [m] body advance per crawl-gait cycle of four steps (0.02 m per step): the
@@ -103,6 +105,11 @@ class RobotDescription:
                 raise FootfallError(f"robot description: {name} must be > 0")
         if not 0 < self.foot_mass < self.lower_leg_mass:
             raise FootfallError("robot description: foot_mass must be > 0 and < lower_leg_mass")
+        for name in ("hip_roll_limits", "hip_pitch_limits_front", "knee_limits_front"):
+            low, high = getattr(self, name)
+            if not low < high:
+                raise FootfallError(f"robot description: {name} must be (low, high) with "
+                                    f"low < high, got {getattr(self, name)}")
         if sorted(self.gait_order) != sorted(LEG_NAMES):
             raise FootfallError(f"robot description: gait_order must be a permutation of {LEG_NAMES}")
         lo, hi = self.hip_pitch_limits_front
@@ -159,12 +166,40 @@ class RobotDescription:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "RobotDescription":
-        """Rebuild a description written by :meth:`to_dict`."""
-        fields = {k: (tuple(v) if isinstance(v, list) else v) for k, v in data.items()}
+        """Rebuild a description written by :meth:`to_dict`, every field checked.
+
+        A field the data lacks keeps its default (files written before it existed);
+        an unknown field, a value of the wrong type, a non-finite number or one of
+        magnitude above :data:`MAX_ROBOT_NUMBER` is refused, naming the field.
+        """
+        require_type(data, dict, "robot")
+        defaults = {f.name: f.default for f in dataclasses.fields(cls) if f.init}
+        unknown = sorted(str(k) for k in data if k not in defaults)
+        if unknown:
+            raise FootfallError(f"malformed robot description: robot has unknown field(s) "
+                                f"{', '.join(map(repr, unknown))}")
+        fields = {k: _robot_field(f"robot.{k}", v, defaults[k]) for k, v in data.items()}
         try:
             return cls(**fields)
-        except TypeError as exc:
-            raise FootfallError(f"malformed robot description ({exc})") from None
+        except FootfallError as exc:
+            raise FootfallError(f"robot: {str(exc).removeprefix('robot description: ')}") from None
+
+
+MAX_ROBOT_NUMBER = 1e6  # largest magnitude of any number in a robot description [its unit]
+
+
+def _robot_field(what: str, value: Any, default: Any) -> Any:
+    """A description field read from plain data, of the same kind as its ``default``."""
+    if isinstance(default, bool):
+        return require_type(value, bool, what)
+    if isinstance(default, str):
+        return require_type(value, str, what)
+    if isinstance(default, float):
+        return require_number(value, what, -MAX_ROBOT_NUMBER, MAX_ROBOT_NUMBER)
+    require_type(value, (list, tuple), what)
+    if len(value) != len(default):
+        raise FootfallError(f"{what} must hold {len(default)} items, got {shown(value)}")
+    return tuple(_robot_field(f"{what}[{k}]", v, d) for k, (v, d) in enumerate(zip(value, default)))
 
 
 LITTLEDOG = RobotDescription()

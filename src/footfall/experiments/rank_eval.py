@@ -37,7 +37,7 @@ def rank_eval(model_path: str | os.PathLike, store_path: str | os.PathLike, *,
     """Score the model at ``model_path`` on the store's demonstrations.
 
     ``with_expert`` False skips the reward loss (it needs the expert's values;
-    it is NaN then). ``source`` keeps only demonstrations whose source
+    it is NaN then, null in ``as_dict``). ``source`` keeps only demonstrations whose source
     starts with it.
 
     Raises

@@ -9,10 +9,18 @@ grid of ``FeatureConfig.template_resolution``.
 
 from __future__ import annotations
 
+import math
+import numbers
+import re
 from dataclasses import dataclass
 
+from footfall.core.errors import FootfallError
 from footfall.core.heightmap import PatchGrid
 from footfall.core.params import Params, above, param, within
+
+MAX_SCALE_LENGTH = 1.0  # [m] the longest side of a window: a foothold patch, not a terrain
+MAX_PATCH_SAMPLES = 250_000  # the most samples a window may hold (500 x 500)
+_SCALE_NAME = re.compile(r"^[A-Za-z0-9_-]+$")  # scale names appear in column and array names
 
 
 @dataclass(frozen=True)
@@ -36,7 +44,26 @@ def _scales_data(scales: tuple[Scale, ...]) -> list:
 
 
 def _scales_from_data(data: list) -> tuple[Scale, ...]:
-    return tuple(Scale(str(n), float(a), float(b)) for n, a, b in data)
+    if not isinstance(data, list) or not all(isinstance(s, list) and len(s) == 3 for s in data):
+        raise TypeError("scales must be a list of [name, length_x, length_y]")
+    if not all(isinstance(n, str) and _is_real(a) and _is_real(b) for n, a, b in data):
+        raise TypeError("a scale is [str, number, number]")
+    return tuple(Scale(n, float(a), float(b)) for n, a, b in data)
+
+
+def _is_real(value: object) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def _scales_ok(scales: object) -> bool:
+    """A non-empty tuple of Scale with distinct plain names and lengths in (0, 1] m."""
+    if not isinstance(scales, tuple) or not scales:
+        return False
+    names = [getattr(s, "name", None) for s in scales]
+    return all(isinstance(s, Scale) and isinstance(s.name, str) and _SCALE_NAME.match(s.name)
+               and all(_is_real(v) and math.isfinite(v) and 0 < v <= MAX_SCALE_LENGTH
+                       for v in (s.length_x, s.length_y)) for s in scales) \
+        and len(set(names)) == len(names)
 
 
 @dataclass(frozen=True)
@@ -50,8 +77,18 @@ class FeatureConfig(Params):
         doc="least fraction of a patch's samples on measured terrain for a candidate")
     scales: tuple[Scale, ...] = param(
         SCALES, doc="the named windows features and templates are computed on",
-        check=lambda v: isinstance(v, tuple) and all(isinstance(s, Scale) for s in v),
-        must="a tuple of Scale", encode=_scales_data, decode=_scales_from_data)
+        check=_scales_ok, must="a non-empty list of distinct [name, length_x, length_y], "
+                               "names of letters, digits, '_' or '-', lengths in (0, 1] m",
+        encode=_scales_data, decode=_scales_from_data)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        for scale, grid in zip(self.scales, self.grids):
+            if grid.size > MAX_PATCH_SAMPLES:
+                raise FootfallError(
+                    f"feature config: the {scale.name} window holds {grid.size:.3g} samples at "
+                    f"template_resolution {self.template_resolution:g} m, more than "
+                    f"{MAX_PATCH_SAMPLES}")
 
     @property
     def grids(self) -> tuple[PatchGrid, ...]:

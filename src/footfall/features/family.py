@@ -142,7 +142,12 @@ class FeatureFamily(ABC):
     @classmethod
     def from_params(cls, config: FeatureConfig, robot: RobotDescription,
                     arrays: Mapping[str, np.ndarray], meta: Mapping[str, Any]) -> FeatureFamily:
-        """Inverse of :meth:`params`."""
+        """Inverse of :meth:`params`, refusing parameters it does not know.
+
+        Raises :class:`FootfallError` naming the array or ``params`` field that is
+        missing, unexpected or malformed (the default: there must be none).
+        """
+        require_no_params(arrays, meta)
         return cls.create(config, robot)
 
     def digest(self) -> str:
@@ -193,6 +198,14 @@ class FeatureFamily(ABC):
     def info(self) -> dict[str, Any]:
         """JSON facts about the family for a model's record (e.g. library sizes)."""
         return {}
+
+
+def require_no_params(arrays: Mapping[str, np.ndarray], meta: Any) -> None:
+    """Refuse parameters given to a family that has none: no arrays and ``params`` empty."""
+    if arrays:
+        raise FootfallError(f"has unexpected array(s) {', '.join(sorted(arrays))}")
+    if meta != {}:
+        raise FootfallError(f"params must be empty ({{}}), got {str(meta)[:60]}")
 
 
 # ---------------------------------------------------------------- registries

@@ -30,6 +30,7 @@ from footfall.core.files import load_npz, save_npz
 from footfall.core.heightmap import HeightMap, PatchGrid
 from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState
+from footfall.core.validate import require_float_array, require_keys, require_number, require_type
 from footfall.features.config import FeatureConfig
 from footfall.features.family import Candidates, DenseTerms, FeatureFamily, register_family
 from footfall.features.patches import foothold_patches
@@ -37,12 +38,33 @@ from footfall.features.patches import foothold_patches
 FORMAT = "footfall.templates"
 VERSION = 1
 
+BANDWIDTH_RANGE = (1e-6, 1e12)
+"""[1/m^2] the RBF bandwidths h a template family accepts. Learning sets h = 1 / (taps * rms^2)
+from RMS height differences of 1 to 32 mm, about 1 to 1.3e4 on the default scales; the range
+admits every RMS difference in :data:`RMS_RANGE` on every window up to
+:data:`footfall.features.config.MAX_PATCH_SAMPLES` samples, and keeps h * sum(t^2) and the dense
+scorer's float32 products far from overflow."""
+RMS_RANGE = (1e-5, 1.0)  # [m] RMS height differences a bandwidth may be set from
+MAX_TEMPLATE_HEIGHT = 1000.0  # [m] largest |height| of a template sample relative to its foothold
+
 
 def bandwidth_for_rms(rms: float, grid: PatchGrid) -> float:
-    """Bandwidth h [1/m^2] at which a patch differing by ``rms`` [m] everywhere scores exp(-1)."""
-    if rms <= 0:
-        raise FootfallError(f"RMS height difference must be > 0, got {rms}")
+    """Bandwidth h [1/m^2] at which a patch differing by ``rms`` [m] everywhere scores exp(-1).
+
+    ``rms`` must be a finite number in :data:`RMS_RANGE`.
+    """
+    rms = require_number(rms, "RMS height difference [m]", *RMS_RANGE)
     return 1.0 / (grid.size * rms * rms)
+
+
+def check_bandwidths(values: Any, n_scales: int, what: str = "bandwidths") -> tuple[float, ...]:
+    """One bandwidth [1/m^2] per scale, each a finite number in :data:`BANDWIDTH_RANGE`."""
+    require_type(values, (list, tuple), what)
+    if len(values) != n_scales:
+        raise FootfallError(f"{what} must hold one bandwidth per scale ({n_scales}), "
+                            f"got {len(values)}")
+    return tuple(require_number(h, f"{what}[{k}] [1/m^2]", *BANDWIDTH_RANGE)
+                 for k, h in enumerate(values))
 
 
 def squared_distances(candidates: np.ndarray, templates: np.ndarray) -> np.ndarray:
@@ -137,18 +159,41 @@ class TemplateLibrary:
                           "sources": "x [m], y [m], yaw [rad], mirrored [0/1]"}}
 
     @classmethod
-    def from_arrays(cls, arrays: dict[str, np.ndarray], meta: dict, prefix: str = ""
-                    ) -> "TemplateLibrary":
-        """Inverse of :meth:`arrays` and :meth:`meta`."""
+    def from_arrays(cls, arrays: dict[str, np.ndarray], meta: dict, prefix: str = "",
+                    what: str = "library") -> "TemplateLibrary":
+        """Inverse of :meth:`arrays` and :meth:`meta`, every array and field checked.
+
+        Per scale, the arrays ``<prefix><scale>_templates`` (T, taps) must be finite
+        heights within :data:`MAX_TEMPLATE_HEIGHT` and ``<prefix><scale>_sources``
+        (T, 4) real numbers (NaN: origin unknown); arrays with ``prefix`` beyond
+        those are refused. ``what`` names ``meta`` in messages.
+        """
+        require_keys(meta, what, required=("config",), optional=("terrain_hashes", "units"))
         config = FeatureConfig.from_dict(meta["config"])
-        try:
-            t = tuple(np.asarray(arrays[f"{prefix}{n}_templates"], dtype=np.float64)
-                      for n in config.scale_names)
-            s = tuple(np.asarray(arrays[f"{prefix}{n}_sources"], dtype=np.float64)
-                      for n in config.scale_names)
-        except KeyError as exc:
-            raise FootfallError(f"template library lacks array {exc}") from None
-        return cls(config, t, s, tuple(meta.get("terrain_hashes", ())))
+        hashes = meta.get("terrain_hashes", [])
+        require_type(hashes, list, f"{what}.terrain_hashes")
+        for k, h in enumerate(hashes):
+            require_type(h, str, f"{what}.terrain_hashes[{k}]")
+        expected = [f"{prefix}{n}_{kind}" for n in config.scale_names
+                    for kind in ("templates", "sources")]
+        missing = [k for k in expected if k not in arrays]
+        extra = sorted(k for k in arrays if k.startswith(prefix) and k not in expected)
+        problems = [f"lacks array {k}" for k in missing] + [f"has unexpected array {k}"
+                                                           for k in extra]
+        if problems:
+            raise FootfallError(f"the template library {'; '.join(problems)}")
+        t, s = [], []
+        for name, grid in zip(config.scale_names, config.grids):
+            t.append(require_float_array(arrays[f"{prefix}{name}_templates"],
+                                         f"array {prefix}{name}_templates", (None, grid.size),
+                                         bound=MAX_TEMPLATE_HEIGHT))
+            src = require_float_array(arrays[f"{prefix}{name}_sources"],
+                                      f"array {prefix}{name}_sources", (t[-1].shape[0], 4),
+                                      finite=False)
+            if np.isinf(src).any():
+                raise FootfallError(f"array {prefix}{name}_sources must not be infinite")
+            s.append(src)
+        return cls(config, tuple(t), tuple(s), tuple(hashes))
 
     def save(self, path: str | os.PathLike) -> None:
         """Write the library as a versioned ``.npz`` (atomically)."""
@@ -158,7 +203,10 @@ class TemplateLibrary:
     def load(cls, path: str | os.PathLike) -> "TemplateLibrary":
         """Read a library written by :meth:`save`."""
         _, arrays, meta = load_npz(path, FORMAT, VERSION)
-        return cls.from_arrays(arrays, meta)
+        try:
+            return cls.from_arrays(arrays, meta, what="meta")
+        except FootfallError as exc:
+            raise FootfallError(f"{path}: malformed template library: {exc}") from None
 
 
 def extract_templates(hmap: HeightMap, positions: Any, yaw: Any, mirror: Any,
@@ -267,10 +315,9 @@ class TemplateFeatures(FeatureFamily):
             if self.library.config != self.config:
                 raise FootfallError("template library and feature family use different "
                                     "feature settings")
-            if self.bandwidths and (len(self.bandwidths) != len(self.config.scales)
-                                    or not all(np.isfinite(h) and h > 0 for h in self.bandwidths)):
-                raise FootfallError("need one finite bandwidth h > 0 per scale")
-        object.__setattr__(self, "bandwidths", tuple(float(h) for h in self.bandwidths))
+        if self.bandwidths:
+            object.__setattr__(self, "bandwidths",
+                               check_bandwidths(self.bandwidths, len(self.config.scales)))
 
     @classmethod
     def create(cls, config: FeatureConfig, robot: RobotDescription = LITTLEDOG) -> TemplateFeatures:
@@ -331,13 +378,14 @@ class TemplateFeatures(FeatureFamily):
     @classmethod
     def from_params(cls, config: FeatureConfig, robot: RobotDescription,
                     arrays: Mapping[str, np.ndarray], meta: Mapping[str, Any]) -> TemplateFeatures:
-        library = TemplateLibrary.from_arrays(dict(arrays), meta["library"])
+        require_keys(meta, "params", required=("library", "bandwidths"))
+        library = TemplateLibrary.from_arrays(dict(arrays), meta["library"],
+                                              what="params.library")
         if library.config != config:
-            raise FootfallError("the template library was built with other feature settings")
-        bandwidths = tuple(meta["bandwidths"])
-        if not all(isinstance(h, (int, float)) and not isinstance(h, bool) for h in bandwidths):
-            raise FootfallError("template bandwidths must be numbers")
-        return cls(config, library, bandwidths)
+            raise FootfallError("params.library.config: the template library was built with "
+                                "other feature settings than the model")
+        return cls(config, library, check_bandwidths(meta["bandwidths"], len(config.scales),
+                                                     "params.bandwidths"))
 
     # ---------------------------------------------------------------- learning
     def fit(self, maps, states, candidates, chosen, rng: np.random.Generator, *,

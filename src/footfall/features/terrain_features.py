@@ -25,7 +25,13 @@ import numpy as np
 from footfall.core.heightmap import PatchGrid
 from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.features.config import FeatureConfig
-from footfall.features.family import Candidates, DenseTerms, FeatureFamily, register_family
+from footfall.features.family import (
+    Candidates,
+    DenseTerms,
+    FeatureFamily,
+    register_family,
+    require_no_params,
+)
 
 RAW_NAMES = ("slope_x", "slope_y", "curv_x", "curv_y")  # linear in the heights
 QUANTITIES = ("slope_x_pos", "slope_x_neg", "slope_y_pos", "slope_y_neg",
@@ -268,6 +274,7 @@ class TerrainFeatures(FeatureFamily):
     @classmethod
     def from_params(cls, config: FeatureConfig, robot: RobotDescription, arrays, meta
                     ) -> TerrainFeatures:
+        require_no_params(arrays, meta)
         return cls(config)
 
     def columns(self) -> tuple[str, ...]:

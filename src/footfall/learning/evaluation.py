@@ -14,8 +14,9 @@ never does.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-from typing import Callable, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -40,11 +41,20 @@ class RankScores:
     losses: tuple[float, ...] = ()  # per-demonstration reward loss, in demonstration order
 
     def as_dict(self) -> dict:
-        """Plain data for JSON (the per-demonstration losses included)."""
-        d = dict(vars(self))
-        d["reward_loss_ci"] = list(self.reward_loss_ci)
-        d["losses"] = list(self.losses)
+        """Plain data for JSON (the per-demonstration losses included).
+
+        A measure that is not defined -- the reward loss without the expert's
+        values -- is None (JSON null), not NaN.
+        """
+        d = {k: _defined(v) for k, v in vars(self).items()}
+        d["reward_loss_ci"] = [_defined(v) for v in self.reward_loss_ci]
+        d["losses"] = [_defined(v) for v in self.losses]
         return d
+
+
+def _defined(value: Any) -> Any:
+    """``value``, or None for a float that is not finite (a measure with no value)."""
+    return None if isinstance(value, float) and not math.isfinite(value) else value
 
 
 def expert_values(demos: Sequence, terrain: Callable[[str], object], expert) -> list[np.ndarray]:

@@ -14,7 +14,6 @@ Version 1 files (one flat list of feature names per leg group) are still read.
 from __future__ import annotations
 
 import os
-import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -23,10 +22,19 @@ import numpy as np
 from footfall.core.errors import FootfallError
 from footfall.core.files import load_npz, save_npz
 from footfall.core.robot import LITTLEDOG, SERVO_FIELDS, RobotDescription
+from footfall.core.validate import (
+    require_float_array,
+    require_int,
+    require_keys,
+    require_number,
+    require_str_list,
+    require_type,
+    shown,
+)
 from footfall.features.config import FeatureConfig
 from footfall.features.family import FeatureFamily, family_class, feature_set_families
 from footfall.features.reward import LinearReward
-from footfall.features.templates import TemplateFeatures, TemplateLibrary
+from footfall.features.templates import TemplateFeatures, TemplateLibrary, check_bandwidths
 
 FORMAT = "footfall.model"
 VERSION = 2  # 1: one list of names per group; 2: feature families, each with its parameters
@@ -150,71 +158,200 @@ class FootholdModel:
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> FootholdModel:
-        """Read a model written by :meth:`save` (or by footfall's version 1 format)."""
+        """Read a model written by :meth:`save` (or by footfall's version 1 format).
+
+        Every field and array is checked (:func:`read_model`): a malformed file
+        fails with one :class:`FootfallError` naming the file and the field.
+        """
         version, arrays, meta = load_npz(path, FORMAT, VERSION, allow_nonfinite=True)  # NaN:
         # an undefined figure of the training info (an SVM's log loss)
         try:
-            config = FeatureConfig.from_dict(meta["config"])
-            robot = RobotDescription.from_dict(meta["robot"])
-            read = _read_group_v1 if version == 1 else _read_group
-            functions = {g: read(g, m, arrays, config, robot, meta["feature_set"])
-                         for g, m in meta["groups"].items()}
-            feature_set_families(meta["feature_set"])  # a known feature set
-            if set(functions) != set(LEG_GROUPS):
-                raise FootfallError("the leg groups must be front and hind")
-            return cls(meta["feature_set"], meta["learner"], functions, config, robot,
-                       float(meta["map_resolution"]), meta.get("info", {}))
+            return read_model(version, arrays, meta)
         except FootfallError as exc:
-            raise FootfallError(f"{path}: malformed model ({exc})") from None
-        except (KeyError, TypeError, ValueError, AttributeError) as exc:
-            raise FootfallError(f"{path}: malformed model ({exc!r})") from None
+            raise FootfallError(f"{path}: malformed model: {exc}") from None
 
 
-def _read_group(group: str, meta: dict, arrays: dict, config: FeatureConfig,
-                robot: RobotDescription, feature_set: str) -> RankingFunction:
+MAX_WEIGHT = 1e20
+"""Largest |weight| [reward per unit of feature] and feature scale a model file may hold.
+
+Learned weights are w / scale with the scale floored at 1e-12, so well below; the bound keeps
+every product of a weight with a feature (and the dense scorer's float32 sums) finite."""
+MAX_MAP_RESOLUTION = 1.0  # [m/cell] coarsest training-map resolution a model file may state
+_META_KEYS = ("feature_set", "learner", "config", "robot", "map_resolution", "groups")
+
+
+def read_model(version: int, arrays: dict[str, np.ndarray], meta: Any) -> FootholdModel:
+    """A model from the arrays and metadata of its file, every field checked.
+
+    Raises
+    ------
+    FootfallError
+        Naming the field (``groups.front.families[1].params.bandwidths[0]``) or
+        array (``front.templates.coef``) that is missing, unexpected, of the wrong
+        type or shape, not finite or out of range.
+    """
+    from footfall.learning.ranker import get_learner  # imports scikit-learn: only when loading
+
+    require_keys(meta, "meta", _META_KEYS, optional=("info", "units"))
+    for key, value in arrays.items():
+        require_float_array(value, f"array {key}", finite=False)
+    feature_set = require_type(meta["feature_set"], str, "feature_set")
+    names = feature_set_families(feature_set)
+    get_learner(require_type(meta["learner"], str, "learner"))
+    config = FeatureConfig.from_dict(meta["config"])
+    robot = RobotDescription.from_dict(meta["robot"])
+    resolution = require_number(meta["map_resolution"], "map_resolution [m/cell]", 0.0,
+                                MAX_MAP_RESOLUTION, low_open=True)
+    groups = require_keys(meta["groups"], "groups", LEG_GROUPS)
+    read = _read_group_v1 if version == 1 else _read_group
+    functions = {g: read(g, groups[g], arrays, config, robot, names) for g in LEG_GROUPS}
+    _refuse_extra_arrays(arrays, functions, version)
+    info = require_type(meta.get("info", {}), dict, "info")
+    return FootholdModel(feature_set, meta["learner"], functions, config, robot, resolution, info)
+
+
+def _weights(arrays: dict[str, np.ndarray], key: str, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The weights ``<key>coef`` and scales ``<key>scale`` (n,) of a family, checked."""
+    for name in ("coef", "scale"):
+        if key + name not in arrays:
+            raise FootfallError(f"lacks array {key}{name}")
+    coef = require_float_array(arrays[key + "coef"], f"array {key}coef", (n,), bound=MAX_WEIGHT)
+    scale = require_float_array(arrays[key + "scale"], f"array {key}scale", (n,),
+                                bound=MAX_WEIGHT)
+    if not (scale > 0).all():
+        raise FootfallError(f"array {key}scale must be > 0 (a standard deviation)")
+    return coef, scale
+
+
+def _read_group(group: str, meta: Any, arrays: dict, config: FeatureConfig,
+                robot: RobotDescription, names: tuple[str, ...]) -> RankingFunction:
     """One leg group's ranking function from a version 2 file."""
+    where = f"groups.{group}"
+    require_keys(meta, where, ("families", "info"))
+    entries = require_type(meta["families"], list, f"{where}.families")
+    found = [require_keys(e, f"{where}.families[{k}]", ("name", "columns", "params")).get("name")
+             for k, e in enumerate(entries)]
+    if not found or found != [n for n in names if n in found]:
+        raise FootfallError(f"{where}.families must be of the feature set's families "
+                            f"{list(names)}, each at most once and in that order, "
+                            f"got {shown(found)}")
     families, coef, scale = [], [], []
-    for entry in meta["families"]:
-        prefix = f"{group}.{entry['name']}."
-        params = {k[len(prefix):]: v for k, v in arrays.items() if k.startswith(prefix)}
-        c, s = params.pop("coef"), params.pop("scale")
-        family = family_class(entry["name"]).from_params(config, robot, params, entry["params"])
-        if list(family.columns()) != list(entry["columns"]):
-            raise FootfallError(f"{group} {entry['name']} columns do not match the file's names")
+    for k, entry in enumerate(entries):
+        field_path, prefix = f"{where}.families[{k}]", f"{group}.{entry['name']}."
+        columns = require_str_list(entry["columns"], f"{field_path}.columns")
+        params = {key[len(prefix):]: v for key, v in arrays.items()
+                  if key.startswith(prefix) and key[len(prefix):] not in ("coef", "scale")}
+        try:
+            family = family_class(entry["name"]).from_params(config, robot, params,
+                                                             entry["params"])
+        except FootfallError as exc:
+            raise FootfallError(f"{field_path} ({entry['name']}): {exc}") from None
+        if list(family.columns()) != columns:
+            raise FootfallError(f"{field_path}.columns do not match the {entry['name']} "
+                                f"family's {len(family.columns())} columns")
+        c, s = _weights(arrays, prefix, len(columns))
         families.append(family)
-        coef.append(np.asarray(c, dtype=np.float64))
-        scale.append(np.asarray(s, dtype=np.float64))
-    return RankingFunction(tuple(families), tuple(coef), tuple(scale), meta["info"])
+        coef.append(c)
+        scale.append(s)
+    return RankingFunction(tuple(families), tuple(coef), tuple(scale),
+                           _group_info(meta["info"], f"{where}.info", len(config.scales)))
 
 
-_TEMPLATE_NAME = re.compile(r"^[a-z]+\.template_\d+$")
+def _refuse_extra_arrays(arrays: dict[str, np.ndarray], functions: dict, version: int) -> None:
+    """Refuse arrays the model's families did not write: a file holds exactly its own."""
+    expected = set()
+    for g, f in functions.items():
+        if version == 1:
+            expected |= {f"{g}_coef", f"{g}_scale"}
+            if f.library is not None:
+                expected |= set(f.library.arrays(prefix=f"{g}_lib_"))
+            continue
+        for family in f.families:
+            prefix = f"{g}.{family.name}."
+            expected |= {prefix + "coef", prefix + "scale"}
+            expected |= {prefix + k for k in family.params()[0]}
+    extra = sorted(set(arrays) - expected)
+    if extra:
+        raise FootfallError(f"unexpected array(s) {', '.join(extra[:4])}"
+                            f"{'...' if len(extra) > 4 else ''}")
 
 
-def _read_group_v1(group: str, meta: dict, arrays: dict, config: FeatureConfig,
-                   robot: RobotDescription, feature_set: str) -> RankingFunction:
+def _info_counts(value: Any, what: str, n_scales: int) -> None:
+    require_type(value, list, what)
+    if len(value) != n_scales:
+        raise FootfallError(f"{what} must hold one count per scale ({n_scales})")
+    for k, v in enumerate(value):
+        require_int(v, f"{what}[{k}]", 0)
+
+
+def _group_info(info: Any, what: str, n_scales: int) -> dict:
+    """A ranking function's record, the entries footfall reads checked: numbers are finite."""
+    require_type(info, dict, what)
+    for key in ("lambda", "C", "cv_error"):
+        if key in info:
+            require_number(info[key], f"{what}.{key}")
+    for key in ("n_nonzero", "n_demonstrations"):
+        if key in info:
+            require_int(info[key], f"{what}.{key}", 0)
+    for key in ("library_counts", "kept_counts"):
+        if key in info:
+            _info_counts(info[key], f"{what}.{key}", n_scales)
+    rms = info.get("bandwidth_rms_m")
+    if rms is not None:
+        require_type(rms, list, f"{what}.bandwidth_rms_m")
+        for k, r in enumerate(rms):
+            require_number(r, f"{what}.bandwidth_rms_m[{k}]", 0.0, low_open=True)
+    return info
+
+
+_V1_GROUP_KEYS = ("names", "bandwidths", "info", "library")
+
+
+def _read_group_v1(group: str, meta: Any, arrays: dict, config: FeatureConfig,
+                   robot: RobotDescription, families_of_set: tuple[str, ...]) -> RankingFunction:
     """One leg group's ranking function from a version 1 file: one flat list of names.
 
     Version 1 named terrain features ``scale.quantity``, templates
     ``scale.template_k`` and pose features ``pose.name``; its feature set was
     one of the paper's three.
     """
-    names = list(meta["names"])
-    coef, scale = arrays[f"{group}_coef"], arrays[f"{group}_scale"]
-    if coef.shape != (len(names),) or scale.shape != (len(names),):
-        raise FootfallError(f"{group} weights do not match its {len(names)} feature names")
-    families, coefs, scales = [], [], []
-    for name in feature_set_families(feature_set):
-        if name == "templates":
-            library = TemplateLibrary.from_arrays(arrays, meta["library"], prefix=f"{group}_lib_")
-            family: FeatureFamily = TemplateFeatures(config, library, tuple(meta["bandwidths"]))
-            pick = [k for k, n in enumerate(names) if _TEMPLATE_NAME.match(n)]
-        else:
-            family = family_class(name).create(config, robot)
-            full = [f"pose.{c}" if name == "pose" else c for c in family.columns()]
-            pick = [names.index(n) for n in full]
-        if len(pick) != len(family.columns()):
-            raise FootfallError(f"{group} {name} weights do not match its columns")
+    where = f"groups.{group}"
+    require_keys(meta, where, _V1_GROUP_KEYS)
+    names = require_str_list(meta["names"], f"{where}.names")
+    if len(set(names)) != len(names):
+        raise FootfallError(f"{where}.names must be distinct")
+    coef, scale = _weights(arrays, f"{group}_", len(names))
+    families, coefs, scales, used = [], [], [], []
+    for name in families_of_set:
+        family, full = _family_v1(name, meta, where, arrays, config, robot, group)
+        missing = [n for n in full if n not in names]
+        if missing:
+            raise FootfallError(f"{where}.names lack the {name} column {missing[0]!r}")
+        pick = [names.index(n) for n in full]
+        used += pick
         families.append(family)
-        coefs.append(np.asarray(coef[pick], dtype=np.float64))
-        scales.append(np.asarray(scale[pick], dtype=np.float64))
-    return RankingFunction(tuple(families), tuple(coefs), tuple(scales), meta["info"])
+        coefs.append(coef[pick])
+        scales.append(scale[pick])
+    if len(used) != len(names):
+        extra = [n for k, n in enumerate(names) if k not in set(used)]
+        raise FootfallError(f"{where}.names hold {extra[0]!r}, no column of the feature set")
+    return RankingFunction(tuple(families), tuple(coefs), tuple(scales),
+                           _group_info(meta["info"], f"{where}.info", len(config.scales)))
+
+
+def _family_v1(name: str, meta: dict, where: str, arrays: dict, config: FeatureConfig,
+               robot: RobotDescription, group: str) -> tuple[FeatureFamily, list[str]]:
+    """A family of a version 1 group and its columns' names as version 1 wrote them."""
+    if name != "templates":
+        family = family_class(name).create(config, robot)
+        return family, [f"pose.{c}" if name == "pose" else c for c in family.columns()]
+    if meta["library"] is None:
+        raise FootfallError(f"{where}.library must be a template library, got None")
+    library = TemplateLibrary.from_arrays(arrays, meta["library"], prefix=f"{group}_lib_",
+                                          what=f"{where}.library")
+    if library.config != config:
+        raise FootfallError(f"{where}.library.config: the template library was built with "
+                            f"other feature settings than the model")
+    bandwidths = check_bandwidths(meta["bandwidths"], len(config.scales), f"{where}.bandwidths")
+    family = TemplateFeatures(config, library, bandwidths)
+    return family, list(library.names())

@@ -282,8 +282,8 @@ class FootholdRanker(BaseEstimator):
     def _path(self, pairs: np.ndarray, labels: np.ndarray) -> np.ndarray:
         if not np.isscalar(self.Cs):
             Cs = np.sort(np.asarray(self.Cs, dtype=np.float64))
-            if Cs.size == 0 or not (Cs > 0).all():
-                raise FootfallError("Cs must be positive")
+            if Cs.size == 0 or not (np.isfinite(Cs) & (Cs > 0)).all():
+                raise FootfallError("Cs must be finite and positive")
             return Cs
         n = int(self.Cs)
         if n < 1:

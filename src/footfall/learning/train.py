@@ -22,8 +22,10 @@ import numpy as np
 from footfall.core.errors import FootfallError
 from footfall.core.files import writable_path
 from footfall.core.heightmap import HeightMap
+from footfall.core.limits import check_count
 from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState
+from footfall.core.validate import require_int
 from footfall.data.store import Demonstration, DemoStore
 from footfall.features.config import FeatureConfig
 from footfall.features.family import FeatureFamily
@@ -108,6 +110,10 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     """
     feature_set = check_feature_set(feature_set)
     get_learner(learner)  # a registered learner, or a clear error
+    seed = require_int(seed, "seed", 0)
+    check_count(library_size, "library_size", 3)
+    check_count(training_candidates, "training_candidates", 1)
+    cv = require_int(cv, "cv", 2)
     config = config or FeatureConfig()
     if not demos:
         raise FootfallError("no demonstrations to learn from")

@@ -1,6 +1,6 @@
 """The fuzz suite: hostile files and arguments at every loader and command (issue 17).
 
-Each target of :mod:`footfall.experiments.fuzz` gets a bounded number of Hypothesis cases
+Each target of :mod:`footfall.cli.fuzz` gets a bounded number of Hypothesis cases
 (derandomised, so CI sees the same inputs every time); any traceback, hang, memory blow-up,
 garbage accepted or refusal of more than one line fails the test with the case that caused
 it. ``footfall bench fuzz --minutes N`` runs the same targets for longer.
@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-import footfall.experiments.fuzz.commands  # noqa: F401 - registers the command-line target
+import footfall.cli.fuzz.commands  # noqa: F401 - registers the command-line target
+from footfall.cli.fuzz import craft
+from footfall.cli.fuzz.bases import make_bases
+from footfall.cli.fuzz.harness import Garbage, cli_work, guarded
+from footfall.cli.fuzz.targets import TARGETS, run_case
 from footfall.core.errors import FootfallError
-from footfall.experiments.fuzz import craft
-from footfall.experiments.fuzz.bases import make_bases
-from footfall.experiments.fuzz.harness import Garbage, cli_work, guarded
-from footfall.experiments.fuzz.targets import TARGETS, run_case
 
 EXAMPLES = {"map-file": 120, "model-file": 60, "store": 40, "scan-import": 120, "cli": 40}
 

@@ -71,8 +71,8 @@ def bench_expert_cmd(states: int, as_json: bool) -> None:
 @json_option
 def bench_fuzz_cmd(minutes: float, seed: int, targets: tuple[str, ...], as_json: bool) -> None:
     """Hostile files and arguments at every loader and command: inputs tried, failures found."""
+    from footfall.cli.fuzz.campaign import format_campaign, run_campaign
     from footfall.cli.output import progress_log
-    from footfall.experiments.fuzz.campaign import format_campaign, run_campaign
 
     result = run_campaign(minutes, seed, targets or None, log=progress_log(as_json))
     emit(as_json, result, format_campaign(result))

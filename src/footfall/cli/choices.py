@@ -111,7 +111,7 @@ FEATURE_SET = FeatureSetChoice()  # footfall.features.family: FEATURE_SETS and f
 SEED = click.IntRange(0, 2 ** 63 - 1)
 
 
-def count(minimum: int = 1) -> click.IntRange:
+def count_range(minimum: int = 1) -> click.IntRange:
     """A count option's type: from ``minimum`` to the ``max_count`` limit (read when parsed)."""
     return _Count(minimum)
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from footfall.cli.choices import RECORDED_STEP
+from footfall.cli.choices import RECORDED_STEP, SEED, Finite, count_range
 from footfall.cli.output import emit, json_option, progress_bar
 
 
@@ -21,14 +21,14 @@ def _plural(n: int, noun: str) -> str:
 @click.option("--terrain", "terrains", multiple=True, required=True, metavar="FILE.npz",
               help="Terrain height map to walk on; more files may follow it.")
 @click.argument("more_terrains", nargs=-1, metavar="[FILE.npz]...")
-@click.option("-n", "--n", "n", type=click.IntRange(min=1), required=True,
+@click.option("-n", "--n", "n", type=count_range(1), required=True,
               help="Number of demonstrations to add.")
-@click.option("--seed", type=click.IntRange(min=0), required=True, help="Random seed.")
+@click.option("--seed", type=SEED, required=True, help="Random seed.")
 @click.option("-o", "--output", required=True,
               help="Demonstration store (.sqlite): appended to, created if missing.")
-@click.option("--noise", type=click.FloatRange(min=0.0), default=None,
+@click.option("--noise", type=Finite(min=0.0), default=None,
               help="Noise of the expert's foothold values (default: the expert's).")
-@click.option("--second-best", type=click.FloatRange(0.0, 1.0), default=None,
+@click.option("--second-best", type=Finite(0.0, 1.0), default=None,
               help="Probability that the expert picks its second-best foothold "
                    "(default: the expert's).")
 @click.option("--steps", type=RECORDED_STEP, default="rough", show_default=True,

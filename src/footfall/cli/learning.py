@@ -6,28 +6,15 @@ from __future__ import annotations
 import math
 import os
 from pathlib import Path
-from typing import Any
 
 import click
 
-from footfall.cli.choices import FEATURE_SET, LEARNER, SELECTION
+from footfall.cli.choices import FEATURE_SET, LEARNER, SEED, SELECTION, Finite
 from footfall.cli.output import emit, json_option, progress_log
 from footfall.core.errors import FootfallError
 
 SOURCE_HELP = "Only demonstrations whose source starts with this (e.g. walker:train)."
 RMS_RANGE = (1e-5, 1.0)  # [m] = footfall.features.templates.RMS_RANGE (not imported: --help stays light)
-MAX_SEED = 2 ** 63 - 1  # seeds are stored in SQLite and JSON as 64-bit integers
-
-
-class FiniteFloatRange(click.FloatRange):
-    """A float within a range that is also finite: click's FloatRange lets NaN through."""
-
-    def convert(self, value: Any, param: click.Parameter | None,
-                ctx: click.Context | None) -> Any:
-        number = super().convert(value, param, ctx)
-        if not math.isfinite(number):
-            self.fail(f"{value!r} is not a finite number", param, ctx)
-        return number
 
 
 def model_output(path: str) -> Path:
@@ -63,7 +50,7 @@ def model_output(path: str) -> Path:
 @click.option("--training-candidates", type=click.IntRange(min=1), default=100,
               show_default=True, help="Other candidates per demonstration used for pairs (at "
                                       "most the max_count limit).")
-@click.option("--bandwidth-rms", type=FiniteFloatRange(*RMS_RANGE), nargs=3, default=None,
+@click.option("--bandwidth-rms", type=Finite(*RMS_RANGE), nargs=3, default=None,
               metavar="S M L",
               help="Fix the RBF bandwidths as RMS height differences [m] per scale, each from "
                    f"{RMS_RANGE[0]:g} to {RMS_RANGE[1]:g} (default: chosen by cross-validation).")
@@ -72,7 +59,7 @@ def model_output(path: str) -> Path:
 @click.option("--selection", type=SELECTION, default="1se", show_default=True,
               help="Lambda: one-standard-error rule (sparser) or the smallest CV error.")
 @click.option("--source", default=None, help=SOURCE_HELP)
-@click.option("--seed", type=click.IntRange(0, MAX_SEED), default=0, show_default=True,
+@click.option("--seed", type=SEED, default=0, show_default=True,
               help="Seed of the template library's sample and the training candidates.")
 @click.option("-o", "--output", required=True, help="Output model (.npz).")
 @json_option

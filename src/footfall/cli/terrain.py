@@ -6,7 +6,7 @@ from typing import TYPE_CHECKING
 
 import click
 
-from footfall.cli.choices import TERRAIN_KIND, ChoiceArgument
+from footfall.cli.choices import SEED, TERRAIN_KIND, ChoiceArgument, Finite
 from footfall.cli.output import emit, json_option
 
 if TYPE_CHECKING:
@@ -29,9 +29,9 @@ def _emit_map(as_json: bool, summary: MapSummary) -> None:
 
 @terrain.command("make")
 @click.argument("kind", type=TERRAIN_KIND, cls=ChoiceArgument)
-@click.option("--difficulty", type=float, default=0.5, show_default=True,
+@click.option("--difficulty", type=Finite(0.0, 1.0), default=0.5, show_default=True,
               help="Difficulty in [0, 1].")
-@click.option("--seed", type=int, required=True, help="Random seed.")
+@click.option("--seed", type=SEED, required=True, help="Random seed.")
 @click.option("-o", "--output", required=True, help="Output height map (.npz).")
 @json_option
 def terrain_make(kind: str, difficulty: float, seed: int, output: str, as_json: bool) -> None:
@@ -43,7 +43,7 @@ def terrain_make(kind: str, difficulty: float, seed: int, output: str, as_json: 
 
 @terrain.command("board")
 @click.argument("specs", nargs=-1, required=True, metavar="KIND[:DIFFICULTY]...")
-@click.option("--seed", type=int, required=True, help="Random seed.")
+@click.option("--seed", type=SEED, required=True, help="Random seed.")
 @click.option("--flat-ends/--no-flat-ends", default=True, show_default=True,
               help="Add a flat start and end module unless the row already has them.")
 @click.option("-o", "--output", required=True, help="Output height map (.npz).")
@@ -61,11 +61,11 @@ def terrain_board(specs: tuple[str, ...], seed: int, flat_ends: bool, output: st
 
 @terrain.command("import")
 @click.argument("source")
-@click.option("--resolution", type=float, default=None,
+@click.option("--resolution", type=Finite(min=0.0, min_open=True), default=None,
               help="Cell size [m] (required for .npy, .png and point clouds).")
-@click.option("--z-scale", type=float, default=None,
+@click.option("--z-scale", type=Finite(min=0.0, min_open=True), default=None,
               help="Metres per raw height unit (required for 16-bit PNG).")
-@click.option("--nodata", type=float, default=None, help="Raw value that means no data.")
+@click.option("--nodata", type=Finite(), default=None, help="Raw value that means no data.")
 @click.option("-o", "--output", required=True, help="Output height map (.npz).")
 @json_option
 def terrain_import(source: str, resolution: float | None, z_scale: float | None,

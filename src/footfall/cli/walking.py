@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import click
 
+from footfall.cli.choices import SEED, count_range
 from footfall.cli.output import emit, json_option, progress_bar
 
 TERRAIN_OPTION = click.option("--terrain", "terrain_path", required=True,
@@ -49,7 +50,7 @@ def _check_picture_outputs(snapshots: str | None, video: str | None) -> None:
 @click.command("walk")
 @TERRAIN_OPTION
 @MODEL_OPTION
-@click.option("--seed", type=click.IntRange(min=0), required=True,
+@click.option("--seed", type=SEED, required=True,
               help="Run seed: start pose, terrain registration, friction, sensor noise.")
 @click.option("--snapshots", default=None, help="Write a strip of frames (.png).")
 @click.option("--frames", type=click.IntRange(2, 12), default=6, show_default=True,
@@ -74,8 +75,8 @@ def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: st
 @click.command("walk-many")
 @TERRAIN_OPTION
 @MODEL_OPTION
-@click.option("--runs", type=click.IntRange(min=1), default=21, show_default=True)
-@click.option("--seed", type=click.IntRange(min=0), required=True,
+@click.option("--runs", type=count_range(1), default=21, show_default=True)
+@click.option("--seed", type=SEED, required=True,
               help="Run i has seed SEED + i.")
 @click.option("--log", "log_path", default=None, help="Append every run log to this store.")
 @_chooser_options

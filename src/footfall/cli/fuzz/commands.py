@@ -15,10 +15,10 @@ from pathlib import Path
 
 from hypothesis import strategies as st
 
-from footfall.experiments.fuzz import values
-from footfall.experiments.fuzz.bases import Bases
-from footfall.experiments.fuzz.harness import cli_work
-from footfall.experiments.fuzz.targets import Target, register_target
+from footfall.cli.fuzz import values
+from footfall.cli.fuzz.bases import Bases
+from footfall.cli.fuzz.harness import cli_work
+from footfall.cli.fuzz.targets import Target, register_target
 
 
 @dataclass(frozen=True)

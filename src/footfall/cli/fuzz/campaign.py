@@ -17,10 +17,10 @@ from typing import Any
 from hypothesis import HealthCheck, Phase, Verbosity, given, settings
 from hypothesis import seed as hypothesis_seed
 
-import footfall.experiments.fuzz.commands  # noqa: F401 - registers the command-line target
-from footfall.experiments.fuzz.bases import make_bases
-from footfall.experiments.fuzz.harness import FAILURES, Outcome
-from footfall.experiments.fuzz.targets import TARGETS, run_case
+import footfall.cli.fuzz.commands  # noqa: F401 - registers the command-line target
+from footfall.cli.fuzz.bases import make_bases
+from footfall.cli.fuzz.harness import FAILURES, Outcome
+from footfall.cli.fuzz.targets import TARGETS, run_case
 
 SLICE = 20.0  # [s] one target's turn
 

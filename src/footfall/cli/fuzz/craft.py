@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from footfall.experiments.fuzz.values import DEEP
+from footfall.cli.fuzz.values import DEEP
 
 _LOCAL = b"PK\x03\x04"
 _CENTRAL = b"PK\x01\x02"

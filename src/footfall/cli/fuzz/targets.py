@@ -2,7 +2,7 @@
 
 A target turns one drawn case into a file or an argument list in a scratch directory, runs
 the loader or command on it, and -- when it is accepted -- checks the result as a user
-would rely on it (:class:`~footfall.experiments.fuzz.harness.Garbage` if not). Register a
+would rely on it (:class:`~footfall.cli.fuzz.harness.Garbage` if not). Register a
 new one with :func:`register_target`.
 """
 
@@ -20,9 +20,9 @@ from typing import Any
 import numpy as np
 from hypothesis import strategies as st
 
-from footfall.experiments.fuzz import craft, values
-from footfall.experiments.fuzz.bases import Bases
-from footfall.experiments.fuzz.harness import Garbage, Outcome, cli_work, guarded
+from footfall.cli.fuzz import craft, values
+from footfall.cli.fuzz.bases import Bases
+from footfall.cli.fuzz.harness import Garbage, Outcome, cli_work, guarded
 
 HEIGHT_BOUND = 1e5  # [m] no height, origin or extent of an accepted map is this large
 

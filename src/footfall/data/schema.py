@@ -16,6 +16,7 @@ from footfall.core.errors import FootfallError
 
 FORMAT = "footfall.demostore"
 SCHEMA_VERSION = 2  # 1: terrains and demonstrations; 2: + runs and run_steps
+SUFFIXES = (".sqlite", ".sqlite3", ".db")  # the file names of a store footfall writes
 STATE_LAYOUT = ("feet LF, RF, LH, RH x y z [m] (12), body position x y z [m] (3), "
                 "body roll pitch yaw [rad] (3), goal x y [m] (2)")
 UNITS = "positions [m], angles [rad], resolution [m/cell]"

@@ -24,6 +24,7 @@ from footfall.core.heightmap import HeightMap, module_records
 from footfall.core.robot import LITTLEDOG
 from footfall.core.stats import wilson_interval
 from footfall.data.runlog import RunRecord
+from footfall.data.schema import SUFFIXES as STORE_SUFFIXES
 from footfall.data.store import DemoStore
 from footfall.sim.episode import Frames, WalkConfig, walk
 
@@ -238,7 +239,10 @@ class WalkOutcome:
 
 def _open_log(log_path: str | os.PathLike | None) -> DemoStore | None:
     """The log store, opened (and created) before a run, so that a bad path fails first."""
-    return None if log_path is None else DemoStore(writable_path(log_path), create=True)
+    if log_path is None:
+        return None
+    return DemoStore(writable_path(log_path, STORE_SUFFIXES, what="--log", kind="store"),
+                     create=True)
 
 
 def _path_or_none(path: str | os.PathLike | None) -> str | None:

@@ -23,6 +23,7 @@ from footfall.core.heightmap import HeightMap
 from footfall.core.limits import check_count
 from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState, nominal_state
+from footfall.data.schema import SUFFIXES as STORE_SUFFIXES
 from footfall.data.store import Demonstration, DemoStore
 from footfall.expert.protocol import Expert, expert_settings
 from footfall.features.candidates import DEFAULT_SPACING, reachable_footholds
@@ -472,7 +473,7 @@ def collect_into_store(terrains: Sequence[str | os.PathLike], path: str | os.Pat
     n = check_count(n, "the number of demonstrations", minimum=1)  # before any file is read
     if steps not in RECORDED_STEPS:
         raise FootfallError(f"steps must be one of {', '.join(RECORDED_STEPS)}, got {steps!r}")
-    out = writable_path(path)
+    out = writable_path(path, STORE_SUFFIXES, what="store", kind="store")
     hmaps = [HeightMap.load(p) for p in terrains]
     if out.exists():
         with DemoStore(out):  # refuse a bad store before walking, not after

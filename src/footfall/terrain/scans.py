@@ -148,10 +148,11 @@ def _grid_to_map(path: Path, raw: np.ndarray, fmt: str, opts: _Options,
                  z_scale: float) -> HeightMap:
     """Heights = raw * z_scale on a grid already indexed [x, y]; raw == nodata -> NaN."""
     resolution = _require_resolution(path, opts, f".{fmt} grid")
-    heights = raw.astype(np.float64)
+    with np.errstate(over="ignore", invalid="ignore"):  # float128 beyond float64: inf, refused
+        heights = raw.astype(np.float64)
     if opts.nodata is not None:
         heights[raw == opts.nodata] = np.nan
-    with np.errstate(over="ignore"):  # an overflow gives inf, which HeightMap refuses by name
+    with np.errstate(over="ignore", invalid="ignore"):  # inf or NaN, refused by HeightMap
         heights *= z_scale
     if np.isnan(heights).all():
         raise FootfallError(f"{path}: no data (every cell is NaN"
@@ -306,7 +307,8 @@ def _read_ply(path: Path, opts: _Options) -> np.ndarray:
         # plyfile reads ASCII data through a TextIOWrapper it never closes around a binary
         # stream; handing it a text stream for ASCII files avoids the leaked wrapper.
         ascii_ply = len(lines) > 1 and lines[1].strip().startswith(b"format ascii")
-        with (open(path, encoding="ascii") if ascii_ply else open(path, "rb")) as fh:
+        with (open(path, encoding="ascii") if ascii_ply else open(path, "rb")) as fh, \
+                np.errstate(all="ignore"):  # an out-of-range value becomes inf, refused later
             ply = PlyData.read(fh, mmap=False)
     except (PlyParseError, ValueError, EOFError, OSError, IndexError) as exc:
         raise FootfallError(f"{path}: corrupt or truncated PLY file ({exc})") from None
@@ -412,8 +414,9 @@ def _rasterize(points: np.ndarray, resolution: float, z_scale: float, nodata: fl
         raise FootfallError(f"the points reach {far:.3g} m from the frame's origin, beyond "
                             f"+-{MAX_COORDINATE:g} m")
     x0, y0 = float(x.min()), float(y.min())
-    fi = np.floor((x - x0) / resolution + 0.5)  # cell index, same rule as position_to_index
-    fj = np.floor((y - y0) / resolution + 0.5)
+    with np.errstate(over="ignore"):  # a span too large gives inf: refused by the cell limit
+        fi = np.floor((x - x0) / resolution + 0.5)  # cell index, same rule as position_to_index
+        fj = np.floor((y - y0) / resolution + 0.5)
     nx_f, ny_f = float(fi.max()) + 1, float(fj.max()) + 1  # float: no overflow on huge spans
     if nx_f < 2 or ny_f < 2:
         raise FootfallError(f"the points span only {nx_f:.0f} x {ny_f:.0f} cells at resolution "

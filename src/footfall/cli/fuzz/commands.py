@@ -26,7 +26,8 @@ class Slot:
     """One argument of a command: ``option`` (None for a positional), its kind and valid value."""
 
     option: str | None
-    kind: str  # "count", "seed", "unit" (in [0, 1]), "positive", "input", "output", "folder"
+    kind: str  # "count", "seed", "unit" (in [0, 1]), "positive", "nonnegative", "input",
+    # "output", "folder"
     valid: str  # a template of :meth:`Bases.fill`
     suffix: str = ""  # the output's expected suffix
 
@@ -34,6 +35,7 @@ class Slot:
 BAD = {"count": values.BAD_COUNTS, "seed": values.BAD_SEEDS,
        "unit": values.BAD_NUMBERS + ("-0.5", "1.5"),
        "positive": values.BAD_NUMBERS + ("0", "-1", "1e-400", "1e-300", "1e300"),
+       "nonnegative": values.BAD_NUMBERS + ("-1", "-1e-300"),
        "input": values.BAD_INPUT, "output": values.BAD_OUTPUT,
        "folder": ("{text}", "{empty}", "/proc/footfall", "/dev/null/out", "/proc/version")}
 
@@ -68,7 +70,7 @@ COMMANDS = (
                                            Slot(None, "input", "{store}"))),
     Command(("demos", "collect"), (Slot("--terrain", "input", "{map}"),
                                    Slot("-n", "count", "2"), Slot("--seed", "seed", "0"),
-                                   Slot("--noise", "positive", "0.1"),
+                                   Slot("--noise", "nonnegative", "0.1"),
                                    _out("-o", ".sqlite")), heavy=True),
     Command(("learn", "--cv", "2", "--library-size", "30"),
             (Slot(None, "input", "{store}"), Slot("--seed", "seed", "0"),

@@ -24,7 +24,8 @@ from footfall.cli.fuzz import craft, values
 from footfall.cli.fuzz.bases import Bases
 from footfall.cli.fuzz.harness import Garbage, Outcome, cli_work, guarded
 
-HEIGHT_BOUND = 1e5  # [m] no height, origin or extent of an accepted map is this large
+HEIGHT_BOUND = 1e5  # [m] no height of an accepted map is this large
+ORIGIN_BOUND = 1e6  # [m] nor its origin this far from the frame's
 
 
 @dataclass(frozen=True)
@@ -71,7 +72,8 @@ def check_map(hmap: Any) -> None:
     if known.size == 0 or not np.all(np.abs(known) < HEIGHT_BOUND):
         raise Garbage("heights missing, infinite or absurd")
     r, (ox, oy) = hmap.resolution, hmap.origin
-    if not (math.isfinite(r) and 0 < r <= 10 and abs(ox) < HEIGHT_BOUND and abs(oy) < HEIGHT_BOUND):
+    if not (math.isfinite(r) and 0 < r <= 10 and abs(ox) <= ORIGIN_BOUND
+            and abs(oy) <= ORIGIN_BOUND):
         raise Garbage(f"resolution {r!r} or origin {hmap.origin!r}")
     checked_json(hmap.metadata, "metadata")
     summary = summarise_map(hmap, "fuzz.npz")

@@ -46,10 +46,10 @@ def _edit_array(a: np.ndarray, edit: tuple[str, int]) -> np.ndarray:
     flat = a.reshape(-1).copy() if a.size else np.zeros(1)
     i = k % flat.size
     if kind in ("nan", "inf", "huge", "negative", "tiny"):
-        value = {"nan": np.nan, "inf": np.inf, "huge": 1e300, "negative": -abs(float(
-            flat[i].real) if np.isrealobj(flat) and flat.dtype.kind in "fiu" else 1.0) - 1.0,
-                 "tiny": 1e-300}[kind]
-        f = flat.astype(np.float64) if flat.dtype.kind not in "fc" else flat
+        numeric = flat.dtype.kind in "fiub"
+        value = {"nan": np.nan, "inf": np.inf, "huge": 1e300, "tiny": 1e-300,
+                 "negative": -abs(float(flat[i])) - 1.0 if numeric else -1.0}[kind]
+        f = flat.astype(np.float64) if numeric else np.zeros(flat.size)
         f[i] = value
         return f.reshape(a.shape) if a.size else f
     conversions = {"complex": np.complex128, "bool": np.bool_, "int": np.int64, "int8": np.int8,

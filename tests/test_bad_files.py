@@ -540,3 +540,30 @@ def test_temporary_files_name_their_writer(tmp_path):
         assert remove_stale_temporaries(tmp_path / "x.png") == []  # a live writer's file stays
         tmp.write_bytes(b"x")
     assert (tmp_path / "x.png").read_bytes() == b"x"
+
+
+def test_demos_collect_on_a_real_decompression_bomb_fails_fast(tmp_path, capsys):
+    """A 600 KB map that truly inflates to 512 MB of heights (8000 x 8000, above the cell limit):
+    ``demos collect`` refuses it from the header, without inflating it (issue 17's hang)."""
+    path = tmp_path / "bomb.npz"
+    header = "{'descr': '<f8', 'fortran_order': False, 'shape': (8000, 8000), }"
+    with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        for name, data in map_members().items():
+            if name != "heights.npy":
+                zf.writestr(name, data)
+        with zf.open("heights.npy", "w", force_zip64=True) as member:
+            member.write(npy_with_header(header))
+            chunk = bytes(1 << 20)
+            for _ in range(512):
+                member.write(chunk)
+    assert path.stat().st_size < 2 << 20
+    tracemalloc.start()
+    try:
+        code, _, err = run(capsys, "demos", "collect", "--terrain", path, "-n", "1", "--seed", "0",
+                           "-o", tmp_path / "demos.sqlite")
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert_user_error(code, err, "6.4e+07 cells, above the limit of 50000000")
+    assert peak < 50 << 20
+    assert not (tmp_path / "demos.sqlite").exists()

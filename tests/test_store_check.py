@@ -221,8 +221,7 @@ def test_walk_many_log_refuses_an_unknown_table(clean):
 def test_collect_n_is_bounded_up_front(tmp_path, capsys):
     code, _, err = run(capsys, "demos", "collect", "--terrain", tmp_path / "missing.npz",
                        "-n", 10 ** 15, "--seed", 0, "-o", tmp_path / "d.sqlite")
-    assert_user_error(code, err, "the number of demonstrations = 1000000000000000 is above the limit "
-                                 "of 100000")
+    assert_user_error(code, err, "1000000000000000 is above the limit of 100000")
     assert not (tmp_path / "d.sqlite").exists()
     with pytest.raises(FootfallError, match="above the limit"):
         collect_demonstrations([bumpy()], ProgressExpert(), 10 ** 9, seed=0)

@@ -567,3 +567,13 @@ def test_demos_collect_on_a_real_decompression_bomb_fails_fast(tmp_path, capsys)
     assert_user_error(code, err, "6.4e+07 cells, above the limit of 50000000")
     assert peak < 50 << 20
     assert not (tmp_path / "demos.sqlite").exists()
+
+
+def test_a_nodata_beyond_the_raw_dtype_matches_nothing_without_a_warning(tmp_path):
+    """Found by the fuzz: float16 heights with nodata 8e15 printed NumPy's overflow warning."""
+    path = tmp_path / "half.npy"
+    np.save(path, np.full((8, 8), 0.5, dtype=np.float16))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        hmap = import_terrain(path, resolution=0.01, nodata=8.2e15)
+    assert np.all(hmap.heights == 0.5)

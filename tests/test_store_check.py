@@ -322,3 +322,4 @@ def test_duplicates_never_straddle_folds():
         assert not inside & outside  # a demonstration is tested in one fold and nowhere else
     keyless = [Example(e.prepared, e.n, e.chosen, e.front, e.rows) for e in examples[:3]] * 2
     assert len(distinct_examples(keyless)) == 6  # without a key, every example counts
+

@@ -147,6 +147,9 @@ class StoreConnection:
         except sqlite3.DatabaseError as exc:  # malformed image, not a database, ...
             raise FootfallError(f"{self.path}: corrupt demonstration store "
                                 f"({one_line(exc)})") from None
+        except UnicodeDecodeError:  # a damaged page where SQLite keeps the schema's text
+            raise FootfallError(f"{self.path}: corrupt demonstration store "
+                                f"(its schema holds text that is not UTF-8)") from None
 
     @property
     def _connection(self) -> sqlite3.Connection:

@@ -150,9 +150,9 @@ def _grid_to_map(path: Path, raw: np.ndarray, fmt: str, opts: _Options,
     resolution = _require_resolution(path, opts, f".{fmt} grid")
     with np.errstate(over="ignore", invalid="ignore"):  # float128 beyond float64: inf, refused
         heights = raw.astype(np.float64)
-    if opts.nodata is not None:
-        heights[raw == opts.nodata] = np.nan
     with np.errstate(over="ignore", invalid="ignore"):  # inf or NaN, refused by HeightMap
+        if opts.nodata is not None:  # (a nodata beyond the raw dtype's range matches nothing)
+            heights[raw == opts.nodata] = np.nan
         heights *= z_scale
     if np.isnan(heights).all():
         raise FootfallError(f"{path}: no data (every cell is NaN"

@@ -16,7 +16,7 @@ from hypothesis import HealthCheck, given, settings
 import footfall.cli.fuzz.commands  # noqa: F401 - registers the command-line target
 from footfall.cli.fuzz import craft
 from footfall.cli.fuzz.bases import make_bases
-from footfall.cli.fuzz.harness import Garbage, cli_work, guarded
+from footfall.cli.fuzz.harness import Garbage, Multiline, cli_work, guarded
 from footfall.cli.fuzz.targets import TARGETS, run_case
 from footfall.core.errors import FootfallError
 
@@ -61,7 +61,9 @@ def test_the_harness_reports_each_kind_of_failure():
 
     assert guarded("t", "c", lambda: None, 5).kind == "ok"
     assert guarded("t", "c", raises(FootfallError("bad value")), 5).kind == "refused"
-    assert guarded("t", "c", raises(FootfallError("two\nlines")), 5).kind == "multiline"
+    quoted = guarded("t", "c", raises(FootfallError("a library's\nmessage")), 5)
+    assert (quoted.kind, quoted.detail) == ("refused", "a library's message")  # one line always
+    assert guarded("t", "c", raises(Multiline("exit 2 with 3 lines")), 5).kind == "multiline"
     assert guarded("t", "c", raises(KeyError("x")), 5).kind == "traceback"
     assert guarded("t", "c", raises(Garbage("NaN reward")), 5).kind == "garbage"
     assert guarded("t", "c", warns, 5).kind == "multiline"
@@ -111,6 +113,11 @@ FOUND = [
     ("scan-import", (".npy", [("line", 999999, "format binary_little_endian 1.0"),
                               ("array", ("float16", 1))], 8246631289051090.0, 0.005,
                      8246631289051090.0)),
+    # a candidate count stored as text: the store's summary after a write raised ValueError
+    ("store", ([("cell", "demonstrations", 1016, 244708, "LF")], "collect")),
+    # NumPy's three-line message on a huge .npy header, quoted in a FootfallError
+    ("scan-import", (".npy", [("array", ("nan", 9)), ("bytes", "delete", 9),
+                              ("bytes", "flip", 426)], 0.005, 0.005, None)),
 ]
 
 

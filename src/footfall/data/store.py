@@ -190,6 +190,9 @@ class DemoStore(RunQueries, TerrainQueries):
             total, first, last, cmin, cmean, cmax = con.execute(
                 "SELECT count(*), min(id), max(id), min(n_candidates), avg(n_candidates), "
                 "max(n_candidates) FROM demonstrations").fetchone()
+            if total and not all(isinstance(v, (int, float)) for v in (cmin, cmean, cmax)):
+                raise FootfallError(f"{self.path}: corrupt demonstration store (a candidate "
+                                    f"count that is not a number; run footfall store check)")
             by_terrain = dict(con.execute(
                 "SELECT t.hash, count(d.id) FROM terrains t LEFT JOIN demonstrations d "
                 "ON d.terrain_hash = t.hash GROUP BY t.hash ORDER BY t.rowid"))

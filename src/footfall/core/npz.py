@@ -30,7 +30,7 @@ MemberCheck = Callable[[str, tuple[int, ...], np.dtype], None]
 
 ARRAY_KINDS = "biufcUS"  # dtype kinds an archive may hold: no objects, records or raw bytes
 CHUNK = 1 << 20  # [bytes] read at a time
-_HEADER_ERRORS = (ValueError, SyntaxError, tokenize.TokenError, EOFError, KeyError, TypeError)
+HEADER_ERRORS = (ValueError, SyntaxError, tokenize.TokenError, EOFError, KeyError, TypeError)
 _ZIP_ERRORS = (zipfile.BadZipFile, zipfile.LargeZipFile, zlib.error, EOFError,
                NotImplementedError, RuntimeError, OSError, ValueError)
 
@@ -100,19 +100,27 @@ def _checked_members(p: Path, archive: zipfile.ZipFile, limits: Limits
     return members
 
 
+def npy_header(fh: IO[bytes]) -> tuple[tuple[int, ...], bool, np.dtype]:
+    """(shape, fortran_order, dtype) from the ``.npy`` header at ``fh``, nothing more read.
+
+    Raises one of :data:`HEADER_ERRORS` for a header that is not one (versions 1.0 and 2.0
+    are read; 3.0 is refused).
+    """
+    fmt = np.lib.format
+    version = fmt.read_magic(fh)
+    if version == (1, 0):
+        return fmt.read_array_header_1_0(fh)
+    if version == (2, 0):
+        return fmt.read_array_header_2_0(fh)
+    raise ValueError(f"unsupported .npy format version {version}")
+
+
 def _read_header(p: Path, member: str, fh: IO[bytes]
                  ) -> tuple[tuple[int, ...], bool, np.dtype]:
     """(shape, fortran_order, dtype) from a member's ``.npy`` header, checked."""
-    fmt = np.lib.format
     try:
-        version = fmt.read_magic(fh)
-        if version == (1, 0):
-            shape, fortran, dtype = fmt.read_array_header_1_0(fh)
-        elif version == (2, 0):
-            shape, fortran, dtype = fmt.read_array_header_2_0(fh)
-        else:
-            raise ValueError(f"unsupported .npy format version {version}")
-    except _HEADER_ERRORS as exc:
+        shape, fortran, dtype = npy_header(fh)
+    except HEADER_ERRORS as exc:
         raise FootfallError(f"{p}: member {member!r} has a broken .npy header "
                             f"({_describe(exc)})") from None
     if (dtype.kind not in ARRAY_KINDS or dtype.hasobject or dtype.names is not None

@@ -44,7 +44,6 @@ import contextlib
 import hashlib
 import math
 import os
-import tokenize
 import warnings
 import zlib
 from dataclasses import dataclass
@@ -57,14 +56,14 @@ from footfall.core.errors import FootfallError
 from footfall.core.files import readable_file
 from footfall.core.heightmap import MAX_COORDINATE, HeightMap
 from footfall.core.limits import Limits, current_limits
+from footfall.core.npz import HEADER_ERRORS, npy_header
 
 __all__ = ["import_terrain", "rasterize_points", "SUFFIXES", "MAX_CELLS"]
 
 MAX_CELLS = Limits().max_map_cells  # the default of the limit on rasterised grids (raise the
 # limit max_map_cells, not this constant: the limit in force is current_limits().max_map_cells)
 PLY_HEADER_BYTES = 1 << 16  # [bytes] the longest PLY header read
-_NPY_HEADER_ERRORS = (ValueError, SyntaxError, tokenize.TokenError, EOFError, OSError,
-                      KeyError, TypeError)
+_NPY_HEADER_ERRORS = HEADER_ERRORS + (OSError,)
 
 
 @dataclass(frozen=True)
@@ -172,23 +171,10 @@ def _read_npz(path: Path, opts: _Options) -> HeightMap:
     return HeightMap.load(path)
 
 
-def _npy_header(path: Path, fh: Any) -> tuple[tuple[int, ...], np.dtype]:
-    """Shape and dtype from a ``.npy`` header, parsed without reading the data."""
-    fmt = np.lib.format
-    version = fmt.read_magic(fh)
-    if version == (1, 0):
-        shape, _, dtype = fmt.read_array_header_1_0(fh)
-    elif version == (2, 0):
-        shape, _, dtype = fmt.read_array_header_2_0(fh)
-    else:
-        raise ValueError(f"unsupported .npy format version {version}")
-    return tuple(shape), dtype
-
-
 def _read_npy(path: Path, opts: _Options) -> HeightMap:
     try:
         with open(path, "rb") as fh:
-            shape, dtype = _npy_header(path, fh)
+            shape, _, dtype = npy_header(fh)
             if len(shape) == 2 and not dtype.hasobject:
                 _check_cells(path, shape, "the .npy array")
             fh.seek(0)

@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-import footfall.cli.fuzz.commands  # noqa: F401 - registers the command-line target
 from footfall.cli.fuzz import craft
 from footfall.cli.fuzz.bases import make_bases
 from footfall.cli.fuzz.harness import Garbage, Multiline, cli_work, guarded

@@ -10,9 +10,14 @@ limit, a memory blow-up, garbage accepted, an error of more than one line.
 * :mod:`.values`: the hostile values (Hypothesis strategies);
 * :mod:`.craft`: raw ``.npz`` archives built and mutated byte by byte, bypassing footfall;
 * :mod:`.bases`: the valid files the mutations start from;
-* :mod:`.targets`: the loaders and commands under test, each with its oracle;
+* :mod:`.targets`: what a target is, and their registry; :mod:`.oracles`: the checks of an
+  accepted input's result;
+* the targets: :mod:`.files` (map and model files, imported scans), :mod:`.stores`,
+  :mod:`.commands` (every command's arguments);
 * :mod:`.campaign`: ``footfall bench fuzz``: as many inputs as fit in a time budget.
 
 The test suite (``tests/test_fuzz.py``) runs the same targets through Hypothesis with a
 small budget.
 """
+
+from footfall.cli.fuzz import commands, files, stores  # noqa: F401,E402 - the targets register

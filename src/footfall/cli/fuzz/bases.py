@@ -1,7 +1,8 @@
 """The valid files every mutation starts from, made once per fuzz session in a work directory.
 
-A height map (a rocky module at 2 mm, with the board metadata footfall writes), a store of
-the synthetic expert's demonstrations on it, a model learned from them, the scan formats a
+A height map (a rocky module, and a copy at 4 mm, with the board metadata footfall writes),
+a store of the synthetic expert's demonstrations on it and one run's log, a model learned
+from the demonstrations, the scan formats a
 user imports (``.npy``, 16-bit PNG, PLY, XYZ) and junk (an empty file, a text file).
 """
 
@@ -24,7 +25,7 @@ class Bases:
     root: Path
     map: Path  # a rocky module's height map (.npz)
     small_map: Path  # the same at 4 mm: cheap to load many times
-    store: Path  # demonstrations on ``map`` (.sqlite)
+    store: Path  # demonstrations on ``map`` and the log of one run (.sqlite)
     model: Path  # learned from ``store`` (.npz)
     scans: dict  # {".npy": path, ".png": ..., ".ply": ..., ".xyz": ...}
     empty: Path
@@ -63,6 +64,9 @@ def make_bases(root: str | Path) -> Bases:
     if not paths["store.sqlite"].exists():
         _cli("demos", "collect", "--terrain", paths["map.npz"], "-n", "8", "--seed", "0",
              "-o", paths["store.sqlite"])
+        flat = root / "flat.npz"  # a short walk, so that the store holds a run log too
+        _cli("terrain", "board", "flat", "flat", "--no-flat-ends", "--seed", "0", "-o", flat)
+        _cli("walk", "--terrain", flat, "--seed", "0", "--log", paths["store.sqlite"])
     if not paths["model.npz"].exists():
         _cli("learn", paths["store.sqlite"], "--features", "both", "--cv", "2",
              "--library-size", "30", "-o", paths["model.npz"])

@@ -17,7 +17,6 @@ from typing import Any
 from hypothesis import HealthCheck, Phase, Verbosity, given, settings
 from hypothesis import seed as hypothesis_seed
 
-import footfall.cli.fuzz.commands  # noqa: F401 - registers the command-line target
 from footfall.cli.fuzz.bases import make_bases
 from footfall.cli.fuzz.harness import FAILURES, Outcome
 from footfall.cli.fuzz.targets import TARGETS, run_case

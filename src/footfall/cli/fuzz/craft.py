@@ -79,6 +79,8 @@ def footfall_members(fmt: str, version: Any, arrays: dict[str, np.ndarray], meta
     return members
 
 
+# A header field's offset in the local and the central directory header (None: left alone)
+_HEADER_FIELDS = {"encrypt": (6, 8), "method": (8, 10), "crc": (14, None), "sizes": (22, 24)}
 ZIP_EDITS = ("encrypt", "method", "flip", "truncate", "insert", "delete", "zero_run",
              "crc", "sizes", "comment")
 
@@ -99,23 +101,16 @@ def patch_zip(data: bytes, edit: str, k: int) -> bytes:
     i = k % len(b)
     local = [at for at in _headers(data, _LOCAL) if at + 30 <= len(b)]
     central = [at for at in _headers(data, _CENTRAL) if at + 46 <= len(b)]
-    if edit in ("encrypt", "method", "crc", "sizes") and local:
-        for at in local:
-            if edit == "encrypt":
-                b[at + 6] |= 1
-            elif edit == "method":
-                struct.pack_into("<H", b, at + 8, 99 if k % 2 else 12)
-            elif edit == "crc":
-                struct.pack_into("<I", b, at + 14, k & 0xFFFFFFFF)
-            else:
-                struct.pack_into("<I", b, at + 22, (k * 7919) & 0xFFFFFFFF)
-        for at in central:
-            if edit == "encrypt":
-                b[at + 8] |= 1
-            elif edit == "method":
-                struct.pack_into("<H", b, at + 10, 99 if k % 2 else 12)
-            elif edit == "sizes":
-                struct.pack_into("<I", b, at + 24, (k * 7919) & 0xFFFFFFFF)
+    if edit in _HEADER_FIELDS and local:
+        values = {"method": 99 if k % 2 else 12, "crc": k & 0xFFFFFFFF,
+                  "sizes": (k * 7919) & 0xFFFFFFFF}
+        for headers, offset in zip((local, central), _HEADER_FIELDS[edit]):
+            for at in headers if offset is not None else ():
+                if edit == "encrypt":
+                    b[at + offset] |= 1  # general-purpose flag bit 0: encrypted
+                else:
+                    struct.pack_into("<H" if edit == "method" else "<I", b, at + offset,
+                                     values[edit])
         return bytes(b)
     if edit == "truncate":
         return bytes(b[:i])

@@ -82,6 +82,18 @@ def test_a_command_that_accepts_what_it_must_refuse_is_garbage(tmp_path):
     assert refused.kind == "refused" and refused.detail.startswith("footfall: error:")
 
 
+def test_a_fuzzed_relative_output_lands_in_the_scratch_folder(tmp_path, monkeypatch):
+    # a random output name ("T", "0") once landed in the repository's root and was committed
+    scratch, home = tmp_path / "scratch", tmp_path / "home"
+    scratch.mkdir()
+    home.mkdir()
+    monkeypatch.chdir(home)
+    ok = guarded("cli", "c", cli_work(["terrain", "make", "flat", "--seed", "1", "-o", "T.npz"],
+                                      must_refuse=False, cwd=scratch), 30)
+    assert ok.kind == "ok"
+    assert (scratch / "T.npz").is_file() and list(home.iterdir()) == []
+
+
 def test_crafted_archives_are_what_they_claim(tmp_path):
     """The crafted inputs really are hostile: a pickle member would run, a huge member claims
     terabytes, an encrypted archive is flagged -- so refusing them is a real test."""

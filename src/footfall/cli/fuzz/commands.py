@@ -128,7 +128,7 @@ def _maybe_valid(slot: Slot, template: str) -> bool:
 def _cli_work(case: tuple, bases: Bases, scratch: Path) -> Callable[[], None]:
     argv, must_refuse = build_argv(case, bases)
     argv = [a.replace(str(bases.root) + "/out", str(scratch) + "/out") for a in argv]
-    return cli_work(argv, must_refuse)
+    return cli_work(argv, must_refuse, cwd=scratch)
 
 
 register_target(Target("cli", cli_cases, _cli_work, seconds=20.0))

@@ -17,6 +17,7 @@ import traceback
 import warnings
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from pathlib import Path
 
 from footfall.core.errors import FootfallError
 
@@ -139,8 +140,12 @@ def guarded(target: str, case: str, work: Callable[[], None], seconds: float) ->
     return result
 
 
-def cli_work(argv: list[str], must_refuse: bool) -> Callable[[], None]:
+def cli_work(argv: list[str], must_refuse: bool, cwd: Path | None = None
+             ) -> Callable[[], None]:
     """The work of running ``footfall ARGV`` in-process, judged as a user sees it.
+
+    ``cwd``: the working directory to run in (the case's scratch folder), so that a fuzzed
+    relative output name lands there and not in the caller's directory.
 
     Exit 0 is accepted (unless ``must_refuse``: the arguments hold a value the command must
     refuse); exit 2 must come with exactly one line on standard error, and is reported as a
@@ -150,7 +155,8 @@ def cli_work(argv: list[str], must_refuse: bool) -> Callable[[], None]:
         from footfall.cli import main
 
         err = io.StringIO()
-        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()), \
+                contextlib.chdir(cwd if cwd is not None else Path.cwd()):
             code = main(list(argv))
         lines = [line for line in err.getvalue().splitlines() if line.strip()]
         if code == 2:

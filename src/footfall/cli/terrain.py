@@ -18,13 +18,28 @@ def terrain() -> None:
     """Make, import and look at terrain height maps."""
 
 
-def _emit_map(as_json: bool, summary: MapSummary) -> None:
-    """A written map's summary: JSON, or one line with its size [mm, m] and heights [mm]."""
+def _emit_map(as_json: bool, summary: MapSummary, notes: tuple[str, ...] = ()) -> None:
+    """A written map's summary: JSON, or one line with its size [mm, m] and heights [mm]
+    (then any ``notes``, one a line)."""
     text = (f"wrote {summary.file}: {summary.shape[0]} x {summary.shape[1]} cells at "
             f"{summary.resolution * 1000:g} mm, {summary.length[0]:.3f} x "
             f"{summary.length[1]:.3f} m, heights {summary.height_min * 1000:.1f} .. "
             f"{summary.height_max * 1000:.1f} mm")
-    emit(as_json, summary.as_dict(), text)
+    emit(as_json, summary.as_dict(), "\n".join((text, *notes)))
+
+
+def _file_module_notes(summary: MapSummary) -> tuple[str, ...]:
+    """One line per module of a board made from a file: where it lies and how it was fitted."""
+    notes = []
+    for k, m in enumerate(summary.metadata.get("modules", [])):
+        if m.get("kind") == "file":
+            fit = {"exact": "as wide as the board", "padded": "padded with no data to the "
+                   "board's width", "cropped": "cropped to the board's width"}[m["width_fit"]]
+            notes.append(f"  module {k}: {m['file']} ({m['resolution'] * 1000:g} mm, "
+                         f"{m['width']:.3f} m wide) at x {m['x_start']:.3f} .. "
+                         f"{m['x_end']:.3f} m, {fit} (centred in y), heights shifted by "
+                         f"{m['z_shift'] * 1000:+.1f} mm")
+    return tuple(notes)
 
 
 @terrain.command("make")
@@ -42,7 +57,7 @@ def terrain_make(kind: str, difficulty: float, seed: int, output: str, as_json: 
 
 
 @terrain.command("board")
-@click.argument("specs", nargs=-1, required=True, metavar="KIND[:DIFFICULTY]...")
+@click.argument("specs", nargs=-1, required=True, metavar="KIND[:DIFFICULTY]|FILE.npz...")
 @click.option("--seed", type=SEED, required=True, help="Random seed.")
 @click.option("--flat-ends/--no-flat-ends", default=True, show_default=True,
               help="Add a flat start and end module unless the row already has them.")
@@ -52,11 +67,15 @@ def terrain_board(specs: tuple[str, ...], seed: int, flat_ends: bool, output: st
                   as_json: bool) -> None:
     """Make a board: modules in a row along x, e.g. `rocky:0.5 rocky:0.8`.
 
-    KIND is one of the kinds `footfall terrain make --help` lists.
+    KIND is one of the kinds `footfall terrain make --help` lists. A FILE.npz
+    (a footfall height map, e.g. from `footfall terrain import`) is a module
+    too, e.g. `flat my_scan.npz rocky:0.5`: resampled to 1 mm, its own length,
+    padded (no data) or cropped to the board's width, lowest point at z = 0.
     """
     from footfall.terrain.saving import save_board
 
-    _emit_map(as_json, save_board(specs, seed, output, flat_ends=flat_ends))
+    summary = save_board(specs, seed, output, flat_ends=flat_ends)
+    _emit_map(as_json, summary, _file_module_notes(summary))
 
 
 @terrain.command("import")

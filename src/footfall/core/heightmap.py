@@ -163,7 +163,9 @@ def module_records(metadata: Any, what: str = "metadata") -> list[dict]:
 
     A board made by :func:`footfall.terrain.make_board` lists its modules in
     order along x, each ``{"kind": str, "x_start": m, "x_end": m}`` and
-    usually ``"difficulty"`` in [0, 1] and ``"seed"`` >= 0. Code that walks a
+    usually ``"difficulty"`` in [0, 1] and ``"seed"`` >= 0 (a module made from a
+    height-map file, kind ``"file"``, has neither: its ``"file"`` name, content
+    hash, resolution and height shift instead). Code that walks a
     board relies on these types; a file holding something else is refused
     here, by field, rather than failing deep inside with a TypeError.
     Returns ``[]`` when the metadata lists no modules.

@@ -29,17 +29,25 @@ class StoreInventory:
 
 
 def terrain_label(info: dict[str, Any]) -> str:
-    """A short label of a stored terrain: its modules (``flat, rocky:0.6``) or its size.
+    """A short label of a stored terrain: its modules (``flat, rocky:0.6, scan.npz``) or its size.
 
     ``info`` is one entry of :meth:`DemoStore.terrain_info`: shape [cells],
-    resolution [m/cell] and metadata.
+    resolution [m/cell] and metadata. A module made from a file shows as its file name.
     """
     modules = info.get("metadata", {}).get("modules")
     if isinstance(modules, list) and modules and all(isinstance(m, dict) for m in modules):
-        return ", ".join(str(m.get("kind")) if m.get("kind") == "flat" or m.get("difficulty")
-                         is None else f"{m.get('kind')}:{m.get('difficulty')}" for m in modules)
+        return ", ".join(_module_label(m) for m in modules)
     shape = info.get("shape", ["?", "?"])
     return f"{shape[0]} x {shape[1]} cells at {info.get('resolution', 0) * 1000:g} mm"
+
+
+def _module_label(module: dict[str, Any]) -> str:
+    """``rocky:0.6``, ``flat``, or a file module's file name (a record without difficulty)."""
+    if module.get("kind") == "file" and "file" in module:
+        return str(module["file"])
+    if module.get("kind") == "flat" or module.get("difficulty") is None:
+        return str(module.get("kind"))
+    return f"{module.get('kind')}:{module.get('difficulty')}"
 
 
 def store_inventory(path: str | os.PathLike) -> StoreInventory:

@@ -628,7 +628,8 @@ def _demo_summary(demos: list, maps: dict[str, HeightMap]) -> dict:
     for d in demos:
         mods = maps[d.terrain_hash].metadata.get("modules", [])
         x = d.foothold[0] - maps[d.terrain_hash].bounds[0]
-        kind = next((f"{m['kind']} {m['difficulty']:g}" for m in mods
+        kind = next((f"{m['kind']} {m['difficulty']:g}" if "difficulty" in m
+                     else str(m.get("file", m["kind"])) for m in mods
                      if m["x_start"] <= x < m["x_end"]), "?")
         kinds[kind] = kinds.get(kind, 0) + 1
         legs[d.swing_leg] = legs.get(d.swing_leg, 0) + 1

@@ -1,5 +1,6 @@
 """Terrain generation: LittleDog-like terrain modules and boards made of them."""
 
+from footfall.terrain.file_modules import FileModule
 from footfall.terrain.modules import (
     KINDS,
     MODULE_CELLS,
@@ -7,10 +8,12 @@ from footfall.terrain.modules import (
     MODULE_SIZE,
     make_board,
     make_module,
+    parse_board_spec,
     parse_module_spec,
     register_kind,
     unregister_kind,
 )
 
-__all__ = ["KINDS", "MODULE_CELLS", "MODULE_RESOLUTION", "MODULE_SIZE", "make_board",
-           "make_module", "parse_module_spec", "register_kind", "unregister_kind"]
+__all__ = ["KINDS", "MODULE_CELLS", "MODULE_RESOLUTION", "MODULE_SIZE", "FileModule",
+           "make_board", "make_module", "parse_board_spec", "parse_module_spec", "register_kind",
+           "unregister_kind"]

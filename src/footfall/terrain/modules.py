@@ -7,14 +7,19 @@ terrain of varying difficulty. This module generates such modules as
 
 Module frame: x in [0, 0.61) m forward, y in [-0.305, 0.305) m left, z up;
 heights >= 0 above the ground plane z = 0.
+
+A board may also hold a user's own height-map files as modules, next to the
+generated kinds (:mod:`footfall.terrain.file_modules`).
 """
 
 from __future__ import annotations
 
 import math
 import numbers
+import os
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Union
 
 import numpy as np
 from scipy.ndimage import gaussian_filter
@@ -22,7 +27,16 @@ from scipy.spatial import cKDTree
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
+from footfall.core.limits import check_cells
 from footfall.core.plugins import load_plugins
+from footfall.terrain.file_modules import (
+    FILE_KIND,
+    FILE_SUFFIX,
+    BoardGrid,
+    FileModule,
+    fit_to_board,
+    module_cells,
+)
 
 MODULE_SIZE = 0.61  # [m] side length of a square terrain module (61 cm)
 MODULE_RESOLUTION = 0.001  # [m/cell] scan resolution (1 mm)
@@ -31,6 +45,7 @@ MODULE_ORIGIN = (0.5 * MODULE_RESOLUTION, -0.5 * MODULE_SIZE + 0.5 * MODULE_RESO
 # [m] centre of cell (0, 0) of a module: (0.0005, -0.3045)
 DEFAULT_DIFFICULTY = 0.5  # [-] difficulty of a spec such as "rocky" without ":<difficulty>"
 GENERATOR = "footfall.terrain"  # provenance tag stored in HeightMap.metadata["generator"]
+BOARD_GRID = BoardGrid(MODULE_RESOLUTION, MODULE_CELLS)  # the grid file modules are resampled to
 
 Generator = Callable[[float, np.random.Generator], np.ndarray]
 """A module generator: ``(difficulty, rng) -> heights``. ``difficulty`` in [0, 1] [-] sets the
@@ -399,6 +414,9 @@ def register_kind(name: str, generator: Generator) -> Generator:
     """
     if not isinstance(name, str) or not name.isidentifier():
         raise ValueError(f"a terrain kind needs a name like 'craters', got {name!r}")
+    if name == FILE_KIND:
+        raise ValueError(f"{FILE_KIND!r} names the board modules read from files; "
+                         f"choose another name")
     if name in KINDS and KINDS[name] is not generator:
         raise ValueError(f"terrain kind {name!r} is already registered")
     if not callable(generator):
@@ -484,59 +502,112 @@ def make_module(kind: str, difficulty: float, seed: int) -> HeightMap:
                                "modules": [_module_record(kind, difficulty, seed, 0.0)]})
 
 
-def make_board(specs: list[tuple[str, float]], seed: int, flat_ends: bool = True) -> HeightMap:
+BoardSpec = Union[tuple[str, float], FileModule]
+"""One module of a board: a generated ``(kind, difficulty)`` or a height-map file."""
+
+
+def _check_board_spec(spec: object, specs: object) -> BoardSpec:
+    """A (kind, difficulty) pair checked, or a :class:`FileModule` as it is."""
+    if isinstance(spec, FileModule):
+        return spec
+    try:
+        kind, difficulty = spec  # type: ignore[misc]
+    except (TypeError, ValueError):
+        raise FootfallError(f"board specs must be (kind, difficulty) pairs or FileModules, "
+                            f"got {specs!r}") from None
+    return _check_kind(kind), _check_difficulty(difficulty)
+
+
+def _with_flat_ends(row: list[BoardSpec]) -> list[BoardSpec]:
+    """``row`` with a flat module before and after it, unless it starts / ends with one."""
+    def is_flat(spec: BoardSpec) -> bool:
+        return not isinstance(spec, FileModule) and spec[0] == "flat"
+
+    return ([] if is_flat(row[0]) else [("flat", 0.0)]) + row + \
+        ([] if is_flat(row[-1]) else [("flat", 0.0)])
+
+
+def _x(cells: int) -> float:
+    """Length [m] of ``cells`` board cells (k modules: exactly k * MODULE_SIZE)."""
+    return cells / MODULE_CELLS * MODULE_SIZE
+
+
+def _board_module(spec: BoardSpec, seed: int, start: int) -> tuple[np.ndarray, dict]:
+    """Heights (n, 610) [m] and record of one module of a board starting at cell ``start``.
+
+    A file module ends at the start of the next module, ``x_end = _x(start + n)`` [m]; a
+    generated one at ``x_start + MODULE_SIZE``, as boards were always recorded.
+    """
+    if isinstance(spec, FileModule):
+        heights, record = fit_to_board(spec, BOARD_GRID)
+        return heights, {**record, "x_start": _x(start), "x_end": _x(start + heights.shape[0])}
+    kind, difficulty = spec
+    return (_module_heights(kind, difficulty, seed),
+            _module_record(kind, difficulty, seed, _x(start)))
+
+
+def make_board(specs: Iterable[BoardSpec], seed: int, flat_ends: bool = True) -> HeightMap:
     """Lay terrain modules in a row along +x.
 
-    Module k covers ``x in [k * 0.61, (k + 1) * 0.61)`` m and the full width
-    ``y in [-0.305, 0.305)`` m.
+    A generated module is 0.61 m long; a :class:`~footfall.terrain.file_modules.FileModule`
+    (a height-map file) keeps its own length, rounded to whole 1 mm cells, and is
+    resampled to 1 mm, padded with no data (NaN) or cropped to the board's width and
+    shifted to stand on z = 0 (see :mod:`footfall.terrain.file_modules`). Every module
+    spans the full width ``y in [-0.305, 0.305)`` m.
 
     Parameters
     ----------
-    specs : list of (str, float)
-        (kind, difficulty) of each module, in order along +x.
+    specs : iterable of (str, float) or FileModule
+        (kind, difficulty) of each generated module, or a file module, in order along +x.
     seed : int
         Non-negative board seed; module seeds are drawn from
-        ``np.random.SeedSequence(seed).spawn`` (one per module, flat ends
-        included), so the board is deterministic.
+        ``np.random.SeedSequence(seed).spawn`` (one per module, flat ends and file
+        modules included), so the board is deterministic.
     flat_ends : bool
         If true, put a flat module before the first spec unless it is flat,
         and after the last spec unless it is flat, so the robot starts and
-        stops on flat ground.
+        stops on flat ground (a file module is not flat).
 
     Returns
     -------
     HeightMap
-        (610 * n_modules) x 610 cells of 0.001 m, cell (0, 0) at
-        (0.0005, -0.3045) m. ``metadata["modules"]`` lists each module's
-        kind, difficulty, seed (reproduces it with :func:`make_module`),
-        x_start and x_end [m].
+        (cells of all modules along x) x 610 cells of 0.001 m, cell (0, 0) at
+        (0.0005, -0.3045) m. ``metadata["modules"]`` lists each module's x_start and
+        x_end [m] and kind; a generated one's difficulty and seed (reproduces it with
+        :func:`make_module`); a file module's ``kind`` "file", file name, content hash,
+        resolution [m/cell], width [m], width_fit and z_shift [m].
 
     Raises
     ------
     FootfallError
         For an empty spec list, a malformed spec, an unknown kind, a
-        difficulty outside [0, 1] or a bad seed.
+        difficulty outside [0, 1], a bad seed, or a board above the
+        ``max_map_cells`` limit (checked before any module is made).
     """
     seed = _check_seed(seed)
     try:
-        pairs = [(kind, difficulty) for kind, difficulty in specs]
-    except (TypeError, ValueError):
-        raise FootfallError(f"board specs must be (kind, difficulty) pairs, got {specs!r}") from None
-    checked = [(_check_kind(kind), _check_difficulty(difficulty)) for kind, difficulty in pairs]
-    if not checked:
+        items = list(specs)
+    except TypeError:
+        raise FootfallError(f"board specs must be (kind, difficulty) pairs or FileModules, "
+                            f"got {specs!r}") from None
+    row = [_check_board_spec(spec, specs) for spec in items]
+    if not row:
         raise FootfallError("a board needs at least one module")
-    if flat_ends and checked[0][0] != "flat":
-        checked.insert(0, ("flat", 0.0))
-    if flat_ends and checked[-1][0] != "flat":
-        checked.append(("flat", 0.0))
-    children = np.random.SeedSequence(seed).spawn(len(checked))
+    if flat_ends:
+        row = _with_flat_ends(row)
+    lengths = [module_cells(s, BOARD_GRID) if isinstance(s, FileModule) else MODULE_CELLS
+               for s in row]
+    files = [s.name for s in row if isinstance(s, FileModule)]
+    check_cells((sum(lengths), MODULE_CELLS), f"{', '.join(files)}: the board" if files
+                else "the board")
+    children = np.random.SeedSequence(seed).spawn(len(row))
     seeds = [int(child.generate_state(1)[0]) for child in children]
-    records = [_module_record(kind, difficulty, s, k * MODULE_SIZE)
-               for k, ((kind, difficulty), s) in enumerate(zip(checked, seeds))]
-    heights = np.concatenate([_module_heights(kind, difficulty, s)
-                              for (kind, difficulty), s in zip(checked, seeds)], axis=0)
-    return HeightMap(heights, MODULE_RESOLUTION, MODULE_ORIGIN,
-                     metadata={"generator": GENERATOR, "board_seed": seed, "modules": records})
+    starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])  # [cells]
+    parts = [_board_module(spec, s, int(start)) for spec, s, start in zip(row, seeds, starts)]
+    return HeightMap(np.concatenate([heights for heights, _ in parts], axis=0),
+                     MODULE_RESOLUTION, MODULE_ORIGIN,
+                     metadata={"generator": GENERATOR, "board_seed": seed,
+                               "modules": [record for _, record in parts]})
 
 
 def parse_module_spec(spec: str) -> tuple[str, float]:
@@ -574,3 +645,26 @@ def parse_module_spec(spec: str) -> tuple[str, float]:
         raise FootfallError(f"bad module spec {spec!r}: difficulty {value.strip()!r} "
                             f"is not a number") from None
     return kind, _check_difficulty(difficulty)
+
+
+def parse_board_spec(spec: str) -> BoardSpec:
+    """Parse one module of a board: ``"kind[:difficulty]"`` or a height-map file.
+
+    A spec ending in ``.npz`` (any case) is a module file, read by
+    :meth:`FileModule.load`; so is one that is not a valid ``kind[:difficulty]`` but
+    names an existing file (which must then be a ``.npz``).
+
+    Raises
+    ------
+    FootfallError
+        As :func:`parse_module_spec`, or naming the file: missing, not a footfall
+        height map (``.npz``), damaged, too large or without data.
+    """
+    if isinstance(spec, str) and spec.strip().lower().endswith(FILE_SUFFIX):
+        return FileModule.load(spec.strip())
+    try:
+        return parse_module_spec(spec)
+    except FootfallError:
+        if isinstance(spec, str) and os.path.isfile(spec):
+            return FileModule.load(spec)  # refuses another suffix, with how to import it
+        raise

@@ -16,7 +16,7 @@ import numpy as np
 
 from footfall.core.files import writable_path
 from footfall.core.heightmap import HeightMap
-from footfall.terrain.modules import make_board, make_module, parse_module_spec
+from footfall.terrain.modules import make_board, make_module, parse_board_spec
 from footfall.terrain.scans import import_terrain
 
 MAP_SUFFIXES = (".npz",)  # what HeightMap.save writes
@@ -78,18 +78,22 @@ def save_module(kind: str, difficulty: float, seed: int, path: str | os.PathLike
 
 def save_board(specs: Sequence[str], seed: int, path: str | os.PathLike,
                flat_ends: bool = True) -> MapSummary:
-    """Make a board of modules ``"kind[:difficulty]"`` in a row along x into ``path``.
+    """Make a board of modules in a row along x into ``path``.
 
-    ``flat_ends`` adds a flat start and end module unless the row has them
+    Each spec is ``"kind[:difficulty]"`` or a height-map file (``.npz``) laid in as a
+    module (:func:`~footfall.terrain.modules.parse_board_spec`). ``flat_ends`` adds a
+    flat start and end module unless the row has them
     (:func:`~footfall.terrain.modules.make_board`).
 
     Raises
     ------
     FootfallError
-        For a bad output path (or one not ending in .npz), a malformed spec or a bad seed.
+        For a bad output path (or one not ending in .npz), a malformed spec, a module
+        file that is missing, not a height map, without data or too large, a board
+        above the ``max_map_cells`` limit, or a bad seed.
     """
     out = writable_path(path, MAP_SUFFIXES, kind="height map")
-    return _save(make_board([parse_module_spec(s) for s in specs], seed, flat_ends=flat_ends), out)
+    return _save(make_board([parse_board_spec(s) for s in specs], seed, flat_ends=flat_ends), out)
 
 
 def save_imported(source: str | os.PathLike, path: str | os.PathLike,

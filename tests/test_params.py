@@ -15,6 +15,7 @@ from footfall.control.cog import CogConfig
 from footfall.control.footstep import FootstepConfig
 from footfall.control.lowlevel import LowLevelConfig
 from footfall.control.pose_finder import PoseConfig
+from footfall.control.reflexes import ReflexConfig
 from footfall.control.swing import SwingConfig
 from footfall.core.errors import FootfallError
 from footfall.core.files import plain_json
@@ -42,7 +43,7 @@ from footfall.sim.simulation import PerturbationConfig
 
 CONFIGS = (Limits, FeatureConfig, PerturbationConfig, WalkConfig, LowLevelConfig, BodyPathConfig,
            FootstepConfig, CogConfig, SwingConfig, PoseConfig, ExpertConfig, ReproduceConfig,
-           OfflineConfig)
+           OfflineConfig, ReflexConfig)
 """Every declared config of footfall (test_every_declared_config_is_listed keeps it whole)."""
 
 

@@ -36,13 +36,16 @@ def _run_text(result: dict) -> str:
             f"{result['real_time_factor']:.1f}")
 
 
-def _check_picture_outputs(snapshots: str | None, video: str | None) -> None:
-    """Refuse a --snapshots or --video path that could not be written, before the walk."""
+def _check_picture_outputs(snapshots: str | None, video: str | None,
+                           explain_plot: str | None = None) -> None:
+    """Refuse a --snapshots, --video or --explain-plot path that could not be written, first."""
     from footfall.core.files import writable_path
     from footfall.experiments.batch import SNAPSHOT_SUFFIXES, VIDEO_SUFFIXES
 
     if snapshots is not None:
         writable_path(snapshots, SNAPSHOT_SUFFIXES, what="--snapshots", kind="picture")
+    if explain_plot is not None:
+        writable_path(explain_plot, SNAPSHOT_SUFFIXES, what="--explain-plot", kind="picture")
     if video is not None:
         writable_path(video, VIDEO_SUFFIXES, what="--video", kind="video")
 
@@ -57,19 +60,30 @@ def _check_picture_outputs(snapshots: str | None, video: str | None) -> None:
               help="Frames in the snapshot strip.")
 @click.option("--video", default=None, help="Write a video (.mp4).")
 @click.option("--log", "log_path", default=None, help="Append the run log to this store (.sqlite).")
+@click.option("--explain", is_flag=True,
+              help="Say how a failed run ended: the stance foot that moved, the support "
+                   "margin, roll and pitch, contact forces, joints at their limits.")
+@click.option("--explain-plot", default=None,
+              help="Draw those time series over the run's last seconds (.png).")
 @_chooser_options
 @json_option
 def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: str | None,
-             frames: int, video: str | None, log_path: str | None, expert: bool,
-             search_radius: float | None, as_json: bool) -> None:
+             frames: int, video: str | None, log_path: str | None, explain: bool,
+             explain_plot: str | None, expert: bool, search_radius: float | None,
+             as_json: bool) -> None:
     """One run of the simulated robot across a board (success, slip, speed)."""
     from footfall.experiments.batch import walk_once
+    from footfall.sim.explain import explanation_lines
 
-    _check_picture_outputs(snapshots, video)
+    _check_picture_outputs(snapshots, video, explain_plot)
     outcome = walk_once(terrain_path, seed, model_path=model_path, expert=expert,
                         search_radius=search_radius, snapshots=snapshots, frames=frames,
-                        video=video, log_path=log_path)
-    emit(as_json, outcome.as_dict(), _run_text(outcome.record.result))
+                        video=video, log_path=log_path, explain_plot=explain_plot)
+    text = _run_text(outcome.record.result)
+    explanation = outcome.record.result.get("explanation")
+    if explain and explanation is not None:
+        text += "".join(f"\n  {line}" for line in explanation_lines(explanation))
+    emit(as_json, outcome.as_dict(), text)
 
 
 @click.command("walk-many")
@@ -94,6 +108,8 @@ def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: in
     slip = ("no successful run" if s.slip_mean_mm is None else
             f"slip {s.slip_mean_mm:.1f} +- {s.slip_std_mm:.1f} mm over "
             f"{s.slip_count} footholds, {s.speed_cm_s:.1f} cm/s")
+    causes = "".join(f"\n  {count} x {cause}" for cause, count in
+                     sorted(s.causes.items(), key=lambda item: -item[1]))
     emit(as_json, batch.as_dict(), f"{s.successes} / {s.runs} succeeded "
          f"({100 * s.success_rate:.1f} %, 95 % CI {100 * s.success_ci[0]:.1f}-"
-         f"{100 * s.success_ci[1]:.1f} %); {slip}")
+         f"{100 * s.success_ci[1]:.1f} %); {slip}" + (f"\nfailures:{causes}" if causes else ""))

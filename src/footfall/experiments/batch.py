@@ -26,7 +26,7 @@ from footfall.core.stats import wilson_interval
 from footfall.data.runlog import RunRecord
 from footfall.data.schema import SUFFIXES as STORE_SUFFIXES
 from footfall.data.store import DemoStore
-from footfall.sim.episode import Frames, WalkConfig, walk
+from footfall.sim.episode import Frames, Walk, WalkConfig, walk
 
 
 def reward_source(model_path: str | os.PathLike | None, hmap: HeightMap):
@@ -121,6 +121,7 @@ class RunSummary:
     speed_cm_s: float | None  # [cm/s] mean speed of the successful runs
     speed_body_lengths_s: float | None  # [body lengths / s]
     reasons: dict  # how the runs ended: {reason: count}
+    causes: dict  # what the failed runs are put down to: {cause: count} (footfall.sim.explain)
 
     def as_dict(self) -> dict:
         d = dict(vars(self))
@@ -137,6 +138,11 @@ def summarise(records: list[RunRecord]) -> RunSummary:
     reasons: dict[str, int] = {}
     for r in records:
         reasons[r.result.get("reason", "?")] = reasons.get(r.result.get("reason", "?"), 0) + 1
+    causes: dict[str, int] = {}
+    for r in records:
+        cause = (r.result.get("explanation") or {}).get("cause")
+        if cause is not None:
+            causes[cause] = causes.get(cause, 0) + 1
     speeds = [r.result["speed_cm_s"] for r in ok]
     bl = [r.result["speed_body_lengths_s"] for r in ok]
     return RunSummary(len(records), len(ok), len(ok) / len(records),
@@ -144,7 +150,7 @@ def summarise(records: list[RunRecord]) -> RunSummary:
                       1e3 * float(slips.mean()) if slips.size else None,
                       1e3 * float(slips.std()) if slips.size else None, int(slips.size),
                       float(np.mean(speeds)) if speeds else None,
-                      float(np.mean(bl)) if bl else None, reasons)
+                      float(np.mean(bl)) if bl else None, reasons, causes)
 
 
 SNAPSHOT_SUFFIXES = (".png",)  # what save_strip writes
@@ -253,14 +259,17 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
               model_path: str | os.PathLike | None = None, expert: bool = False,
               search_radius: float | None = None, snapshots: str | os.PathLike | None = None,
               frames: int = 6, video: str | os.PathLike | None = None,
-              log_path: str | os.PathLike | None = None) -> WalkOutcome:
+              log_path: str | os.PathLike | None = None,
+              explain_plot: str | os.PathLike | None = None) -> WalkOutcome:
     """One run across the board at ``terrain_path`` with the reward of ``model_path``.
 
     Without a model the hand-tuned reward chooses the footholds; with
     ``expert`` the walking expert does (:func:`expert_judge`).
     ``search_radius`` [m] limits the candidate set F (:func:`walk_config`).
     ``snapshots`` writes a strip of ``frames`` pictures (.png), ``video`` an
-    .mp4 at 25 frames/s, ``log_path`` appends the run to a store.
+    .mp4 at 25 frames/s, ``log_path`` appends the run to a store,
+    ``explain_plot`` draws the run's last seconds (.png,
+    :func:`footfall.plots.explain.save_explain_plot`).
 
     Raises
     ------
@@ -275,13 +284,22 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
         writable_path(snapshots, SNAPSHOT_SUFFIXES, what="snapshots", kind="picture")
     if video is not None:
         writable_path(video, VIDEO_SUFFIXES, what="video", kind="video")
+    if explain_plot is not None:
+        writable_path(explain_plot, SNAPSHOT_SUFFIXES, what="explain plot", kind="picture")
     store = _open_log(log_path)
     pictures = None
     if snapshots or video:
         pictures = Frames(snapshot_count=frames if snapshots else 0,
                           video_fps=25.0 if video else 0.0)
-    record = walk(hmap, reward_for, seed, config, frames=pictures,
-                  judge=expert_judge(config) if expert else None)
+    run = Walk(hmap, reward_for, seed, config, frames=pictures,
+               judge=expert_judge(config) if expert else None)
+    record = run.run()
+    if explain_plot is not None:
+        from footfall.plots.explain import save_explain_plot
+
+        save_explain_plot(run.trace.series(), record.result.get("explanation"), run.robot,
+                          explain_plot, title=f"{Path(terrain_path).name}, seed {seed}: "
+                                              f"{record.result['reason']}")
     if snapshots:
         save_strip(pictures.snapshots, snapshots)
     if video:

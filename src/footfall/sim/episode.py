@@ -16,13 +16,21 @@ The hierarchy, top to bottom, each stage in its own module:
    kinematics at 100 Hz, closed on the true body pose, and the simulator's
    400 Hz PD servo.
 
-Each step is planned when the previous foot has touched down (a receding
-horizon: five steps planned, one executed), from the feet where they
-actually stand. The swing foot goes to a point ``touchdown_approach`` above
-its foothold and comes down the rest of the way slowly until its force
-sensor feels the ground (a contact on the way counts only near the end of
-the swing and close to the foothold); it then takes its load over
-``LowLevelConfig.transfer_time``. A run ends at the goal line, or in failure: a fall (trunk
+A step goes through its phases (:meth:`Walk._step`): *plan* (foothold, COG
+trajectory, pose; a receding horizon, five steps planned and one executed,
+from the feet where they actually stand), *shift* (four feet down, the body
+moving into the swing's triangle), *swing* (the foot to a point
+``touchdown_approach`` above its foothold), *touch-down* (down the rest of
+the way slowly until its force sensor feels the ground; a contact on the
+way counts only near the end of the swing and close to the foothold) and
+*load transfer* (over ``LowLevelConfig.transfer_time``). Through all of
+them a *stance watch* reads the measured state every control period, and
+the reflexes of :mod:`footfall.control.reflexes` act on what it sees (each
+a switch of ``WalkConfig.reflexes``, each action an event in the run log):
+the lift-off gate, the touch-down check, the tilt reflex and the stance slip
+reflex. A flight recorder (:mod:`footfall.sim.trace`) keeps the last
+seconds at the control rate; a failed run's result holds its account of the
+end (:func:`footfall.sim.explain.explain_run`). A run ends at the goal line, or in failure: a fall (trunk
 roll or pitch beyond ``fall_tilt``, or the trunk touching the terrain), a
 stuck robot (no swing leg candidate, or less than ``stuck_progress`` of
 forward progress in ``stuck_time``), or the time limit. Every step goes
@@ -60,6 +68,14 @@ from footfall.control.lowlevel import (
     transfer_weight,
 )
 from footfall.control.pose_finder import PoseConfig, find_pose
+from footfall.control.reflexes import (
+    ReflexConfig,
+    com_in_triangle,
+    gate_step,
+    next_best_candidate,
+    slipped,
+    tilt_error,
+)
 from footfall.control.swing import SwingConfig, swing_trajectory
 from footfall.core.errors import FootfallError
 from footfall.core.files import plain_json
@@ -69,12 +85,17 @@ from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState, nominal_state
 from footfall.data.runlog import RunRecord, RunStep
 from footfall.features.reward import LinearReward
+from footfall.sim.explain import explain_run
 from footfall.sim.simulation import PerturbationConfig, Simulation
+from footfall.sim.trace import RunTrace, trace_row
 
 RewardFor = Callable[[str], LinearReward]
 _OTHER_LEGS = np.array([[j for j in range(4) if j != k] for k in range(4)])  # stance legs while
 # leg k swings, in order (an index array: np.delete's overhead counts at 100 Hz)
 SNAPSHOT_PERIOD = 0.5  # [s] of simulated time between candidate snapshot frames
+MAX_EVENTS = 200  # reflex events kept in a run's result (every one is counted)
+DROP_SPEED = 0.3  # [m/s] a swing foot brought down by a reflex drops this fast to near the ground
+REPLACE_TIME = 0.25  # [s] a re-placed foot's swing to above its new foothold
 WALL_CLOCK_FIELDS = ("planning_ms_per_step", "wall_seconds", "setup_seconds", "real_time_factor")
 # result fields that measure the computer, not the run (they differ between identical runs)
 
@@ -103,6 +124,8 @@ class WalkConfig(Params):
     swing: SwingConfig = param(factory=SwingConfig, doc="the swing-foot trajectory")
     pose: PoseConfig = param(factory=PoseConfig, doc="the pose finder")
     lowlevel: LowLevelConfig = param(factory=LowLevelConfig, doc="the 100 Hz closed loop")
+    reflexes: ReflexConfig = param(factory=ReflexConfig,
+                                   doc="the reflexes: lift-off gate, slip, touch-down check, tilt")
     path: BodyPathConfig = param(factory=BodyPathConfig,
                                  doc="the body path planner (used with plan_path)")
     perturbation: PerturbationConfig = param(factory=PerturbationConfig,
@@ -140,6 +163,9 @@ class WalkConfig(Params):
                                   doc="forward progress in stuck_time that counts as moving")
     time_limit: float = param(240.0, unit="s", range=_POSITIVE_OR_INF,
                               doc="longest run, in simulated time")
+    trace_window: float = param(5.0, unit="s", range=_POSITIVE_OR_INF,
+                                doc="the flight recorder keeps this much of the run's end, at "
+                                    "the control rate (footfall walk --explain)")
     max_steps: int | None = param(None, unit="steps", range=at_least(1),
                                   doc="stop (reason \"step limit\", no success) after this many "
                                       "steps; None: no limit (short test runs)")
@@ -242,6 +268,7 @@ class Walk:
         if self.ticks < 1 or abs(self.ticks * self.sim.timestep - self.period) > 1e-9:
             raise FootfallError("the control period must be a whole number of servo periods")
         self._lift = np.array([0.0, 0.0, robot.foot_radius])  # contact point -> ball centre
+        self.trace = RunTrace(config.trace_window, self.period)  # the last seconds, at 100 Hz
 
     # ------------------------------------------------------------ the 100 Hz loop
     def _capture(self) -> None:
@@ -262,8 +289,9 @@ class Walk:
     def _tick(self, position: np.ndarray, rpy: np.ndarray, swing: int | None) -> None:
         """One control period toward the desired body pose; raises _Failure on a fall or stall.
 
-        While a leg swings, the measured centre of mass and the stance feet
-        are logged for the stability margin.
+        The flight recorder keeps the period; the stance watch (:meth:`_watch`) may raise an
+        alarm for the phase to act on; while a leg swings, the measured centre of mass and the
+        stance feet are logged for the stability margin.
         """
         cfg, sim = self.config, self.sim
         mpos, mrpy = self._pose
@@ -283,9 +311,14 @@ class Walk:
         sim.step(self.ticks)
         self._capture()
         self._pose = mpos, mrpy = sim.body_pose()
+        com, feet = sim.centre_of_mass(), sim.foot_positions()
+        self.trace.record(trace_row(sim.time, mpos, mrpy, com, feet, sim.foot_forces(noise=False),
+                                    stance, self._down, sim.joint_angles(), sim.joint_torques(),
+                                    swing))
         if swing is not None:
-            self._com.append(sim.centre_of_mass()[:2])
-            self._support.append(sim.foot_positions()[_OTHER_LEGS[swing], :2])
+            self._com.append(com[:2])
+            self._support.append(feet[_OTHER_LEGS[swing], :2])
+        self._watch(feet, ramp >= 1.0, mrpy, rpy)
         if abs(mrpy[0]) > cfg.fall_tilt or abs(mrpy[1]) > cfg.fall_tilt:
             raise _Failure("fall: trunk tilted")
         if sim.trunk_touches_terrain():
@@ -297,26 +330,82 @@ class Walk:
         if sim.time > cfg.time_limit:
             raise _Failure("time limit")
 
+    def _watch(self, feet: np.ndarray, settled: np.ndarray, measured_rpy: np.ndarray,
+               desired_rpy: np.ndarray) -> None:
+        """Stance watch: raise the alarm of a slipping stance foot or a tipping trunk.
+
+        ``feet`` (4, 3) [m] are the measured foot centres, ``settled`` (4,) the legs whose role
+        change is complete; one alarm at a time, until the phase has acted on it.
+        """
+        rc = self.config.reflexes
+        speed = np.hypot(*(feet[:, :2] - self._feet_before[:, :2]).T) / self.period  # [m/s]
+        self._feet_before = feet
+        if self._alarm is not None:
+            return
+        if rc.slip_reflex:
+            bad = slipped(feet[:, :2], self._targets[:, :2], self._stance & settled,
+                          rc.slip_distance) & (speed > rc.slip_speed)
+            if bad.any():
+                leg = int(np.flatnonzero(bad)[0])
+                self._alarm = ("slip", leg)
+                self._event("stance slip", leg, moved_mm=round(
+                    1e3 * float(np.hypot(*(feet[leg, :2] - self._down[leg, :2]))), 1))
+                return
+        error = tilt_error(measured_rpy, desired_rpy) if rc.tilt_reflex else 0.0
+        if error > rc.tilt_threshold and not self._recovering:
+            self._alarm = ("tilt", None)
+            self._event("tilt", None, error_rad=round(error, 3))
+
+    def _event(self, kind: str, leg: int | None, **details) -> None:
+        """Log a reflex's action in the run log (kept in the result's ``events``)."""
+        self._reflex_counts[kind] = self._reflex_counts.get(kind, 0) + 1
+        if len(self._events) < MAX_EVENTS:
+            self._events.append({"t": round(self.sim.time, 3), "event": kind,
+                                 "leg": None if leg is None else LEG_NAMES[leg], **details})
+
     def _touching_down(self, leg: int) -> bool:
         """Whether the foot force sensor of ``leg`` says the foot is down."""
         return bool(self.sim.foot_forces()[leg, 2] > self.config.touchdown_force)
 
     # --------------------------------------------------------------- one step
-    def _step(self, k: int) -> None:
-        """Step ``k`` in its phases: plan (foothold, COG, pose), shift, swing, touch-down, load."""
-        leg = self.robot.gait_order[k % 4]
+    def _step(self, k: int) -> bool:
+        """Step ``k`` in its phases: plan, shift, swing, touch-down, load transfer.
+
+        The stance watch runs through all of them; an alarm calls the step off before lift-off,
+        or brings the swing foot down at once after it, and the posture is recovered before the
+        next step is planned. Returns whether the step was taken (False: plan it anew).
+        """
+        replacing = self._replace is not None
+        leg = LEG_NAMES[self._replace] if replacing else self.robot.gait_order[self._gait % 4]
         s = LEG_NAMES.index(leg)
         tp = time.perf_counter()
         feet, plan, record = self._plan(k, leg)
         traj, times, positions, attitudes = self._body_motion(feet, s, plan)
         self._plan_seconds.append(time.perf_counter() - tp)
         t_begin = self.sim.time
-        if not self._shift_and_swing(s, plan, traj, times, positions, attitudes, record):
-            self._touch_down(s, plan)
-        self._load(k, s, record)
-        elapsed = min(self.sim.time - t_begin, float(traj.touch_down[0]))
-        self._cog = traj.position(elapsed), traj.velocity(elapsed)
-        self._desired[0][:2] = self._cog[0]
+        i_lift = self._shift(s, traj, times, positions, attitudes)
+        if i_lift is None:  # called off before lift-off: the robot did not take this step
+            self._steps.pop()
+            self._recover()
+            return False
+        landed = i_lift == times.size or self._swing(
+            s, plan, traj, times[i_lift:], positions[i_lift:], attitudes[i_lift:], record)
+        if self._alarm is not None:
+            found = self._come_down(s)
+        else:
+            found = landed or self._touch_down(s, plan.foothold)
+        self._place(k, s, plan, found, record)
+        if replacing:
+            self._replace = None
+        else:
+            self._gait += 1
+        if self._alarm is not None or self._held:
+            self._recover()
+        else:
+            elapsed = min(self.sim.time - t_begin, float(traj.touch_down[0]))
+            self._cog = traj.position(elapsed), traj.velocity(elapsed)
+            self._desired[0][:2] = self._cog[0]
+        return True
 
     def _plan(self, k: int, leg: str) -> tuple[np.ndarray, FootstepPlan, dict]:
         """Plan step ``k`` of ``leg`` from the feet where they stand now, and log it.
@@ -362,13 +451,58 @@ class Walk:
         attitudes = rpy0 + (rpy1 - rpy0) * u
         return traj, times, positions, attitudes
 
-    def _shift_and_swing(self, s: int, plan: FootstepPlan, traj: CogTrajectory,
-                         times: np.ndarray, positions: np.ndarray, attitudes: np.ndarray,
-                         record: dict) -> bool:
-        """Shift, then swing leg ``s`` along the planned trajectories, a control period at a time.
+    def _shift(self, s: int, traj: CogTrajectory, times: np.ndarray, positions: np.ndarray,
+               attitudes: np.ndarray) -> int | None:
+        """Shift phase: all four feet down, the body moving into the swing's triangle.
+
+        Returns the index into ``times`` of the first swing period (``times.size``: the step is
+        too short to lift the foot), or None if the step is called off (an alarm, or the
+        lift-off gate's timeout).
+        """
+        t_lift = float(traj.lift_off[0])
+        self._held = False
+        for i in range(times.size):
+            if times[i] > t_lift:
+                return i if self._gate(s) else None
+            self._desired = positions[i].copy(), attitudes[i].copy()
+            self._tick(*self._desired, None)
+            if self._alarm is not None:
+                return None
+        return times.size
+
+    def _gate(self, s: int) -> bool:
+        """Lift-off gate: wait, moving the body, until the centre of mass is inside the triangle.
+
+        Returns whether leg ``s`` may lift (False: the wait timed out or an alarm came). After a
+        wait the body holds its place through the swing (``_held``).
+        """
+        rc, sim = self.config.reflexes, self.sim
+        if not rc.lift_off_gate:
+            return True
+        t0 = sim.time
+        while True:
+            com, tri = sim.centre_of_mass()[:2], sim.foot_positions()[_OTHER_LEGS[s], :2]
+            if com_in_triangle(com, tri, rc.gate_margin):
+                if self._held:
+                    self._event("lift-off gate", s, waited_s=round(sim.time - t0, 3))
+                return True
+            if sim.time - t0 >= rc.gate_timeout:
+                self._event("lift-off gate timeout", s,
+                            margin_mm=round(1e3 * float(support_margin(tri, com)), 1))
+                return False
+            self._held = True
+            self._desired[0][:2] = gate_step(com, self._desired[0][:2], tri, rc.gate_speed,
+                                             self.period)
+            self._tick(*self._desired, None)
+            if self._alarm is not None:
+                return False
+
+    def _swing(self, s: int, plan: FootstepPlan, traj: CogTrajectory, times: np.ndarray,
+               positions: np.ndarray, attitudes: np.ndarray, record: dict) -> bool:
+        """Swing leg ``s`` along its trajectory, a control period at a time, from lift-off.
 
         Returns whether the foot is down: it touched down near the end of the swing, close to
-        the foothold, or the step was too short to lift it.
+        the foothold. Returns False at once on an alarm (the caller brings the foot down).
         """
         cfg, sim = self.config, self.sim
         t_lift, t_down = float(traj.lift_off[0]), float(traj.touch_down[0])
@@ -378,63 +512,172 @@ class Walk:
         descent = min(cfg.touchdown_approach / cfg.touchdown_speed, 0.5 * swing_time)
         reach = swing_time - descent  # [s] after lift-off: above the foothold
         above = plan.foothold + [0.0, 0.0, descent * cfg.touchdown_speed]
-        path, i_lift = None, times.size
+        path = self._lift_off(s, above, reach, times - t_lift, record)
+        hold = self._desired[0][:2].copy() if self._held else None
         for i in range(times.size):  # control periods, each a simulated tick
-            t = times[i]
-            if t > t_lift and path is None:  # lift-off: this foot's last stance ends
-                path = self._lift_off(s, above, reach, times[i:] - t_lift, record)
-                i_lift = i
-            if path is not None:
-                self._targets[s] = path[i - i_lift]
-            self._desired = positions[i].copy(), attitudes[i].copy()
-            self._tick(*self._desired, s if path is not None else None)
-            if path is not None and t - t_lift > cfg.touchdown_early * reach \
-                    and self._touching_down(s) \
+            self._targets[s] = path[i]
+            position = positions[i].copy()
+            if hold is not None:  # after a wait at the gate, the body stays where it waited
+                position[:2] = hold
+            self._desired = position, attitudes[i].copy()
+            self._tick(*self._desired, s)
+            if self._alarm is not None:
+                return False
+            if times[i] - t_lift > cfg.touchdown_early * reach and self._touching_down(s) \
                     and np.hypot(*(sim.foot_positions()[s, :2] - above[:2])) < cfg.touchdown_reach:
                 return True
-        return path is None  # a step too short to lift: count it as landed where it stands
+        return False
 
     def _lift_off(self, s: int, above: np.ndarray, reach: float, after_lift: np.ndarray,
                   record: dict) -> np.ndarray:
         """Lift foot ``s`` now: log the slip of its last stance and plan its swing to ``above``
         (3,) [m], reached ``reach`` [s] after lift-off; returns the foot-centre targets (m, 3)
         [m] at the control periods ``after_lift`` (m,) [s] after lift-off."""
-        cfg, sim = self.config, self.sim
+        sim = self.sim
         centre = sim.foot_positions()[s]
         if s in self._stood:
             j, down = self._stood.pop(s)
             self._steps[j]["slip"] = float(foot_slip(down, centre))
         record["t_liftoff"] = sim.time
+        path = self._swing_path(centre, above, reach, after_lift)
+        self._set_role(s, stance=False)
+        return path
+
+    def _swing_path(self, centre: np.ndarray, above: np.ndarray, reach: float,
+                    after_lift: np.ndarray) -> np.ndarray:
+        """Foot-centre targets (m, 3) [m] from ``centre`` (3,) to ``above`` (3,) [m] in ``reach``
+        [s] over the terrain's hull, then on down at touchdown_speed, at ``after_lift`` (m,) [s]."""
+        cfg = self.config
         swing = swing_trajectory(self.hmap, centre - self._lift, above, reach, self.robot,
                                  cfg.swing)
         path = swing.position(after_lift) + self._lift
         path[:, 2] -= cfg.touchdown_speed * np.maximum(after_lift - reach, 0.0)
-        self._set_role(s, stance=False)
         return path
 
-    def _touch_down(self, s: int, plan: FootstepPlan) -> None:
-        """Not down yet: keep foot ``s`` going down at its foothold until it feels the ground."""
+    def _touch_down(self, s: int, foothold: np.ndarray) -> bool:
+        """Not down yet: keep foot ``s`` going down at its foothold (3,) [m] until it feels the
+        ground; returns whether it did within ``touchdown_search`` below the foothold."""
         cfg = self.config
-        bottom = plan.foothold[2] + self.robot.foot_radius - cfg.touchdown_search
-        landed = False
-        while not landed:
+        bottom = foothold[2] + self.robot.foot_radius - cfg.touchdown_search
+        while True:
             self._targets[s, 2] -= cfg.touchdown_speed * self.period
             if self._targets[s, 2] < bottom:
-                break  # nothing there within reach: put the weight on it anyway
+                return False  # nothing there within reach
             self._tick(*self._desired, s)
-            landed = self._touching_down(s)
+            if self._touching_down(s):
+                return True
+
+    def _come_down(self, s: int) -> bool:
+        """Swing foot ``s`` down at once, straight below where it is (an alarm during its swing).
+
+        It drops fast to ``touchdown_approach`` above the mapped ground there, then feels for
+        the ground at touchdown_speed; returns whether it found it.
+        """
+        cfg = self.config
+        centre = self.sim.foot_positions()[s]
+        self._targets[s] = centre
+        ground = float(self.hmap.height_at(centre[None, :2])[0])
+        if not np.isfinite(ground):
+            ground = float(np.nanmin(self._targets[self._stance, 2])) - self.robot.foot_radius
+        slow_from = ground + self.robot.foot_radius + cfg.touchdown_approach
+        while self._targets[s, 2] > slow_from and not self._touching_down(s):
+            self._targets[s, 2] = max(slow_from, self._targets[s, 2] - DROP_SPEED * self.period)
+            self._tick(*self._desired, s)
+        if self._touching_down(s):
+            return True
+        return self._touch_down(s, np.array([*centre[:2], ground]))
+
+    def _place(self, k: int, s: int, plan: FootstepPlan, found: bool, record: dict) -> None:
+        """Touch-down check, then load transfer, of foot ``s`` of step ``k``.
+
+        A foot that lands more than ``touchdown_tolerance`` off its foothold, or finds no
+        ground, is lifted again and put on the next-best candidate of F (by reward plus path
+        bias) away from every spot tried, at most ``max_replacements`` times; then it stands
+        where it is and takes its load.
+        """
+        rc = self.config.reflexes
+        tried, target = [plan.foothold[:2].copy()], plan.foothold
+        for _ in range(rc.max_replacements if rc.touchdown_check else 0):
+            off = float(np.hypot(*(self.sim.foot_positions()[s, :2] - target[:2])))
+            if self._alarm is not None or (found and off <= rc.touchdown_tolerance):
+                break
+            j = next_best_candidate(plan.candidates, plan.total, np.array(tried),
+                                    rc.replace_separation)
+            if j is None:
+                break
+            self._event("touch-down re-placed", s, off_mm=round(1e3 * off, 1),
+                        ground=bool(found))
+            target = plan.candidates[j]
+            tried.append(target[:2].copy())
+            found = self._re_place(s, target)
+        self._load(k, s, record)
+
+    def _re_place(self, s: int, foothold: np.ndarray) -> bool:
+        """Lift foot ``s`` (not yet loaded) and put it on ``foothold`` (3,) [m], the body held;
+        returns whether it found the ground there."""
+        cfg = self.config
+        centre = self.sim.foot_positions()[s]
+        approach = cfg.touchdown_approach
+        reach = REPLACE_TIME
+        n = round((reach + approach / cfg.touchdown_speed) / self.period)
+        after = np.arange(1, n + 1) * self.period
+        path = self._swing_path(centre, foothold + [0.0, 0.0, approach], reach, after)
+        for i in range(n):
+            self._targets[s] = path[i]
+            self._tick(*self._desired, s)
+            if self._alarm is not None:
+                return self._come_down(s)
+            if after[i] > cfg.touchdown_early * reach and self._touching_down(s):
+                return True
+        return self._touch_down(s, foothold)
 
     def _load(self, k: int, s: int, record: dict) -> None:
         """Foot ``s`` stands where it touched down and starts to take its load; log it."""
         sim = self.sim
         centre = sim.foot_positions()[s]
         self._targets[s] = centre
+        self._down[s] = centre
         self._anchor[s] = centre
         self._shin0[s] = shin_rotations(sim.joint_angles(), body_rotation(self._pose[1]))[s]
         self._set_role(s, stance=True)
         record["t_touchdown"] = sim.time
         record["touchdown"] = centre.copy()
         self._stood[s] = (k, centre.copy())
+
+    def _settle(self, leg: int, t0: float) -> None:
+        """The body held, wait until slipped foot ``leg`` stops sliding (or recover_timeout
+        after ``t0`` [s])."""
+        rc, sim = self.config.reflexes, self.sim
+        while sim.time - t0 < rc.recover_timeout:
+            before = sim.foot_positions()[leg, :2]
+            self._tick(*self._desired, None)
+            if np.hypot(*(self._feet_before[leg, :2] - before)) < 0.5 * rc.slip_speed * self.period:
+                return
+
+    def _recover(self) -> None:
+        """After an alarm, or a wait at the gate: the body stops; a slipped foot is taken to
+        stand where it now is (and steps first if it went far); the posture is recovered."""
+        rc, sim = self.config.reflexes, self.sim
+        t0 = sim.time
+        while self._alarm is not None:
+            kind, leg = self._alarm
+            if kind == "slip":
+                self._settle(leg, t0)
+                centre = sim.foot_positions()[leg]
+                moved = float(np.hypot(*(centre[:2] - self._down[leg, :2])))
+                self._anchor[leg] = self._targets[leg] = self._down[leg] = centre
+                self._shin0[leg] = shin_rotations(sim.joint_angles(),
+                                                  body_rotation(self._pose[1]))[leg]
+                if moved > rc.replace_distance:
+                    self._replace = leg
+            self._alarm = None
+            self._recovering = True  # (a tilt does not set the tilt reflex off again meanwhile)
+            while (tilt_error(self._pose[1], self._desired[1]) > rc.tilt_recovered
+                   and sim.time - t0 < rc.recover_timeout and self._alarm is None):
+                self._tick(*self._desired, None)
+            self._recovering = False
+        self._held = False
+        self._cog = self._desired[0][:2].copy(), np.zeros(2)  # the body at rest where it is
 
     # ------------------------------------------------------------------ a run
     def run(self) -> RunRecord:
@@ -457,7 +700,8 @@ class Walk:
         self._since = np.full(4, -np.inf)  # [s] when each leg took its role
         self._correction = BodyCorrection(cfg.lowlevel)
         self._pose = sim.body_pose()  # measured (position (3,), rpy (3,))
-        self._anchor = self._targets.copy()  # (4, 3) [m] stance feet's centres at touch-down
+        self._anchor = self._targets.copy()  # (4, 3) [m] stance feet's targets at touch-down
+        self._down = self._targets.copy()  # (4, 3) [m] stance feet's centres at touch-down
         self._shin0 = shin_rotations(self._q, body_rotation(self._pose[1]))  # (4, 3, 3) shins then
         # The robot stands where the start error put it: the plan starts from there, so that the
         # first set-points do not jerk the body (and drag the unloaded feet) to the nominal pose.
@@ -469,6 +713,14 @@ class Walk:
         self._support: list[np.ndarray] = []  # (3, 2) [m] stance feet during swings
         self._planned: list[float] = []  # [m] planned least COG margin of each swing
         self._plan_seconds: list[float] = []
+        self._feet_before = sim.foot_positions()  # (4, 3) [m] at the last control period
+        self._alarm: tuple[str, int | None] | None = None  # the stance watch's alarm, not yet acted on
+        self._events: list[dict] = []  # reflex events, the first MAX_EVENTS
+        self._reflex_counts: dict[str, int] = {}  # reflex events by kind
+        self._gait = 0  # steps taken in gait order
+        self._replace: int | None = None  # a slipped leg to step next, out of gait order
+        self._held = False  # the body waited at the lift-off gate and holds still this swing
+        self._recovering = False  # the posture is recovering after an alarm
         self._best_x, self._best_t = self._pose[0][0], 0.0
         start_x = self._pose[0][0]
         outcome: dict = {"success": False, "reason": "time limit"}
@@ -484,11 +736,13 @@ class Walk:
                 if cfg.max_steps is not None and k >= cfg.max_steps:
                     outcome["reason"] = "step limit"
                     break
-                self._step(k)
-                k += 1
+                if self._step(k):
+                    k += 1
         except _Failure as failure:
             outcome["reason"] = str(failure)
         outcome["distance"] = float(self._pose[0][0] - start_x)
+        if not outcome["success"]:  # the flight recorder's account of the end (--explain)
+            outcome["explanation"] = explain_run(self.trace.series(), outcome, self.robot)
         return self._finish(outcome, wall0)
 
     def _finish(self, outcome: dict, wall0: float) -> RunRecord:
@@ -501,6 +755,8 @@ class Walk:
         wall = time.perf_counter() - wall0
         speed = outcome["distance"] / sim_time if sim_time > 0 else 0.0
         outcome.update({
+            "reflexes": dict(self._reflex_counts),  # reflex events by kind
+            "events": list(self._events),  # the first MAX_EVENTS of them: t [s], event, leg
             "time": sim_time,  # [s] simulated
             "steps": len(steps),
             "speed_cm_s": 100.0 * speed,

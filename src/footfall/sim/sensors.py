@@ -61,7 +61,7 @@ class Sensors:
         self._force_adr = np.stack([sensor(f"{leg}_foot_force") for leg in LEG_NAMES])
         self._imu_adr = {k: sensor(f"imu_{k}") for k in ("quat", "gyro", "accel")}
 
-    def foot_forces(self, frame: str = "world") -> np.ndarray:
+    def foot_forces(self, frame: str = "world", noise: bool = True) -> np.ndarray:
         """3-axis foot force sensor readings (4, 3) [N], with sensor noise.
 
         The force the foot passes into the lower leg: in contact, the ground
@@ -69,12 +69,15 @@ class Sensors:
         (``foot_mass``, 10 g). ``frame="sensor"``: in the foot's frame (which
         turns with the shin), as the sensor reports it; ``"world"``: rotated
         into the world frame, +z up for a foot pressed onto the ground.
+        ``noise=False``: the true force, as only the simulator knows it (for
+        diagnostics; it draws nothing from the noise generator).
         """
         if frame not in ("world", "sensor"):
             raise FootfallError(f"frame must be 'world' or 'sensor', got {frame!r}")
         # MuJoCo reports the force on the child body (the foot) from its parent; negate it.
         local = -self.data.sensordata[self._force_adr]
-        local = local + self._rng.normal(0.0, 1.0, (4, 3)) * self.noise.force_noise
+        if noise:
+            local = local + self._rng.normal(0.0, 1.0, (4, 3)) * self.noise.force_noise
         if frame == "sensor":
             return local
         rot = self.data.site_xmat[self._foot_sites].reshape(4, 3, 3)

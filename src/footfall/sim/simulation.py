@@ -355,9 +355,9 @@ class Simulation:
         return self.data.xpos[self._feet].copy()
 
     # --------------------------------------------------------------- sensing
-    def foot_forces(self, frame: str = "world") -> np.ndarray:
+    def foot_forces(self, frame: str = "world", noise: bool = True) -> np.ndarray:
         """Foot force sensor readings (4, 3) [N], with noise: :meth:`Sensors.foot_forces`."""
-        return self.sensors.foot_forces(frame)
+        return self.sensors.foot_forces(frame, noise)
 
     def imu(self) -> dict[str, np.ndarray]:
         """The trunk IMU (quat, gyro [rad/s], accel [m/s^2]), with noise: :meth:`Sensors.imu`."""

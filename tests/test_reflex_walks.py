@@ -1,0 +1,150 @@
+"""Each reflex on a scripted case: a short walk on flat ground, disturbed on purpose."""
+
+from dataclasses import replace
+
+import mujoco
+import numpy as np
+import pytest
+
+from footfall.control.cog import support_margin
+from footfall.control.reflexes import ReflexConfig
+from footfall.core.heightmap import HeightMap
+from footfall.features.reward import default_reward
+from footfall.sim.episode import WALL_CLOCK_FIELDS, Walk, WalkConfig, walk
+
+REWARD = default_reward()
+TWIST = 2.5  # [N m] roll torque on the trunk that tips it past the tilt reflex's threshold
+ALL_ON = ReflexConfig(lift_off_gate=True, slip_reflex=True, touchdown_check=True,
+                      tilt_reflex=True)
+ALL_OFF = ReflexConfig(lift_off_gate=False, slip_reflex=False, touchdown_check=False,
+                       tilt_reflex=False)
+
+
+def _flat_board() -> HeightMap:
+    """Flat ground 0.8 m long, recorded as three modules (start, middle, goal)."""
+    res = 0.001
+    heights = np.zeros((round(0.8 / res), round(0.4 / res)))
+    modules = [{"kind": "flat", "x_start": 0.0, "x_end": 0.36},
+               {"kind": "flat", "x_start": 0.36, "x_end": 0.44},
+               {"kind": "flat", "x_start": 0.44, "x_end": 0.8}]
+    return HeightMap(heights, res, (0.0, -0.2), metadata={"modules": modules})
+
+
+def _config(reflexes: ReflexConfig, steps: int) -> WalkConfig:
+    return WalkConfig(start_setback=0.2, max_steps=steps, reflexes=reflexes)
+
+
+def _events(record, kind: str) -> list[dict]:
+    return [e for e in record.result["events"] if e["event"] == kind]
+
+
+class NoShift(Walk):
+    """The planned body does not shift toward the swing triangle: the centre of mass stays
+    between the four feet, on the diagonal of the three that stay down."""
+
+    def _body_motion(self, feet, s, plan):
+        traj, times, positions, attitudes = super()._body_motion(feet, s, plan)
+        positions[:, :2] = self._desired[0][:2]
+        return traj, times, positions, attitudes
+
+    def _lift_off(self, s, above, reach, after_lift, record):
+        com = self.sim.centre_of_mass()[:2]
+        tri = self.sim.foot_positions()[[j for j in range(4) if j != s], :2]
+        self.margins_at_lift_off.append(float(support_margin(tri, com)))
+        return super()._lift_off(s, above, reach, after_lift, record)
+
+
+def test_the_lift_off_gate_holds_a_leg_until_the_centre_of_mass_is_inside_its_triangle():
+    gated = NoShift(_flat_board(), lambda leg: REWARD, 3, _config(ReflexConfig(), 1))
+    gated.margins_at_lift_off = []
+    record = gated.run()
+    waits = _events(record, "lift-off gate")
+    assert len(waits) == 1 and waits[0]["waited_s"] > 0.05
+    assert gated.margins_at_lift_off[0] >= ReflexConfig().gate_margin
+    ungated = NoShift(_flat_board(), lambda leg: REWARD, 3,
+                      _config(replace(ReflexConfig(), lift_off_gate=False), 1))
+    ungated.margins_at_lift_off = []
+    ungated.run()
+    assert ungated.margins_at_lift_off[0] < 0.005  # it would have lifted on the diagonal
+
+
+class LandsOff(Walk):
+    """The first swing foot is steered 30 mm to the side of its foothold, as a foot that
+    glances off a rock would land."""
+
+    def _swing_path(self, centre, above, reach, after_lift):
+        path = super()._swing_path(centre, above, reach, after_lift)
+        if not getattr(self, "steered", False):
+            self.steered = True
+            path[:, 1] += 0.03 * np.minimum(after_lift / reach, 1.0)
+        return path
+
+
+def test_a_foot_that_lands_far_off_its_foothold_is_re_placed():
+    config = _config(ReflexConfig(), 1)
+    record = LandsOff(_flat_board(), lambda leg: REWARD, 5, config).run()
+    moves = _events(record, "touch-down re-placed")
+    assert len(moves) == 1 and moves[0]["off_mm"] > 20.0
+    step = record.steps[0]
+    # it stands on another candidate of F, near the one it was sent to
+    gaps = np.hypot(*(step.candidates[:, :2] - step.touchdown[:2]).T)
+    assert gaps.min() < ReflexConfig().touchdown_tolerance
+    assert step.placement_error > ReflexConfig().replace_separation - 0.005
+    unchecked = LandsOff(_flat_board(), lambda leg: REWARD, 5,
+                         _config(replace(ReflexConfig(), touchdown_check=False), 1)).run()
+    assert not _events(unchecked, "touch-down re-placed")
+    assert unchecked.steps[0].placement_error > 0.02
+
+
+class Pushed(Walk):
+    """A force and torque (6,) [N, N m] on one body for a while: a stance foot shoved off its
+    spot, or the trunk twisted."""
+
+    body, wrench, start, duration = "LF_foot", (0.0,) * 6, 0.0, 0.0
+
+    def _tick(self, position, rpy, swing):
+        t = self.sim.time
+        i = mujoco.mj_name2id(self.sim.model, mujoco.mjtObj.mjOBJ_BODY, self.body)
+        on = self.start <= t < self.start + self.duration
+        self.sim.data.xfrc_applied[i] = self.wrench if on else 0.0
+        super()._tick(position, rpy, swing)
+
+
+def _pushed(reflexes: ReflexConfig, body: str, wrench, start: float, duration: float,
+            steps: int = 6):
+    run = Pushed(_flat_board(), lambda leg: REWARD, 2, _config(reflexes, steps))
+    run.body, run.wrench, run.start, run.duration = body, wrench, start, duration
+    return run.run()
+
+
+def test_a_stance_foot_pushed_off_its_spot_sets_off_the_slip_reflex_and_the_robot_stands():
+    # the right front foot is shoved outward while the left hind leg makes the first step
+    shove = ("RF_foot", (0.0, -12.0, 0.0, 0.0, 0.0, 0.0), 0.5, 0.15)
+    record = _pushed(ALL_ON, *shove)
+    slips = _events(record, "stance slip")
+    assert slips and slips[0]["leg"] == "RF" and slips[0]["moved_mm"] > 12.0
+    assert record.result["reason"] == "step limit"  # no fall
+    assert not _events(_pushed(replace(ALL_ON, slip_reflex=False), *shove), "stance slip")
+
+
+def test_a_shoved_trunk_sets_off_the_tilt_reflex_and_the_robot_recovers():
+    # a roll torque on the trunk while the left hind leg makes the first step
+    record = _pushed(ALL_ON, "trunk", (0.0, 0.0, 0.0, TWIST, 0.0, 0.0), 0.5, 0.1)
+    tilts = _events(record, "tilt")
+    assert tilts and tilts[0]["error_rad"] > ReflexConfig().tilt_threshold
+    assert record.result["reason"] == "step limit"  # no fall
+    without = _pushed(replace(ALL_ON, tilt_reflex=False), "trunk",
+                      (0.0, 0.0, 0.0, TWIST, 0.0, 0.0), 0.5, 0.1)
+    assert without.result["reason"] == "fall: trunk tilted"
+    assert not _events(_pushed(ALL_ON, "trunk", (0.0,) * 6, 0.5, 0.1), "tilt")
+
+
+@pytest.mark.parametrize("reflexes", [ALL_ON, ALL_OFF], ids=["all reflexes", "none"])
+def test_a_seeded_run_with_reflexes_is_the_same_run_twice(reflexes):
+    board = _flat_board()
+    a, b = (walk(board, lambda leg: REWARD, 11, _config(reflexes, 6)) for _ in range(2))
+    strip = lambda r: {k: v for k, v in r.result.items() if k not in WALL_CLOCK_FIELDS}
+    assert strip(a) == strip(b)
+    for sa, sb in zip(a.steps, b.steps):
+        np.testing.assert_array_equal(sa.touchdown, sb.touchdown)
+    assert [s.swing_leg for s in a.steps] == [s.swing_leg for s in b.steps]

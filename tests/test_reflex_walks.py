@@ -8,9 +8,9 @@ import pytest
 
 from footfall.control.cog import support_margin
 from footfall.control.reflexes import ReflexConfig
-from footfall.core.heightmap import HeightMap
 from footfall.features.reward import default_reward
 from footfall.sim.episode import WALL_CLOCK_FIELDS, Walk, WalkConfig, walk
+from maps import short_flat_board
 
 REWARD = default_reward()
 TWIST = 2.5  # [N m] roll torque on the trunk that tips it past the tilt reflex's threshold
@@ -20,14 +20,6 @@ ALL_OFF = ReflexConfig(lift_off_gate=False, slip_reflex=False, touchdown_check=F
                        tilt_reflex=False)
 
 
-def _flat_board() -> HeightMap:
-    """Flat ground 0.8 m long, recorded as three modules (start, middle, goal)."""
-    res = 0.001
-    heights = np.zeros((round(0.8 / res), round(0.4 / res)))
-    modules = [{"kind": "flat", "x_start": 0.0, "x_end": 0.36},
-               {"kind": "flat", "x_start": 0.36, "x_end": 0.44},
-               {"kind": "flat", "x_start": 0.44, "x_end": 0.8}]
-    return HeightMap(heights, res, (0.0, -0.2), metadata={"modules": modules})
 
 
 def _config(reflexes: ReflexConfig, steps: int) -> WalkConfig:
@@ -55,13 +47,13 @@ class NoShift(Walk):
 
 
 def test_the_lift_off_gate_holds_a_leg_until_the_centre_of_mass_is_inside_its_triangle():
-    gated = NoShift(_flat_board(), lambda leg: REWARD, 3, _config(ReflexConfig(), 1))
+    gated = NoShift(short_flat_board(), lambda leg: REWARD, 3, _config(ReflexConfig(), 1))
     gated.margins_at_lift_off = []
     record = gated.run()
     waits = _events(record, "lift-off gate")
     assert len(waits) == 1 and waits[0]["waited_s"] > 0.05
     assert gated.margins_at_lift_off[0] >= ReflexConfig().gate_margin
-    ungated = NoShift(_flat_board(), lambda leg: REWARD, 3,
+    ungated = NoShift(short_flat_board(), lambda leg: REWARD, 3,
                       _config(replace(ReflexConfig(), lift_off_gate=False), 1))
     ungated.margins_at_lift_off = []
     ungated.run()
@@ -82,7 +74,7 @@ class LandsOff(Walk):
 
 def test_a_foot_that_lands_far_off_its_foothold_is_re_placed():
     config = _config(ReflexConfig(), 1)
-    record = LandsOff(_flat_board(), lambda leg: REWARD, 5, config).run()
+    record = LandsOff(short_flat_board(), lambda leg: REWARD, 5, config).run()
     moves = _events(record, "touch-down re-placed")
     assert len(moves) == 1 and moves[0]["off_mm"] > 20.0
     step = record.steps[0]
@@ -90,7 +82,7 @@ def test_a_foot_that_lands_far_off_its_foothold_is_re_placed():
     gaps = np.hypot(*(step.candidates[:, :2] - step.touchdown[:2]).T)
     assert gaps.min() < ReflexConfig().touchdown_tolerance
     assert step.placement_error > ReflexConfig().replace_separation - 0.005
-    unchecked = LandsOff(_flat_board(), lambda leg: REWARD, 5,
+    unchecked = LandsOff(short_flat_board(), lambda leg: REWARD, 5,
                          _config(replace(ReflexConfig(), touchdown_check=False), 1)).run()
     assert not _events(unchecked, "touch-down re-placed")
     assert unchecked.steps[0].placement_error > 0.02
@@ -112,7 +104,7 @@ class Pushed(Walk):
 
 def _pushed(reflexes: ReflexConfig, body: str, wrench, start: float, duration: float,
             steps: int = 6):
-    run = Pushed(_flat_board(), lambda leg: REWARD, 2, _config(reflexes, steps))
+    run = Pushed(short_flat_board(), lambda leg: REWARD, 2, _config(reflexes, steps))
     run.body, run.wrench, run.start, run.duration = body, wrench, start, duration
     return run.run()
 
@@ -141,7 +133,7 @@ def test_a_shoved_trunk_sets_off_the_tilt_reflex_and_the_robot_recovers():
 
 @pytest.mark.parametrize("reflexes", [ALL_ON, ALL_OFF], ids=["all reflexes", "none"])
 def test_a_seeded_run_with_reflexes_is_the_same_run_twice(reflexes):
-    board = _flat_board()
+    board = short_flat_board()
     a, b = (walk(board, lambda leg: REWARD, 11, _config(reflexes, 6)) for _ in range(2))
     strip = lambda r: {k: v for k, v in r.result.items() if k not in WALL_CLOCK_FIELDS}
     assert strip(a) == strip(b)

@@ -17,7 +17,6 @@ from footfall.control.lowlevel import (
     transfer_weight,
 )
 from footfall.core.errors import FootfallError
-from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import (
     body_to_world,
     forward_kinematics,
@@ -31,6 +30,7 @@ from footfall.features.reward import default_reward
 from footfall.features.terrain_features import TerrainFeatures
 from footfall.learning.model import FootholdModel, RankingFunction
 from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig, foot_slip, walk
+from maps import short_flat_board
 
 R = LITTLEDOG
 
@@ -135,14 +135,6 @@ def test_shin_rotations_turn_the_lower_legs_as_the_kinematics_do():
 
 
 # ------------------------------------------------------------- a short walk
-def _short_flat_board() -> HeightMap:
-    """Flat ground 0.8 m long, recorded as three modules (start, middle, goal)."""
-    res = 0.001
-    heights = np.zeros((round(0.8 / res), round(0.4 / res)))
-    modules = [{"kind": "flat", "x_start": 0.0, "x_end": 0.36},
-               {"kind": "flat", "x_start": 0.36, "x_end": 0.44},
-               {"kind": "flat", "x_start": 0.44, "x_end": 0.8}]
-    return HeightMap(heights, res, (0.0, -0.2), metadata={"modules": modules})
 
 
 SHORT = WalkConfig(start_setback=0.2, time_limit=30.0)
@@ -150,7 +142,7 @@ SHORT = WalkConfig(start_setback=0.2, time_limit=30.0)
 
 @pytest.fixture(scope="module")
 def short_walks():
-    board = _short_flat_board()
+    board = short_flat_board()
     reward = default_reward()
     return [walk(board, lambda leg: reward, 7, SHORT) for _ in range(2)]
 
@@ -180,7 +172,7 @@ def test_same_seed_same_run_bit_for_bit(short_walks):
 
 def test_step_limit_ends_a_run_without_success():
     reward = default_reward()
-    rec = walk(_short_flat_board(), lambda leg: reward, 1, WalkConfig(start_setback=0.2,
+    rec = walk(short_flat_board(), lambda leg: reward, 1, WalkConfig(start_setback=0.2,
                                                                       max_steps=2))
     assert rec.result["reason"] == "step limit" and not rec.result["success"]
     assert len(rec.steps) == 2 and [s.swing_leg for s in rec.steps] == list(R.gait_order[:2])
@@ -204,7 +196,7 @@ def test_cli_walk_missing_terrain_is_one_line_and_exit_2(tmp_path, capsys):
 
 def test_cli_walk_refuses_a_model_for_another_robot(tmp_path, capsys):
     board = tmp_path / "board.npz"
-    _short_flat_board().save(board)
+    short_flat_board().save(board)
     config = FeatureConfig()
     terrain = TerrainFeatures(config)
     n = len(terrain.columns())
@@ -221,7 +213,7 @@ def test_the_expert_can_choose_every_foothold_itself():
     """A judge in place of the reward: every logged candidate value is the expert's own."""
     from footfall.expert.synthetic import SyntheticExpert, walking_expert
 
-    board = _short_flat_board()
+    board = short_flat_board()
     config = WalkConfig(start_setback=0.2, max_steps=3)
     expert = SyntheticExpert(walking_expert(config.footstep.lead))
     rec = walk(board, lambda leg: default_reward(), 1, config, judge=expert.values)
@@ -235,7 +227,7 @@ def test_the_expert_can_choose_every_foothold_itself():
 
 def test_cli_walk_expert_and_model_together_is_one_line_and_exit_2(tmp_path, capsys):
     board = tmp_path / "board.npz"
-    _short_flat_board().save(board)
+    short_flat_board().save(board)
     code, _, err = run(capsys, "walk", "--terrain", board, "--expert", "--model",
                        tmp_path / "model.npz", "--seed", "0")
     assert_user_error(code, err, "--expert chooses the footholds itself")

@@ -39,7 +39,7 @@ Everything here is a pure function of measured arrays; the walk
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -96,8 +96,6 @@ class ReflexConfig(Params):
 
     def without(self, reflex: str) -> ReflexConfig:
         """This configuration with one reflex (a name of :data:`REFLEXES`) switched off."""
-        from dataclasses import replace
-
         if reflex not in REFLEXES:
             raise ValueError(f"unknown reflex {reflex!r}; reflexes are {', '.join(REFLEXES)}")
         return replace(self, **{reflex: False})

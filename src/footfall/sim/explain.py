@@ -93,15 +93,6 @@ def hull_margin(points: np.ndarray, active: np.ndarray, query: np.ndarray) -> np
     return np.where(enough & np.isfinite(margin), margin, np.nan)
 
 
-def _first_true_before_end(flags: np.ndarray, time: np.ndarray) -> float | None:
-    """How long [s] before the last row the last unbroken run of True rows ending at it began."""
-    if flags.size == 0 or not flags[-1]:
-        return None
-    false = np.flatnonzero(~flags)
-    start = false[-1] + 1 if false.size else 0
-    return float(time[-1] - time[start])
-
-
 def stance_slips(trace: TraceSeries) -> np.ndarray:
     """How far (n, 4) [m] each stance foot's centre is from where it was put down (NaN: swing)."""
     return np.linalg.norm(trace.feet - trace.anchor, axis=-1)

@@ -13,7 +13,7 @@ from footfall.sim.episode import WALL_CLOCK_FIELDS, Walk, WalkConfig, walk
 from maps import short_flat_board
 
 REWARD = default_reward()
-TWIST = 2.5  # [N m] roll torque on the trunk that tips it past the tilt reflex's threshold
+TWIST = 2.0  # [N m] roll torque on the trunk that tips it past the tilt reflex's threshold
 ALL_ON = ReflexConfig(lift_off_gate=True, slip_reflex=True, touchdown_check=True,
                       tilt_reflex=True)
 ALL_OFF = ReflexConfig(lift_off_gate=False, slip_reflex=False, touchdown_check=False,
@@ -110,8 +110,9 @@ def _pushed(reflexes: ReflexConfig, body: str, wrench, start: float, duration: f
 
 
 def test_a_stance_foot_pushed_off_its_spot_sets_off_the_slip_reflex_and_the_robot_stands():
-    # the right front foot is shoved outward while the left hind leg makes the first step
-    shove = ("RF_foot", (0.0, -12.0, 0.0, 0.0, 0.0, 0.0), 0.5, 0.15)
+    # the right front foot is shoved outward while the left hind leg makes the first step (with
+    # the stance load control the loaded foot holds a 12 N shove; 14 N slides it)
+    shove = ("RF_foot", (0.0, -14.0, 0.0, 0.0, 0.0, 0.0), 0.5, 0.15)
     record = _pushed(ALL_ON, *shove)
     slips = _events(record, "stance slip")
     assert slips and slips[0]["leg"] == "RF" and slips[0]["moved_mm"] > 12.0
@@ -125,9 +126,11 @@ def test_a_shoved_trunk_sets_off_the_tilt_reflex_and_the_robot_recovers():
     tilts = _events(record, "tilt")
     assert tilts and tilts[0]["error_rad"] > ReflexConfig().tilt_threshold
     assert record.result["reason"] == "step limit"  # no fall
+    # (Before the stance load control, 2.5 N m felled the robot without the reflex and not with
+    # it; with load control the two fall and stand alike over 1.5-2.5 N m: README, issue 18.)
     without = _pushed(replace(ALL_ON, tilt_reflex=False), "trunk",
                       (0.0, 0.0, 0.0, TWIST, 0.0, 0.0), 0.5, 0.1)
-    assert without.result["reason"] == "fall: trunk tilted"
+    assert not _events(without, "tilt")
     assert not _events(_pushed(ALL_ON, "trunk", (0.0,) * 6, 0.5, 0.1), "tilt")
 
 

@@ -63,6 +63,14 @@ class LowLevelConfig(Params):
     transfer_time: float = param(0.05, unit="s", range=within(0, math.inf),
                                  doc="a leg moves from the measured to the commanded body frame "
                                      "over this long after touch-down (and back after lift-off)")
+    load_gain: float = param(0.002, unit="m/(N s)", range=within(0, math.inf),
+                             doc="stance load control: a stance foot's target height moves by "
+                                 "this times its load error (footfall.control.load); 0: off")
+    load_limit: float = param(0.015, unit="m", range=within(0, math.inf),
+                              doc="bound of a stance foot's load control offset")
+    unload_time: float = param(0.15, unit="s", range=within(0, math.inf),
+                               doc="with load control, a leg is unloaded over this long before "
+                                   "it lifts")
 
 
 class BodyCorrection:
@@ -98,6 +106,14 @@ class BodyCorrection:
         rpy = np.array(desired_rpy, dtype=np.float64)
         rpy[:2] += self.attitude
         return desired_position + self.position, rpy
+
+
+    def rebase(self, desired_rpy: np.ndarray, new_desired_rpy: np.ndarray) -> None:
+        """The desired roll and pitch change from ``desired_rpy`` to ``new_desired_rpy`` (3,)
+        [rad] without a step in the commanded attitude: the correction takes the difference."""
+        diff = np.asarray(desired_rpy[:2], dtype=np.float64) - np.asarray(new_desired_rpy[:2])
+        diff = (diff + np.pi) % (2 * np.pi) - np.pi
+        self.attitude = self.attitude + diff
 
 
 def shin_rotations(q: np.ndarray, body_rotation: np.ndarray) -> np.ndarray:

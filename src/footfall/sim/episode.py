@@ -58,6 +58,7 @@ from footfall.control.footstep import (
     JudgedFootstepPlanner,
     NoFootholdError,
 )
+from footfall.control.load import load_offsets, load_shares
 from footfall.control.lowlevel import (
     BodyCorrection,
     LowLevelConfig,
@@ -285,6 +286,7 @@ class Walk:
         """Leg ``leg`` starts passing its load on (stance) or off (swing) now."""
         self._stance[leg] = stance
         self._since[leg] = self.sim.time
+        self._unload[leg] = 1.0
 
     def _tick(self, position: np.ndarray, rpy: np.ndarray, swing: int | None) -> None:
         """One control period toward the desired body pose; raises _Failure on a fall or stall.
@@ -304,6 +306,13 @@ class Walk:
         self._targets[stance] = self._anchor[stance] + rolled(
             self._shin0[stance], shin_rotations(sim.joint_angles(), rot[1])[stance],
             self.robot.foot_radius)
+        if cfg.lowlevel.load_gain > 0:  # each stance foot carries its share (its force sensor)
+            shares = load_shares(self._feet_before[:, :2], self._com_before,
+                                 np.where(stance, ramp, 0.0) * self._unload)
+            self._press = load_offsets(self._press, sim.foot_forces()[:, 2], shares, stance,
+                                       cfg.lowlevel.load_gain * self.period,
+                                       cfg.lowlevel.load_limit)
+            self._targets[:, 2] += self._press
         q, _ = joint_targets(self.robot, self._targets, (cpos, rot[0]), (mpos, rot[1]), weight,
                              self._q)
         sim.set_targets(q, (q - self._q) / self.period)
@@ -312,6 +321,7 @@ class Walk:
         self._capture()
         self._pose = mpos, mrpy = sim.body_pose()
         com, feet = sim.centre_of_mass(), sim.foot_positions()
+        self._com_before = com[:2]
         self.trace.record(trace_row(sim.time, mpos, mrpy, com, feet, sim.foot_forces(noise=False),
                                     stance, self._down, sim.joint_angles(), sim.joint_torques(),
                                     swing))
@@ -460,10 +470,14 @@ class Walk:
         lift-off gate's timeout).
         """
         t_lift = float(traj.lift_off[0])
+        unload = self.config.lowlevel.unload_time
         self._held = False
         for i in range(times.size):
             if times[i] > t_lift:
                 return i if self._gate(s) else None
+            if unload > 0:  # the swing leg passes its load on to the others before it lifts
+                self._unload[s] = 1.0 - float(transfer_weight(times[i] - (t_lift - unload),
+                                                              unload))
             self._desired = positions[i].copy(), attitudes[i].copy()
             self._tick(*self._desired, None)
             if self._alarm is not None:
@@ -676,7 +690,15 @@ class Walk:
                    and sim.time - t0 < rc.recover_timeout and self._alarm is None):
                 self._tick(*self._desired, None)
             self._recovering = False
+            error = tilt_error(self._pose[1], self._desired[1])
+            if self._alarm is None and error > rc.tilt_threshold:
+                # A posture the legs cannot reach from where the feet stand (joints at their
+                # limits): the gait goes on from the one it has rather than waiting for ever.
+                self._event("posture accepted", None, error_rad=round(error, 3))
+                self._correction.rebase(self._desired[1], self._pose[1])
+                self._desired[1][:2] = self._pose[1][:2]
         self._held = False
+        self._unload[:] = 1.0  # a step called off keeps its leg's load
         self._cog = self._desired[0][:2].copy(), np.zeros(2)  # the body at rest where it is
 
     # ------------------------------------------------------------------ a run
@@ -714,6 +736,9 @@ class Walk:
         self._planned: list[float] = []  # [m] planned least COG margin of each swing
         self._plan_seconds: list[float] = []
         self._feet_before = sim.foot_positions()  # (4, 3) [m] at the last control period
+        self._com_before = sim.centre_of_mass()[:2]  # (2,) [m] at the last control period
+        self._press = np.zeros(4)  # [m] stance feet's load control offsets (target heights)
+        self._unload = np.ones(4)  # [-] availability of each leg to carry load (1 - unloading)
         self._alarm: tuple[str, int | None] | None = None  # the stance watch's alarm, not yet acted on
         self._events: list[dict] = []  # reflex events, the first MAX_EVENTS
         self._reflex_counts: dict[str, int] = {}  # reflex events by kind

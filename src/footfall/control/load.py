@@ -1,0 +1,93 @@
+"""Stance load control: each stance foot carries its share of the weight, felt by its force sensor.
+
+A position-controlled quadruped on four feet is statically indeterminate:
+on uneven ground the stiff legs put the weight on whichever diagonal pair
+stands highest, like a four-legged table on a rough floor. A foot that was
+set down exactly where it touched the ground carries nothing until the body
+sags onto it, and when the loaded foot of the other diagonal lifts, the
+body tips onto the unloaded one -- the step that starts most slides and
+falls on rocks (``footfall walk --explain``).
+
+So, every control period, the share of the weight each stance foot should
+carry is found from where the feet and the measured centre of mass are
+(:func:`load_shares`: moment balance about the centre of mass, the spare
+degree of freedom of four feet spent on spreading the load evenly), and
+each foot's target height is moved by the force error its sensor measures
+(:func:`load_offsets`): down while it carries too little, up while it
+carries too much. A leg about to lift is unloaded this way first, and a leg
+just set down takes its share gradually. The offsets sum to nothing over
+the stance feet (the measured total is shared out), so the body height is
+left to the body controller.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def load_shares(feet_xy: np.ndarray, com_xy: np.ndarray, availability: np.ndarray
+                ) -> np.ndarray:
+    """Share [-] (k,) of the weight each of k feet should carry; the shares sum to 1.
+
+    The shares ``s`` balance the moment about the centre of mass,
+    ``sum s_i (p_i - c) = 0``, and of all such shares minimise
+    ``sum s_i^2 / a_i``: a foot of availability ``a_i`` 0 carries nothing, a
+    foot of availability 1 its full part. Three available feet have one
+    solution (the barycentric coordinates of the centre of mass); four share
+    the spare degree of freedom. Shares are clipped at 0 (a centre of mass
+    outside the support cannot be balanced) and scaled back to sum 1.
+
+    Parameters
+    ----------
+    feet_xy : array of shape (k, 2)
+        Horizontal positions [m] of the feet.
+    com_xy : array of shape (2,)
+        Horizontal position [m] of the centre of mass.
+    availability : array of shape (k,)
+        Availability [-] in [0, 1] of each foot to carry load.
+    """
+    p = np.asarray(feet_xy, dtype=np.float64) - np.asarray(com_xy, dtype=np.float64)
+    a = np.clip(np.asarray(availability, dtype=np.float64), 0.0, 1.0)
+    if not a.any():
+        return np.zeros(a.shape)
+    rows = np.vstack([np.ones(len(a)), p.T])  # (3, k): total, moment about x and y
+    shares = _balanced(rows, a)
+    if shares.min() < 0 and (a < 1).any():  # the partly available feet cannot be spared:
+        shares = _balanced(rows, (a > 0).astype(np.float64))  # every foot down takes its part
+    shares = np.maximum(shares, 0.0)
+    total = shares.sum()
+    return shares / total if total > 0 else a / a.sum()
+
+
+def _balanced(rows: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """Least ``sum s^2 / a`` shares (k,) with ``rows @ s = (1, 0, 0)``; ``rows`` (3, k)."""
+    gram = (rows * a) @ rows.T
+    # the pseudo-inverse: two available feet (or three on a line) balance in the least-squares
+    # sense instead of failing
+    return a * (rows.T @ (np.linalg.pinv(gram, rcond=1e-9) @ np.array([1.0, 0.0, 0.0])))
+
+
+def load_offsets(offsets: np.ndarray, measured: np.ndarray, shares: np.ndarray,
+                 stance: np.ndarray, gain: float, limit: float) -> np.ndarray:
+    """Target height offsets (4,) [m] of the stance feet after one period of load control.
+
+    Each stance foot's offset moves by ``gain`` [m/N] times its load error:
+    the vertical force it measures less its share of the stance feet's
+    measured total, up (+) for a foot that carries too much. Bounded by
+    ``limit`` [m]; legs not in ``stance`` get 0.
+
+    Parameters
+    ----------
+    offsets : array of shape (4,)
+        The offsets [m] so far.
+    measured : array of shape (4,)
+        Vertical foot forces [N], + for a foot pressed onto the ground.
+    shares : array of shape (4,)
+        Shares [-] of the weight (:func:`load_shares`; 0 for legs not in stance).
+    stance : array of shape (4,), bool
+        The legs whose offsets are controlled.
+    """
+    f = np.where(stance, np.maximum(np.asarray(measured, dtype=np.float64), 0.0), 0.0)
+    error = f - shares * f.sum()
+    out = np.clip(np.asarray(offsets, dtype=np.float64) + gain * error, -limit, limit)
+    return np.where(stance, out, 0.0)

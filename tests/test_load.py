@@ -1,0 +1,117 @@
+"""Stance load control (footfall.control.load): the shares of the weight and the height offsets."""
+
+import numpy as np
+import pytest
+
+from footfall.control.load import load_offsets, load_shares
+from footfall.control.lowlevel import LowLevelConfig
+from footfall.features.reward import default_reward
+from footfall.sim.episode import Walk, WalkConfig
+from maps import short_flat_board
+
+FEET = np.array([[0.1, 0.08], [0.1, -0.08], [-0.1, 0.08], [-0.1, -0.08]])  # [m] LF RF LH RH
+
+
+def test_four_feet_around_the_centre_share_evenly():
+    assert np.allclose(load_shares(FEET, [0.0, 0.0], np.ones(4)), 0.25)
+
+
+@pytest.mark.parametrize("com", [[0.02, 0.01], [-0.03, 0.02], [0.0, -0.05]])
+def test_shares_balance_the_moment_about_the_centre_of_mass(com):
+    shares = load_shares(FEET, com, np.ones(4))
+    assert shares.sum() == pytest.approx(1.0)
+    assert np.allclose(shares @ (FEET - com), 0.0, atol=1e-12)
+    assert (shares > 0).all()
+
+
+def test_three_feet_carry_the_barycentric_coordinates_of_the_centre_of_mass():
+    tri = FEET[[0, 1, 3]]
+    weights = np.array([0.5, 0.2, 0.3])
+    com = weights @ tri
+    shares = load_shares(FEET, com, [1.0, 1.0, 0.0, 1.0])
+    assert np.allclose(shares, [0.5, 0.2, 0.0, 0.3])
+
+
+def test_a_leg_being_unloaded_carries_less_as_its_availability_falls():
+    com = np.array([0.01, -0.01])  # inside the triangle without LH
+    carried = [load_shares(FEET, com, [1.0, 1.0, a, 1.0])[2] for a in (1.0, 0.5, 0.1, 0.0)]
+    assert carried[0] > carried[1] > carried[2] > carried[3] == 0.0
+
+
+def test_a_leg_that_cannot_be_spared_keeps_its_part():
+    com = np.array([-0.05, 0.05])  # outside the triangle without LH: LH must stay loaded
+    shares = load_shares(FEET, com, [1.0, 1.0, 0.05, 1.0])
+    assert shares[2] > 0.25
+    assert shares.sum() == pytest.approx(1.0)
+    assert (shares >= 0).all()
+
+
+def test_a_centre_of_mass_outside_the_support_gives_the_nearest_shares_that_are_possible():
+    shares = load_shares(FEET, [0.3, 0.0], [1.0, 1.0, 1.0, 1.0])
+    assert (shares >= 0).all() and shares.sum() == pytest.approx(1.0)
+    assert shares[:2].sum() > 0.9  # the front feet take it all
+
+
+def test_no_available_foot_carries_nothing():
+    assert not load_shares(FEET, [0.0, 0.0], np.zeros(4)).any()
+
+
+def test_a_foot_carrying_too_much_goes_up_and_one_carrying_too_little_goes_down():
+    shares = np.full(4, 0.25)
+    measured = np.array([12.0, 4.0, 8.0, 8.0])  # [N]
+    stance = np.ones(4, dtype=bool)
+    out = load_offsets(np.zeros(4), measured, shares, stance, gain=1e-4, limit=0.01)
+    assert out[0] > 0 > out[1]
+    assert out[2] == out[3] == 0.0
+    assert out.sum() == pytest.approx(0.0)  # the body height is left alone
+
+
+def test_load_offsets_are_bounded_and_zero_for_legs_not_in_stance():
+    stance = np.array([True, True, False, True])
+    measured = np.array([30.0, 0.0, 5.0, 0.0])
+    shares = load_shares(FEET, [0.0, 0.0], stance.astype(float))
+    out = load_offsets(np.array([0.0, 0.0, 0.003, 0.0]), measured, shares, stance, gain=1.0,
+                       limit=0.01)
+    assert out[2] == 0.0
+    assert np.abs(out).max() == pytest.approx(0.01)
+    assert out[0] == pytest.approx(0.01)
+
+
+def test_a_negative_force_reading_counts_as_no_load():
+    shares = np.array([0.5, 0.5, 0.0, 0.0])
+    stance = np.array([True, True, False, False])
+    out = load_offsets(np.zeros(4), np.array([-3.0, 10.0, 0.0, 0.0]), shares, stance, 1e-3, 1.0)
+    assert out[0] == pytest.approx(-5e-3)  # it carries 0 of its 5 N: down
+
+
+# ---------------------------------------------------------------- on the robot, standing
+class Wobbles(Walk):
+    """Stands on four feet after the left front foot's target was set 4 mm into the ground:
+    the LF-RH diagonal would carry the robot and the other diagonal next to nothing, as on
+    uneven ground. Records the vertical foot forces [N] after ``STAND`` s."""
+
+    STAND = 1.0  # [s]
+
+    def _step(self, k):
+        self._anchor[0, 2] -= 0.004
+        for _ in range(round(self.STAND / self.period)):
+            self._tick(*self._desired, None)
+        self.loads = self.sim.foot_forces(noise=False)[:, 2]
+        return True
+
+
+def _stand(load_gain: float) -> np.ndarray:
+    config = WalkConfig(start_setback=0.2, max_steps=1,
+                        lowlevel=LowLevelConfig(load_gain=load_gain))
+    run = Wobbles(short_flat_board(), lambda leg: default_reward(), 1, config)
+    run.run()
+    return run.loads
+
+
+def test_load_control_spreads_the_weight_over_a_wobbling_stance():
+    off, on = _stand(0.0), _stand(LowLevelConfig().load_gain or 0.002)
+    # without it one diagonal (LF, RH) carries most of the weight
+    assert off[0] + off[3] > 2.0 * (off[1] + off[2])
+    # with it the feet share the weight evenly (the centre of mass is near the middle)
+    assert on.min() > 0.6 * on.mean()
+    assert abs(on.sum() - off.sum()) < 0.05 * off.sum()  # the same weight, shared out

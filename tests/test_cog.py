@@ -164,3 +164,42 @@ def test_bad_input_raises():
     traj = plan_cog(feet, crawl(1), np.zeros(2), np.zeros(2))
     with pytest.raises(FootfallError, match="defined for t"):
         traj.position(traj.end + 0.1)
+
+
+# ------------------------------------------------------------------ the legs' reach
+def _worst_reach(traj, feet, steps):
+    """Largest x or y distance [m] of a foot down from its nominal place under the COG."""
+    home = nominal_feet()[:, :2]
+    current, worst = feet[:, :2].copy(), 0.0
+    for k, (leg, foothold) in enumerate(steps):
+        j = LEG_NAMES.index(leg)
+        for phase, t0, t1 in (("shift", traj.shift_start[k], traj.lift_off[k]),
+                              ("swing", traj.lift_off[k], traj.touch_down[k])):
+            down = [i for i in range(4) if phase == "shift" or i != j]
+            cog = traj.position(np.linspace(t0, t1, 200))
+            gap = np.abs(current[down][None] - home[down][None] - cog[:, None])
+            worst = max(worst, float(gap.max()))
+        current[j] = foothold[:2]
+    return worst
+
+
+def test_with_a_reach_the_cog_keeps_every_foot_down_within_it():
+    feet = nominal_feet()
+    steps = crawl(4, stride=0.08)
+    steps[1] = ("LF", steps[1][1] + [0.03, 0.0, 0.0])  # a long stride of the front left foot
+    free = plan_cog(feet, steps, np.zeros(2), np.zeros(2), CogConfig())
+    config = CogConfig(reach=0.07)
+    kept = plan_cog(feet, steps, np.zeros(2), np.zeros(2), config)
+    assert kept.status == "optimal"
+    assert _worst_reach(free, feet, steps) > 0.09  # without it a foot is left far behind
+    assert _worst_reach(kept, feet, steps) <= 0.07 + 1e-9
+    assert_stable(kept, config)
+
+
+def test_a_reach_that_cannot_be_kept_is_dropped():
+    feet = nominal_feet()
+    steps = crawl(4)
+    traj = plan_cog(feet, steps, np.zeros(2), np.zeros(2), CogConfig(reach=0.005))
+    assert traj.status == "out of reach"
+    same = plan_cog(feet, steps, np.zeros(2), np.zeros(2), CogConfig())
+    np.testing.assert_allclose(traj.waypoints, same.waypoints)

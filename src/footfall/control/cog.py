@@ -25,6 +25,14 @@ sway": the body never has to stop, and how far it sways follows from the
 least-acceleration trade-off at the pace the phase durations and foothold
 spacing set.
 
+Reach (``CogConfig.reach``, issue 18): the support triangles alone let the
+COG run far past the feet -- after a long stride onto a rock the body
+lunged 13 cm in half a second and the hind legs met their joint limits. With
+a reach, the COG's Bezier points (hence the whole cubic) stay, in every
+phase, in the box that keeps each foot down within ``reach`` of its nominal
+place under the body; a plan that cannot keep it is planned without it
+(status "out of reach").
+
 Robustness: a swing whose triangle is too thin for the margin (inradius <=
 margin: the inset triangle is empty) pins the COG to the incentre, at rest,
 for that swing (it "slows down" to a stop there). If the shifts' ZMP
@@ -71,6 +79,10 @@ class CogConfig(Params):
                             doc="weight of the squared distance [m^2] of the COG at each lift-off "
                                 "and touch-down from the swing triangle's incentre, against the "
                                 "integrated squared acceleration [m^2/s^3]")
+    reach: float | None = param(None, unit="m", range=above(0),
+                                doc="the COG keeps every foot down within this distance of its "
+                                    "nominal place under the body, along x and along y; None: "
+                                    "no limit")
     slowdown: float = param(2.0, unit="-", range=at_least(1),
                             doc="factor on every shift's duration when the ZMP cannot be kept in")
 
@@ -179,7 +191,8 @@ class CogTrajectory:
     waypoints: np.ndarray  # (K, 2, 2) [m] COG at lift-off and at touch-down of each swing
     margin: float  # [m] inset of the triangles the COG and ZMP keep during the swings
     cog_height: float  # [m] COG height used for the ZMP
-    status: str  # 'optimal', 'slowed' (shifts lengthened), 'relaxed' (shift ZMP unconstrained)
+    status: str  # 'optimal', 'out of reach' (reach dropped), 'slowed' (shifts lengthened),
+    # 'relaxed' (shift ZMP unconstrained)
     # or 'fallback' (COG stops at every incentre)
     pinned: np.ndarray  # (K,) bool: the inset triangle was empty; the COG stops at the incentre
     _pos: PPoly  # position [m] of time
@@ -253,7 +266,8 @@ def _stances(feet: np.ndarray, steps: Sequence[tuple[str, np.ndarray]]
 
 
 def _solve(start: np.ndarray, v0: np.ndarray, stances: np.ndarray, triangles: np.ndarray,
-           durations: np.ndarray, config: CogConfig, height: float, shift_zmp: bool
+           durations: np.ndarray, config: CogConfig, height: float, shift_zmp: bool,
+           reach: tuple[np.ndarray, np.ndarray] | None = None
            ) -> tuple[np.ndarray | None, np.ndarray, np.ndarray]:
     """COG states (2K + 1, 2, 2) = (position, velocity) at every phase boundary, or None if infeasible.
 
@@ -269,7 +283,7 @@ def _solve(start: np.ndarray, v0: np.ndarray, stances: np.ndarray, triangles: np
     centres, radii = incircle(triangles)
     pinned = radii <= config.margin + _SAFETY
     G, g = _objective(w, durations, centres, config, inputs)
-    C, c = _constraints(w, stances, triangles, pinned, config, shift_zmp, inputs)
+    C, c = _constraints(w, stances, triangles, pinned, config, shift_zmp, inputs, reach)
 
     # A pinned swing stands still at the incentre: its boundary states are constants.
     fixed = np.zeros((n_phases, 4))
@@ -342,11 +356,14 @@ def _objective(w: dict[str, np.ndarray], durations: np.ndarray, centres: np.ndar
 
 def _constraints(w: dict[str, np.ndarray], stances: np.ndarray, triangles: np.ndarray,
                  pinned: np.ndarray, config: CogConfig, shift_zmp: bool,
-                 inputs: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+                 inputs: tuple[np.ndarray, np.ndarray],
+                 reach: tuple[np.ndarray, np.ndarray] | None = None
+                 ) -> tuple[np.ndarray, np.ndarray]:
     """The constraints as C z + c >= 0: C (m, n), c (m,).
 
     During each swing not ``pinned``, the COG's and the ZMP's Bezier points inside the inset
-    triangle; with ``shift_zmp``, during each shift, the ZMP's inside the inset support polygon.
+    triangle; with ``shift_zmp``, during each shift, the ZMP's inside the inset support polygon;
+    with ``reach`` (:func:`_reach_boxes`), in every phase the COG's inside its box.
     """
     n_steps, n = triangles.shape[0], 4 * 2 * triangles.shape[0]
     normals, offsets = _triangle_halfplanes(triangles, config.margin + _SAFETY)  # (K, 3, 2), (K, 3)
@@ -366,7 +383,35 @@ def _constraints(w: dict[str, np.ndarray], stances: np.ndarray, triangles: np.nd
             nrm, off = _halfplanes(hull, config.margin + _SAFETY)
             C.append(np.einsum("ed,qdn->qen", nrm, zmp_m[k]).reshape(-1, n))
             c.append((zmp_c[k] @ nrm.T - off).ravel())
+    if reach is not None:
+        lo, hi = reach  # (P, 2) [m] each phase's box for the COG; lo > hi: no box
+        valid = (lo <= hi).all(axis=1)
+        bez_m, bez_c = _linear(w["bezier"], inputs)  # (P, 4, 2, n), (P, 4, 2)
+        C += [bez_m[valid].reshape(-1, n), -bez_m[valid].reshape(-1, n)]
+        c += [(bez_c[valid] - lo[valid, None, :]).ravel(),
+              (hi[valid, None, :] - bez_c[valid]).ravel()]
     return np.vstack(C), np.concatenate(c)
+
+
+def _reach_boxes(stances: np.ndarray, legs: tuple[str, ...], robot: RobotDescription,
+                 reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per phase (shift, swing of each step) the box lo, hi (P, 2) [m] of COG positions that
+    keep every foot down within ``reach`` [m], along x and along y, of its nominal place under
+    the body (hip_x ahead or behind, nominal_foot_y to the side; the body's axes taken along
+    the world's: the walks go straight along x). A phase whose feet are further apart than
+    twice the reach on either axis (lo > hi) has no box."""
+    home = np.array([[(1 if leg.front else -1) * robot.hip_x, leg.side * robot.nominal_foot_y]
+                     for leg in robot.legs])
+    rel = stances - home  # (K, 4, 2): the COG that would put each foot at home
+    down = np.ones(rel.shape[:2], dtype=bool)
+    swing = down.copy()
+    swing[np.arange(len(legs)), [LEG_NAMES.index(leg) for leg in legs]] = False
+    lo, hi = [], []
+    for mask in (down, swing):
+        lo.append(np.where(mask[..., None], rel, -np.inf).max(axis=1) - reach)
+        hi.append(np.where(mask[..., None], rel, np.inf).min(axis=1) + reach)
+    # phases in order: shift 0, swing 0, shift 1, ...
+    return (np.stack(lo, axis=1).reshape(-1, 2), np.stack(hi, axis=1).reshape(-1, 2))
 
 
 def least_squares_inequality(G: np.ndarray, g: np.ndarray, C: np.ndarray, c: np.ndarray
@@ -464,7 +509,13 @@ def plan_cog(feet: np.ndarray, steps: Sequence[tuple[str, np.ndarray]], start_xy
     n_steps = len(legs)
     durations = np.tile([config.shift_duration, config.swing_duration], n_steps)
     status = "optimal"
-    states, centres, pinned = _solve(start, v0, stances, triangles, durations, config, height, True)
+    boxes = None if config.reach is None else _reach_boxes(stances, legs, robot, config.reach)
+    states, centres, pinned = _solve(start, v0, stances, triangles, durations, config, height,
+                                     True, boxes)
+    if states is None and boxes is not None:
+        status = "out of reach"  # the legs' reach is dropped first
+        states, centres, pinned = _solve(start, v0, stances, triangles, durations, config,
+                                         height, True)
     if states is None and config.slowdown > 1:
         durations[0::2] *= config.slowdown
         status = "slowed"

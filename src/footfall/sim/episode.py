@@ -112,7 +112,7 @@ def _walk_footstep() -> FootstepConfig:
 
 
 def _walk_cog() -> CogConfig:
-    return CogConfig(swing_duration=0.4, centring=100.0, slowdown=4.0)
+    return CogConfig(swing_duration=0.4, centring=100.0, slowdown=4.0, reach=0.08)
 
 
 @dataclass(frozen=True)
@@ -121,7 +121,8 @@ class WalkConfig(Params):
 
     footstep: FootstepConfig = param(factory=_walk_footstep,
                                      doc="the footstep planner (path bias, stride)")
-    cog: CogConfig = param(factory=_walk_cog, doc="the COG planner (swing and shift timing)")
+    cog: CogConfig = param(factory=_walk_cog,
+                           doc="the COG planner (swing and shift timing, the legs' reach)")
     swing: SwingConfig = param(factory=SwingConfig, doc="the swing-foot trajectory")
     pose: PoseConfig = param(factory=PoseConfig, doc="the pose finder")
     lowlevel: LowLevelConfig = param(factory=LowLevelConfig, doc="the 100 Hz closed loop")

@@ -13,8 +13,10 @@ The hierarchy, top to bottom, each stage in its own module:
 5. swing trajectory (:mod:`footfall.control.swing`) -- over the convex hull
    of the terrain;
 6. low-level control (:mod:`footfall.control.lowlevel`) -- inverse
-   kinematics at 100 Hz, closed on the true body pose, and the simulator's
-   400 Hz PD servo.
+   kinematics at 100 Hz, closed on the true body pose, with each stance
+   foot's height set by its force sensor so that it carries its share of
+   the weight (:mod:`footfall.control.load`), and the simulator's 400 Hz PD
+   servo.
 
 A step goes through its phases (:meth:`Walk._step`): *plan* (foothold, COG
 trajectory, pose; a receding horizon, five steps planned and one executed,
@@ -671,7 +673,8 @@ class Walk:
 
     def _recover(self) -> None:
         """After an alarm, or a wait at the gate: the body stops; a slipped foot is taken to
-        stand where it now is (and steps first if it went far); the posture is recovered."""
+        stand where it now is (and steps first if it went far); the posture is recovered, or,
+        if it cannot be within recover_timeout, accepted as it is."""
         rc, sim = self.config.reflexes, self.sim
         t0 = sim.time
         while self._alarm is not None:

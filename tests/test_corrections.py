@@ -7,12 +7,12 @@ from footfall.core.errors import FootfallError
 from footfall.core.state import nominal_state
 from footfall.data.runlog import RunRecord, RunStep
 from footfall.data.store import DemoStore
-from footfall.experiments.reproduce import _worst
 from footfall.expert.corrections import (
     corrections_to_demonstrations,
     inspect_run,
     source_of,
     step_verdicts,
+    worst_corrections,
 )
 from test_store import terrain
 
@@ -70,7 +70,7 @@ def test_step_verdicts_are_the_best_index_and_the_shortfall_of_every_step():
 def test_a_capped_expert_labels_the_worst_mistakes_of_a_run():
     hm = terrain()
     run = _run(hm, [0.30, 0.34, 0.33, 0.31, 0.32])
-    verdicts = _worst(inspect_run(run, hm, TableExpert(), margin=1.5), 1.5, cap=2)
+    verdicts = worst_corrections(inspect_run(run, hm, TableExpert(), margin=1.5), 1.5, cap=2)
     assert [v.k for v in verdicts if v.label is not None] == [0, 3]  # shortfalls 4 and 3
 
 

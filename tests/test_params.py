@@ -34,6 +34,7 @@ from footfall.core.params import (
     to_dict,
     within,
 )
+from footfall.experiments.ablation import AblationConfig
 from footfall.experiments.offline import OfflineConfig
 from footfall.experiments.reproduce import ReproduceConfig
 from footfall.expert.synthetic import ExpertConfig
@@ -43,7 +44,7 @@ from footfall.sim.simulation import PerturbationConfig
 
 CONFIGS = (Limits, FeatureConfig, PerturbationConfig, WalkConfig, LowLevelConfig, BodyPathConfig,
            FootstepConfig, CogConfig, SwingConfig, PoseConfig, ExpertConfig, ReproduceConfig,
-           OfflineConfig, ReflexConfig)
+           OfflineConfig, ReflexConfig, AblationConfig)
 """Every declared config of footfall (test_every_declared_config_is_listed keeps it whole)."""
 
 

@@ -1,5 +1,5 @@
-"""``footfall offline``, ``reproduce`` and ``demo``: the experiments end to end, and the picture
-demo."""
+"""``footfall offline``, ``reproduce``, ``ablation`` and ``demo``: the experiments end to end, and
+the picture demo."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from footfall.cli.choices import SEED
+from footfall.cli.choices import SEED, RegistryChoice
 from footfall.cli.output import emit, json_option, progress_log
 
 
@@ -49,6 +49,42 @@ def reproduce(out: str, seed: int, quick: bool, processes: int | None, as_json: 
     results = run_reproduction(Path(out), config, processes=processes, log=progress_log(as_json))
     lines = [_table2_line(k, v) for k, v in results["table2"].items()]
     emit(as_json, results, "\n".join(lines + [f"wrote {Path(out) / 'report.md'} and report.html"]))
+
+
+def _variant_names() -> list[str]:
+    from footfall.experiments.ablation import VARIANTS
+
+    return list(VARIANTS)
+
+
+@click.command()
+@click.option("--out", "out", default="out/ablation", show_default=True, help="Report folder "
+              "(and the store of every run; run again with the same arguments to resume).")
+@click.option("--variant", "variants", multiple=True, type=RegistryChoice(_variant_names),
+              help="A controller variant to walk (repeatable) [default: all of them]; the "
+                   "defaults are always walked, as the baseline.")
+@click.option("--who", "who", multiple=True, type=click.Choice(["expert", "hand"]),
+              help="Who chooses the footholds (repeatable) [default: both]: the walking expert "
+                   "or the hand-tuned reward.")
+@click.option("--quick", is_flag=True, help="A small version (about a minute) for a smoke test.")
+@click.option("--processes", type=click.IntRange(1, 1024), default=None,
+              help="Parallel runs [default: the available cores].")
+@json_option
+def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], quick: bool,
+             processes: int | None, as_json: bool) -> None:
+    """The walking controller's ablation: each part switched off alone, paired runs."""
+    from dataclasses import replace
+
+    from footfall.experiments.ablation import AblationConfig, ablation_markdown, run_ablation
+
+    config = AblationConfig.quick() if quick else AblationConfig()
+    if variants:
+        config = replace(config, variants=variants)
+    if who:
+        config = replace(config, who=tuple(dict.fromkeys(who)))
+    summary = run_ablation(Path(out), config, processes=processes, log=progress_log(as_json))
+    emit(as_json, summary, ablation_markdown(config, summary)
+         + f"wrote {Path(out) / 'ablation.md'} and ablation.json")
 
 
 @click.command()

@@ -45,9 +45,7 @@ import hashlib
 import json
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass, field, replace
-from multiprocessing import get_context
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
@@ -55,14 +53,13 @@ import numpy as np
 
 from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
-from footfall.core.files import write_text_atomic
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, above, at_least, param
 from footfall.core.robot import LITTLEDOG
 from footfall.core.seeds import SeedStreams
-from footfall.data.runlog import RunRecord
 from footfall.data.store import DemoStore
 from footfall.experiments.batch import summarise
+from footfall.experiments.runs import RunJob, Runner, claim_folder
 from footfall.expert.synthetic import ExpertConfig, walking_expert
 from footfall.features.family import PAPER_FEATURE_SETS
 from footfall.learning.model import LEG_GROUPS, FootholdModel
@@ -257,110 +254,12 @@ class Workspace:
 def open_workspace(out: str | os.PathLike, config: ReproduceConfig) -> Workspace:
     """The folder ``out`` made ready: refused if it holds other settings; boards made once."""
     out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise FootfallError(f"output path is not a directory: {out}")
-    out.mkdir(parents=True, exist_ok=True)
+    claim_folder(out, config.to_dict(), "a reproduction")
     (out / "models").mkdir(exist_ok=True)
-    settings_path = out / "config.json"
-    mine = json.dumps(config.to_dict(), sort_keys=True, indent=1)
-    if settings_path.exists() and settings_path.read_text() != mine:
-        raise FootfallError(f"{out} holds a reproduction with other settings; use another --out")
-    write_text_atomic(settings_path, mine)
     paths = _make_terrain(out, config)
     maps = {n: HeightMap.load(p) for n, p in paths.items()}
     return Workspace(out, config, paths, maps, {m.content_hash(): m for m in maps.values()},
                      seed_streams(config))
-
-
-# ---------------------------------------------------------------- the runs
-@dataclass(frozen=True)
-class _Job:
-    key: str  # unique run key in the store
-    terrain: str  # board file
-    model: str | None  # model file (None: the hand-tuned default reward)
-    seed: int  # the run's seed (start pose, registration, friction, sensors)
-    walk: WalkConfig
-    correct: bool = False  # the expert inspects the run
-    margin: float = 0.0
-    cap: int | None = None
-    expert: ExpertConfig = field(default_factory=ExpertConfig)
-    judge: bool = False  # the expert chooses every foothold itself (model unused)
-    inspect_seed: int = 0  # the expert's randomness while it inspects the run
-
-
-def _execute(job: _Job) -> tuple[RunRecord, list]:
-    """One run (in a worker process): walk, and the expert's corrections if asked for."""
-    from threadpoolctl import threadpool_limits
-
-    from footfall.experiments.batch import reward_source
-    from footfall.expert.corrections import corrections_to_demonstrations, inspect_run
-    from footfall.expert.synthetic import SyntheticExpert
-    from footfall.sim.episode import walk
-
-    hmap = HeightMap.load(job.terrain)
-    with threadpool_limits(limits=1):
-        judge = SyntheticExpert(job.expert).values if job.judge else None
-        record = walk(hmap, reward_source(job.model, hmap), job.seed, job.walk, judge=judge)
-        record = replace(record, key=job.key)
-        demos = []
-        if job.correct:
-            expert = SyntheticExpert(job.expert)
-            found = inspect_run(record, hmap, expert, job.margin, rng=job.inspect_seed)
-            found = _worst(found, job.margin, job.cap)
-            demos = corrections_to_demonstrations(record, job.key, found, expert)
-    return record, demos
-
-
-def _worst(corrections: list, margin: float, cap: int | None) -> list:
-    """The corrected steps the expert labels: all above the margin, or the worst ``cap`` of them."""
-    chosen = [c for c in corrections if c.label is not None and c.shortfall > margin]
-    if cap is not None and len(chosen) > cap:
-        chosen = sorted(chosen, key=lambda c: (-c.shortfall, c.k))[:cap]
-    keep = {c.k for c in chosen}
-    return [c if c.k in keep else replace(c, label=None) for c in corrections]
-
-
-@dataclass
-class _Runner:
-    """Runs jobs not yet in the store, in parallel; each run is stored with its demos on arrival."""
-
-    store: DemoStore
-    terrains: dict[str, HeightMap]  # content hash -> board
-    processes: int
-    on_run: Callable[[str], None] | None
-    log: Callable[[str], None]
-
-    def run(self, jobs: list[_Job], desc: str) -> None:
-        from tqdm import tqdm
-
-        done = {r["key"] for r in self.store.runs()}
-        todo = [j for j in jobs if j.key not in done]
-        if len(todo) < len(jobs):
-            self.log(f"{desc}: {len(jobs) - len(todo)} of {len(jobs)} runs already stored")
-        if not todo:
-            return
-        with tqdm(total=len(todo), desc=desc, unit="run", disable=None, dynamic_ncols=True) as bar:
-            if self.processes <= 1 or len(todo) == 1:
-                for job in todo:
-                    self._keep(*_execute(job), bar)
-                return
-            with ProcessPoolExecutor(max_workers=min(self.processes, len(todo)),
-                                     mp_context=get_context("spawn")) as pool:
-                futures = [pool.submit(_execute, job) for job in todo]
-                try:
-                    for f in as_completed(futures):
-                        self._keep(*f.result(), bar)
-                except BaseException:
-                    for f in futures:
-                        f.cancel()
-                    raise
-
-    def _keep(self, record: RunRecord, demos: list, bar) -> None:
-        self.store.add_run(record, terrains=[self.terrains[record.terrain_hash]],
-                           demonstrations=demos)
-        bar.update(1)
-        if self.on_run is not None:
-            self.on_run(record.key)
 
 
 # ---------------------------------------------------------------- learning
@@ -439,7 +338,7 @@ class Corrections:
     demos: list  # the corrections of every round, in source order (run key, step)
 
 
-def correction_rounds(ws: Workspace, runner: _Runner) -> Corrections:
+def correction_rounds(ws: Workspace, runner: Runner) -> Corrections:
     """Walk, correct, learn, for up to ``rounds + extra_rounds`` rounds (see the module)."""
     config, log = ws.config, runner.log
     train = [n for n in ws.paths if n.startswith("train")]
@@ -447,7 +346,7 @@ def correction_rounds(ws: Workspace, runner: _Runner) -> Corrections:
     rounds: list[dict] = []
     short: list[str] = []
     for r in range(config.rounds + config.extra_rounds):
-        jobs = [_Job(f"correct/r{r}/{name}", str(ws.paths[name]), model_path, seed, config.walk,
+        jobs = [RunJob(f"correct/r{r}/{name}", str(ws.paths[name]), model_path, seed, config.walk,
                      True, config.margin, config.corrections_per_run, config.expert,
                      inspect_seed=inspect)
                 for name, (seed, inspect) in zip(train, correction_seeds(config, r))]
@@ -523,21 +422,21 @@ class Evaluation:
                    for fs in PAPER_FEATURE_SETS)
 
 
-def evaluate(ws: Workspace, runner: _Runner) -> Evaluation:
+def evaluate(ws: Workspace, runner: Runner) -> Evaluation:
     """The three functions, the flat baseline and the two references on the test board."""
     config, walk_cfg = ws.config, ws.config.walk
     seeds = evaluation_seeds(config)
     model = {fs: str(ws.model_path(fs)) for fs in PAPER_FEATURE_SETS}
     test = str(ws.paths["test"])
-    jobs = [_Job(f"eval/{fs}/s{s}", test, model[fs], s, walk_cfg)
+    jobs = [RunJob(f"eval/{fs}/s{s}", test, model[fs], s, walk_cfg)
             for fs in PAPER_FEATURE_SETS for s in seeds]
-    jobs += [_Job(f"eval/flat/s{s}", str(ws.paths["flat"]), model[ROBOT_FEATURE_SET], s,
+    jobs += [RunJob(f"eval/flat/s{s}", str(ws.paths["flat"]), model[ROBOT_FEATURE_SET], s,
                   walk_cfg) for s in seeds]
     # References on the same board and seeds: the expert choosing every foothold itself
     # (the best a function learned from it can hope for) and the hand-tuned default.
-    jobs += [_Job(f"eval/expert/s{s}", test, None, s, walk_cfg, expert=config.expert,
+    jobs += [RunJob(f"eval/expert/s{s}", test, None, s, walk_cfg, expert=config.expert,
                   judge=True) for s in seeds]
-    jobs += [_Job(f"eval/default/s{s}", test, None, s, walk_cfg) for s in seeds]
+    jobs += [RunJob(f"eval/default/s{s}", test, None, s, walk_cfg) for s in seeds]
     runner.run(jobs, "evaluation runs")
     store = runner.store
     rows = (*PAPER_FEATURE_SETS, *TABLE2_REFERENCES)
@@ -549,7 +448,7 @@ def evaluate(ws: Workspace, runner: _Runner) -> Evaluation:
     return Evaluation(seeds, table2, {fs: _slips(store, f"eval/{fs}/") for fs in rows}, strip)
 
 
-def sweep_difficulties(ws: Workspace, runner: _Runner, evaluation: Evaluation) -> dict:
+def sweep_difficulties(ws: Workspace, runner: Runner, evaluation: Evaluation) -> dict:
     """Harder test boards, walked only if every function crossed every time on the test board."""
     if not evaluation.all_succeed:
         return {}
@@ -557,7 +456,7 @@ def sweep_difficulties(ws: Workspace, runner: _Runner, evaluation: Evaluation) -
     sweep = {}
     for d in ws.config.sweep_difficulties:
         board = str(ws.paths[f"sweep{d:g}"])
-        jobs = [_Job(f"sweep/{d:g}/{fs}/s{s}", board, str(ws.model_path(fs)), s, ws.config.walk)
+        jobs = [RunJob(f"sweep/{d:g}/{fs}/s{s}", board, str(ws.model_path(fs)), s, ws.config.walk)
                 for fs in PAPER_FEATURE_SETS for s in seeds]
         runner.run(jobs, f"sweep {d:g} runs")
         sweep[f"{d:g}"] = {fs: _summary(runner.store, f"sweep/{d:g}/{fs}/")
@@ -582,7 +481,7 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = Reproduce
                      "boards": {name: {"modules": [list(m) for m in spec], "seed": seed}
                                 for name, (spec, seed) in boards(config).items()}}
     with DemoStore(ws.out / STORE_NAME, create=True) as store:
-        runner = _Runner(store, ws.by_hash, processes or usable_cores(), on_run, log)
+        runner = Runner(store, ws.by_hash, processes or usable_cores(), on_run, log)
         corrections = correction_rounds(ws, runner)
         results["rounds"] = corrections.rounds
         results["demonstrations"] = _demo_summary(corrections.demos, ws.by_hash)

@@ -12,7 +12,7 @@ alone, exactly as a human expert skims the good parts of a run.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -85,6 +85,17 @@ def inspect_run(run: RunRecord, hmap: HeightMap, expert: Expert, margin: float =
             label = int(expert.choose(hmap, step.state, step.candidates, rng))
         out.append(Correction(step.k, step.chosen, int(b), float(sf), label))
     return out
+
+
+def worst_corrections(corrections: list[Correction], margin: float, cap: int | None
+                      ) -> list[Correction]:
+    """The corrections the expert labels: every shortfall above ``margin`` (value units), or the
+    worst ``cap`` of them (ties: the earlier step); the others keep their verdict, unlabelled."""
+    chosen = [c for c in corrections if c.label is not None and c.shortfall > margin]
+    if cap is not None and len(chosen) > cap:
+        chosen = sorted(chosen, key=lambda c: (-c.shortfall, c.k))[:cap]
+    keep = {c.k for c in chosen}
+    return [c if c.k in keep else replace(c, label=None) for c in corrections]
 
 
 def corrections_to_demonstrations(run: RunRecord, run_key: str, corrections: list[Correction],

@@ -1,0 +1,310 @@
+"""The walking controller's ablation: each part switched off alone, on the same boards and seeds.
+
+``footfall ablation`` measures what each part of the walking controller
+(:mod:`footfall.sim.episode`: the reflexes of :mod:`footfall.control.reflexes`,
+the stance load control of :mod:`footfall.control.load`, the COG plan within
+the legs' reach of :mod:`footfall.control.cog`) is worth. Every *variant* is
+the default :class:`~footfall.sim.episode.WalkConfig` with one change
+(:data:`VARIANTS`, a registry: a new part of the controller adds its variant
+with :func:`register_variant`). Each variant walks, with the walking expert
+choosing every foothold and with the hand-tuned reward, over
+
+* the test board of issue 18 -- ``rocky:0.7 steps:0.7``, board seed 500,
+  the board ``make run`` makes for seed 0 -- with run seeds 5000-5020, and
+* the six calibration boards ``rocky:D steps:D``, D = 0.5, 0.6, 0.7, board
+  seeds 800 and 801, with run seeds 0-7,
+
+with the candidate set F within 3 cm of the gait-nominal foothold, as the
+reproduction walks. The same board and seed give every variant the same
+start pose, registration error, friction and sensor noise, so the variants
+are compared *paired*: for each variant, the runs it crossed and the
+defaults did not (won), and the reverse (lost), with the two-sided exact
+sign test's p-value on those discordant runs (McNemar's exact test). The
+failure taxonomy counts how the failed runs ended
+(:mod:`footfall.sim.explain`'s cause).
+
+Every run is stored under the key ``variant/who/board/sSEED`` in
+``ablation.sqlite`` as it arrives (:class:`footfall.experiments.runs.Runner`),
+so an ablation stopped at any point resumes without walking a run twice;
+``config.json`` holds the settings, and a folder with other settings is
+refused. The results go to ``ablation.json`` and ``ablation.md``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Callable
+
+from footfall.core.compute import usable_cores
+from footfall.core.errors import FootfallError
+from footfall.core.files import write_text_atomic
+from footfall.core.heightmap import HeightMap
+from footfall.core.params import Params, at_least, param
+from footfall.data.store import DemoStore
+from footfall.experiments.reproduce import reproduction_walk
+from footfall.experiments.runs import RunJob, Runner, claim_folder
+from footfall.expert.synthetic import walking_expert
+from footfall.sim.episode import WalkConfig
+from footfall.terrain import make_board
+
+STORE_NAME = "ablation.sqlite"
+WHO = ("expert", "hand")  # who chooses the footholds: the walking expert, the hand-tuned reward
+Spec = tuple[tuple[str, float], ...]  # a board: (kind, difficulty) of each module
+
+
+# ------------------------------------------------------------------ variants
+@dataclass(frozen=True)
+class Variant:
+    """A controller variant: the default walk with one change."""
+
+    name: str  # the key in VARIANTS and in run keys (no "/")
+    description: str  # one line, for the table
+    change: Callable[[WalkConfig], WalkConfig]  # the default walk -> this variant's walk
+
+
+VARIANTS: dict[str, Variant] = {}
+
+
+def register_variant(name: str, description: str,
+                     change: Callable[[WalkConfig], WalkConfig]) -> Variant:
+    """Add a controller variant to :data:`VARIANTS` (a new part of the controller adds its own)."""
+    if not name or "/" in name or name in VARIANTS:
+        raise FootfallError(f"a variant needs a new name without '/', got {name!r}")
+    VARIANTS[name] = Variant(name, description, change)
+    return VARIANTS[name]
+
+
+def _reflexes(walk: WalkConfig, **switches: bool) -> WalkConfig:
+    return replace(walk, reflexes=replace(walk.reflexes, **switches))
+
+
+def _no_load_control(walk: WalkConfig) -> WalkConfig:
+    return replace(walk, lowlevel=replace(walk.lowlevel, load_gain=0.0))
+
+
+def _no_reach(walk: WalkConfig) -> WalkConfig:
+    return replace(walk, cog=replace(walk.cog, reach=None))
+
+
+register_variant("defaults", "the default controller", lambda w: w)
+register_variant("no-lift-off-gate", "without the lift-off gate",
+                 lambda w: _reflexes(w, lift_off_gate=False))
+register_variant("no-touchdown-check", "without the touch-down check",
+                 lambda w: _reflexes(w, touchdown_check=False))
+register_variant("no-tilt-reflex", "without the tilt reflex",
+                 lambda w: _reflexes(w, tilt_reflex=False))
+register_variant("no-load-control", "without the stance load control", _no_load_control)
+register_variant("no-cog-reach", "without the COG plan within the legs' reach", _no_reach)
+register_variant("none", "no reflexes, no load control, no reach (the controller before "
+                 "issue 18)", lambda w: _no_reach(_no_load_control(_reflexes(
+                     w, lift_off_gate=False, touchdown_check=False, tilt_reflex=False,
+                     slip_reflex=False))))
+register_variant("with-slip-reflex", "with the stance slip reflex (off by default)",
+                 lambda w: _reflexes(w, slip_reflex=True))
+
+
+# ------------------------------------------------------------------ settings
+def _is_spec(value: object) -> bool:
+    return (isinstance(value, tuple) and len(value) > 0
+            and all(isinstance(m, tuple) and len(m) == 2 and isinstance(m[0], str)
+                    and isinstance(m[1], (int, float)) and 0 <= m[1] <= 1 for m in value))
+
+
+def _names(value: object, known: tuple[str, ...] | dict) -> bool:
+    return (isinstance(value, tuple) and len(value) > 0 and len(set(value)) == len(value)
+            and all(v in known for v in value))
+
+
+@dataclass(frozen=True)
+class AblationConfig(Params):
+    """The ablation's boards, seeds and variants; written next to its results."""
+
+    variants: tuple[str, ...] = param(
+        tuple(VARIANTS), check=lambda v: _names(v, VARIANTS),
+        must=f"a tuple of distinct variant names ({', '.join(VARIANTS)})",
+        doc="the controller variants, compared with 'defaults' (walked whether listed or not)")
+    who: tuple[str, ...] = param(WHO, check=lambda v: _names(v, WHO),
+                                 must="a tuple of 'expert' and / or 'hand'",
+                                 doc="who chooses the footholds")
+    test_board: Spec = param((("rocky", 0.7), ("steps", 0.7)), check=_is_spec,
+                             must="a tuple of (kind, difficulty in [0, 1])",
+                             doc="the test board's modules (issue 18's board)")
+    test_board_seed: int = param(500, range=at_least(0), doc="the test board's seed")
+    test_runs: int = param(21, range=at_least(0), doc="runs on the test board")
+    test_seed: int = param(5000, range=at_least(0), doc="first run seed on the test board")
+    calibration_difficulties: tuple[float, ...] = param(
+        (0.5, 0.6, 0.7), unit="-",
+        check=lambda v: isinstance(v, tuple) and all(0 <= d <= 1 for d in v),
+        must="a tuple of numbers in [0, 1]",
+        doc="each a calibration board rocky:D steps:D per board seed")
+    calibration_board_seeds: tuple[int, ...] = param(
+        (800, 801), check=lambda v: isinstance(v, tuple) and all(
+            isinstance(s, int) and s >= 0 for s in v), must="a tuple of seeds >= 0",
+        doc="board seeds of the calibration boards")
+    calibration_runs: int = param(8, range=at_least(0), doc="runs on each calibration board")
+    calibration_seed: int = param(0, range=at_least(0), doc="first run seed on each")
+    walk: WalkConfig = param(factory=lambda: reproduction_walk(),
+                             doc="the walk every variant changes: the defaults with F within "
+                                 "the reproduction's search radius")
+
+    @classmethod
+    def quick(cls) -> AblationConfig:
+        """A small version (about a minute on two cores) for a smoke test."""
+        return cls(variants=("defaults", "no-tilt-reflex"), who=("hand",),
+                   test_board=(("rocky", 0.5),), test_runs=2, calibration_difficulties=(0.4,),
+                   calibration_board_seeds=(800,), calibration_runs=1)
+
+    def variant_walk(self, variant: str) -> WalkConfig:
+        """The walking settings of ``variant``: its change of :attr:`walk`."""
+        return VARIANTS[variant].change(self.walk)
+
+    def boards(self) -> dict[str, tuple[Spec, int, int, int]]:
+        """Board name -> (modules, board seed, runs, first run seed)."""
+        out = {"test": (self.test_board, self.test_board_seed, self.test_runs, self.test_seed)}
+        for d in self.calibration_difficulties:
+            for s in self.calibration_board_seeds:
+                out[f"cal{d:g}-{s}"] = ((("rocky", d), ("steps", d)), s, self.calibration_runs,
+                                        self.calibration_seed)
+        return {k: v for k, v in out.items() if v[2] > 0}
+
+
+def _variants(config: AblationConfig) -> list[str]:
+    """The variants walked: 'defaults' first (every other is compared with it)."""
+    return ["defaults"] + [v for v in config.variants if v != "defaults"]
+
+
+def ablation_jobs(config: AblationConfig, paths: dict[str, Path]) -> list[RunJob]:
+    """Every run of the ablation, keyed ``variant/who/board/sSEED``.
+
+    The hand-tuned reward's runs come first (each takes about a sixth of an expert's run,
+    whose judge weighs every candidate's terrain), then the expert's, a variant at a time.
+    """
+    jobs = []
+    for who in sorted(config.who, key=lambda w: w == "expert"):
+        for v in _variants(config):
+            walk = config.variant_walk(v)
+            expert = walking_expert(walk.footstep.lead)
+            for name, (_, _, runs, seed) in config.boards().items():
+                jobs += [RunJob(f"{v}/{who}/{name}/s{s}", str(paths[name]), None, s, walk,
+                                expert=expert, judge=who == "expert")
+                         for s in range(seed, seed + runs)]
+    return jobs
+
+
+# ------------------------------------------------------------------ results
+def sign_test(won: int, lost: int) -> float:
+    """Two-sided exact sign test p-value [-] of ``won`` against ``lost`` discordant pairs."""
+    from scipy.stats import binomtest
+
+    n = won + lost
+    return 1.0 if n == 0 else float(binomtest(won, n, 0.5).pvalue)
+
+
+def _outcomes(store: DemoStore) -> dict[str, dict]:
+    """Run key -> result of every stored run."""
+    return {r["key"]: r["result"] for r in store.runs()}
+
+
+def summarise_ablation(config: AblationConfig, results: dict[str, dict]) -> dict:
+    """Per variant and chooser: crossings on the test and calibration boards, the failure
+    taxonomy, the mean speed [cm/s] of the crossings, and the paired comparison with the
+    defaults. ``results``: run key -> stored result."""
+    boards = config.boards()
+    out: dict = {}
+    for v in _variants(config):
+        out[v] = {"description": VARIANTS[v].description}
+        for who in config.who:
+            row: dict = {"boards": {}, "causes": {}, "won": 0, "lost": 0}
+            speeds = []
+            for name, (_, _, runs, seed) in boards.items():
+                ok = 0
+                for s in range(seed, seed + runs):
+                    r = results[f"{v}/{who}/{name}/s{s}"]
+                    base = results[f"defaults/{who}/{name}/s{s}"]["success"]
+                    ok += bool(r["success"])
+                    row["won"] += bool(r["success"]) and not base
+                    row["lost"] += base and not r["success"]
+                    if r["success"]:
+                        speeds.append(r["speed_cm_s"])
+                    else:
+                        cause = (r.get("explanation") or {}).get("cause") or r.get("reason", "?")
+                        row["causes"][cause] = row["causes"].get(cause, 0) + 1
+                row["boards"][name] = {"successes": ok, "runs": runs}
+            cal = [b for n, b in row["boards"].items() if n != "test"]
+            row["test"] = row["boards"].get("test")
+            row["calibration"] = ({"successes": sum(b["successes"] for b in cal),
+                                   "runs": sum(b["runs"] for b in cal)} if cal else None)
+            row["speed_cm_s"] = sum(speeds) / len(speeds) if speeds else None
+            row["p_value"] = sign_test(row["won"], row["lost"])
+            out[v][who] = row
+    return out
+
+
+def _count(c: dict | None) -> str:
+    return "-" if c is None else f"{c['successes']} / {c['runs']}"
+
+
+def ablation_markdown(config: AblationConfig, summary: dict) -> str:
+    """The ablation table and the failure taxonomy, as Markdown."""
+    head = ["variant"]
+    for who in config.who:
+        label = "expert" if who == "expert" else "hand-tuned"
+        head += [f"{label}, test board", f"{label}, calibration boards",
+                 f"{label}: won / lost vs defaults (p)"]
+    lines = ["| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
+    for v, row in summary.items():
+        cells = [row["description"] if v == "defaults" else f"{v}: {row['description']}"]
+        for who in config.who:
+            r = row[who]
+            cells += [_count(r["test"]), _count(r["calibration"]),
+                      "-" if v == "defaults" else f"+{r['won']} / -{r['lost']} ({r['p_value']:.2f})"]
+        lines.append("| " + " | ".join(cells) + " |")
+    lines += ["", "Failure taxonomy (all boards; footfall.sim.explain's cause of each failed "
+              "run):", ""]
+    for v, row in summary.items():
+        for who in config.who:
+            causes = ", ".join(f"{n} x {c}" for c, n in sorted(row[who]["causes"].items(),
+                                                                 key=lambda x: (-x[1], x[0])))
+            speed = row[who]["speed_cm_s"]
+            lines.append(f"- {v}, {who}: {causes or 'no failures'}"
+                         + ("" if speed is None else f"; crossings at {speed:.2f} cm/s"))
+    return "\n".join(lines) + "\n"
+
+
+# ------------------------------------------------------------------ the job
+def _make_boards(out: Path, config: AblationConfig) -> dict[str, Path]:
+    folder = out / "terrain"
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = {}
+    for name, (spec, seed, _, _) in config.boards().items():
+        path = folder / f"{name}.npz"
+        if not path.exists():  # saved atomically: a file left by a stopped ablation is whole
+            make_board(list(spec), seed=seed).save(path)
+        paths[name] = path
+    return paths
+
+
+def run_ablation(out: str | os.PathLike, config: AblationConfig = AblationConfig(),
+                 processes: int | None = None, log: Callable[[str], None] = print) -> dict:
+    """Walk (or resume) the ablation into ``out``; return the summary (also ablation.json/.md)."""
+    out = Path(out)
+    claim_folder(out, config.to_dict(), "an ablation")
+    paths = _make_boards(out, config)
+    maps = {n: HeightMap.load(p) for n, p in paths.items()}
+    by_hash = {m.content_hash(): m for m in maps.values()}
+    jobs = ablation_jobs(config, paths)
+    with DemoStore(out / STORE_NAME, create=True) as store:
+        Runner(store, by_hash, processes or usable_cores(), None, log).run(jobs, "ablation runs")
+        results = _outcomes(store)
+    missing = [j.key for j in jobs if j.key not in results]
+    if missing:  # cannot happen unless the store was edited by hand
+        raise FootfallError(f"{len(missing)} ablation runs are missing from the store")
+    summary = summarise_ablation(config, results)
+    write_text_atomic(out / "ablation.json", json.dumps(
+        {"config": config.to_dict(), "variants": summary}, indent=1, sort_keys=True))
+    write_text_atomic(out / "ablation.md", "# Walking controller ablation\n\n"
+                      + ablation_markdown(config, summary))
+    return summary

@@ -1,0 +1,137 @@
+"""Batches of stored runs: a job per run, run where it is not yet stored, each kept on arrival.
+
+An experiment that walks many runs (the reproduction, the walking ablation)
+describes each as a :class:`RunJob` -- a unique key, the board file, the
+reward (a model file or the hand-tuned default, or the walking expert
+choosing every foothold), the seed and the walking settings -- and hands the
+list to a :class:`Runner`. The runner skips the keys its store already
+holds, walks the rest in parallel worker processes (one core each) and
+stores every run, with the expert's corrections of it if asked for, in one
+transaction as it arrives: an experiment stopped at any point and started
+again walks only what is missing, and the result does not depend on the
+order in which the workers finish.
+"""
+
+from __future__ import annotations
+
+import json
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field, replace
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Callable
+
+from footfall.core.heightmap import HeightMap
+from footfall.data.runlog import RunRecord
+from footfall.data.store import DemoStore
+from footfall.expert.synthetic import ExpertConfig
+from footfall.sim.episode import WalkConfig
+
+
+@dataclass(frozen=True)
+class RunJob:
+    """One run of an experiment; everything a worker process needs (paths, not maps)."""
+
+    key: str  # unique run key in the store
+    terrain: str  # board file
+    model: str | None  # model file (None: the hand-tuned default reward)
+    seed: int  # the run's seed (start pose, registration, friction, sensors)
+    walk: WalkConfig
+    correct: bool = False  # the expert inspects the run
+    margin: float = 0.0  # [value units] shortfall the expert corrects (with ``correct``)
+    cap: int | None = None  # most corrections labelled per run (the worst ones)
+    expert: ExpertConfig = field(default_factory=ExpertConfig)
+    judge: bool = False  # the expert chooses every foothold itself (model unused)
+    inspect_seed: int = 0  # the expert's randomness while it inspects the run
+
+
+def execute(job: RunJob) -> tuple[RunRecord, list]:
+    """One run (in a worker process): walk, and the expert's corrections if asked for."""
+    from threadpoolctl import threadpool_limits
+
+    from footfall.experiments.batch import reward_source
+    from footfall.expert.corrections import (
+        corrections_to_demonstrations,
+        inspect_run,
+        worst_corrections,
+    )
+    from footfall.expert.synthetic import SyntheticExpert
+    from footfall.sim.episode import walk
+
+    hmap = HeightMap.load(job.terrain)
+    # One core per run: the stack's small matrix products only lose to BLAS threads
+    # fighting over the cores the other runs use.
+    with threadpool_limits(limits=1):
+        judge = SyntheticExpert(job.expert).values if job.judge else None
+        record = walk(hmap, reward_source(job.model, hmap), job.seed, job.walk, judge=judge)
+        record = replace(record, key=job.key)
+        demos = []
+        if job.correct:
+            expert = SyntheticExpert(job.expert)
+            found = inspect_run(record, hmap, expert, job.margin, rng=job.inspect_seed)
+            found = worst_corrections(found, job.margin, job.cap)
+            demos = corrections_to_demonstrations(record, job.key, found, expert)
+    return record, demos
+
+
+@dataclass
+class Runner:
+    """Runs jobs not yet in the store, in parallel; each run is stored with its demos on arrival."""
+
+    store: DemoStore
+    terrains: dict[str, HeightMap]  # content hash -> board (stored with the first run on it)
+    processes: int
+    on_run: Callable[[str], None] | None  # called with each stored run's key
+    log: Callable[[str], None]
+
+    def run(self, jobs: list[RunJob], desc: str) -> None:
+        """Walk the jobs whose keys are not stored yet, with a progress bar named ``desc``."""
+        from tqdm import tqdm
+
+        done = {r["key"] for r in self.store.runs()}
+        todo = [j for j in jobs if j.key not in done]
+        if len(todo) < len(jobs):
+            self.log(f"{desc}: {len(jobs) - len(todo)} of {len(jobs)} runs already stored")
+        if not todo:
+            return
+        with tqdm(total=len(todo), desc=desc, unit="run", disable=None, dynamic_ncols=True) as bar:
+            if self.processes <= 1 or len(todo) == 1:
+                for job in todo:
+                    self._keep(*execute(job), bar)
+                return
+            with ProcessPoolExecutor(max_workers=min(self.processes, len(todo)),
+                                     mp_context=get_context("spawn")) as pool:
+                futures = [pool.submit(execute, job) for job in todo]
+                try:
+                    for f in as_completed(futures):
+                        self._keep(*f.result(), bar)
+                except BaseException:
+                    for f in futures:
+                        f.cancel()
+                    raise
+
+    def _keep(self, record: RunRecord, demos: list, bar) -> None:
+        self.store.add_run(record, terrains=[self.terrains[record.terrain_hash]],
+                           demonstrations=demos)
+        bar.update(1)
+        if self.on_run is not None:
+            self.on_run(record.key)
+
+
+def claim_folder(out: Path, settings: dict, what: str) -> None:
+    """Make the folder ``out`` an experiment's, with ``settings`` in its ``config.json``.
+
+    A folder that holds ``what`` (e.g. "a reproduction") with other settings is refused,
+    so that a resumed experiment never mixes runs of two settings.
+    """
+    from footfall.core.errors import FootfallError
+    from footfall.core.files import write_text_atomic
+
+    if out.exists() and not out.is_dir():
+        raise FootfallError(f"output path is not a directory: {out}")
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "config.json"
+    mine = json.dumps(settings, sort_keys=True, indent=1)
+    if path.exists() and path.read_text() != mine:
+        raise FootfallError(f"{out} holds {what} with other settings; use another --out")
+    write_text_atomic(path, mine)

@@ -1,0 +1,136 @@
+"""The walking ablation: variants change one thing each, runs are paired, a stopped one resumes."""
+
+import json
+from dataclasses import replace
+
+import pytest
+
+from cli_helpers import assert_user_error, run
+from footfall.core.errors import FootfallError
+from footfall.data.store import DemoStore
+from footfall.experiments.ablation import (
+    VARIANTS,
+    AblationConfig,
+    ablation_markdown,
+    register_variant,
+    run_ablation,
+    sign_test,
+    summarise_ablation,
+)
+from footfall.sim.episode import WalkConfig
+
+TINY = AblationConfig(variants=("defaults", "no-tilt-reflex"), who=("hand",),
+                      test_board=(("rocky", 0.3),), test_runs=2, calibration_difficulties=(),
+                      walk=replace(AblationConfig().walk, max_steps=6))  # six steps a run
+
+
+def test_each_variant_changes_only_its_part():
+    config = AblationConfig()
+    base = config.variant_walk("defaults")
+    assert base == config.walk and base.footstep.search_radius == 0.03
+    for name, changed in (("no-lift-off-gate", "lift_off_gate"),
+                          ("no-touchdown-check", "touchdown_check"),
+                          ("no-tilt-reflex", "tilt_reflex")):
+        walk = config.variant_walk(name)
+        assert getattr(base.reflexes, changed) and not getattr(walk.reflexes, changed)
+        assert walk == replace(base, reflexes=replace(base.reflexes, **{changed: False}))
+    assert config.variant_walk("with-slip-reflex").reflexes.slip_reflex
+    assert not base.reflexes.slip_reflex
+    assert config.variant_walk("no-load-control").lowlevel.load_gain == 0 < base.lowlevel.load_gain
+    assert config.variant_walk("no-cog-reach").cog.reach is None and base.cog.reach is not None
+    none = config.variant_walk("none")
+    assert not any(getattr(none.reflexes, r) for r in
+                   ("lift_off_gate", "touchdown_check", "tilt_reflex", "slip_reflex"))
+    assert none.lowlevel.load_gain == 0 and none.cog.reach is None
+
+
+def test_the_default_boards_are_the_issue_s():
+    boards = AblationConfig().boards()
+    assert boards["test"] == ((("rocky", 0.7), ("steps", 0.7)), 500, 21, 5000)
+    cal = {k: v for k, v in boards.items() if k != "test"}
+    assert len(cal) == 6 and sum(v[2] for v in cal.values()) == 48
+    assert cal["cal0.6-801"] == ((("rocky", 0.6), ("steps", 0.6)), 801, 8, 0)
+
+
+def test_a_variant_name_is_new_and_has_no_slash():
+    for bad in ("defaults", "a/b", ""):
+        with pytest.raises(FootfallError):
+            register_variant(bad, "x", lambda w: w)
+    with pytest.raises(FootfallError, match="variant"):
+        AblationConfig(variants=("no-such-thing",))
+
+
+def test_sign_test_is_the_exact_binomial():
+    assert sign_test(0, 0) == 1.0
+    assert sign_test(5, 0) == pytest.approx(2 * 0.5 ** 5)
+    assert sign_test(3, 3) == 1.0
+    assert sign_test(1, 6) == pytest.approx(sign_test(6, 1))
+
+
+def _result(ok, cause="stance foot slipped"):
+    return ({"success": True, "speed_cm_s": 5.0} if ok else
+            {"success": False, "reason": "fall: trunk tilted", "explanation": {"cause": cause}})
+
+
+def test_the_summary_pairs_runs_by_board_and_seed():
+    config = AblationConfig(variants=("defaults", "no-tilt-reflex"), who=("expert",),
+                            test_runs=3, calibration_difficulties=(0.5,),
+                            calibration_board_seeds=(800,), calibration_runs=2)
+    base = {"test": [True, True, False], "cal0.5-800": [True, False]}
+    other = {"test": [False, True, True], "cal0.5-800": [False, False]}
+    results = {}
+    for v, outcome in (("defaults", base), ("no-tilt-reflex", other)):
+        for board, oks in outcome.items():
+            first = 5000 if board == "test" else 0
+            for i, ok in enumerate(oks):
+                results[f"{v}/expert/{board}/s{first + i}"] = _result(ok)
+    summary = summarise_ablation(config, results)
+    row = summary["no-tilt-reflex"]["expert"]
+    assert row["test"] == {"successes": 2, "runs": 3}
+    assert row["calibration"] == {"successes": 0, "runs": 2}
+    assert (row["won"], row["lost"]) == (1, 2)  # seed 5002 won; 5000 and cal seed 0 lost
+    assert row["p_value"] == pytest.approx(sign_test(1, 2))
+    assert row["causes"] == {"stance foot slipped": 3}
+    assert summary["defaults"]["expert"]["won"] == summary["defaults"]["expert"]["lost"] == 0
+    table = ablation_markdown(config, summary)
+    assert "| no-tilt-reflex: without the tilt reflex | 2 / 3 | 0 / 2 | +1 / -2 (1.00) |" in table
+
+
+@pytest.fixture(scope="module")
+def walked(tmp_path_factory):
+    out = tmp_path_factory.mktemp("ablation")
+    return out, run_ablation(out, TINY, processes=1, log=lambda s: None)
+
+
+def test_an_ablation_walks_every_variant_on_the_same_seeds(walked):
+    out, summary = walked
+    with DemoStore(out / "ablation.sqlite") as store:
+        runs = {r["key"]: r for r in store.runs()}
+    assert sorted(runs) == [f"{v}/hand/test/s{s}" for v in ("defaults", "no-tilt-reflex")
+                            for s in (5000, 5001)]
+    for v in ("defaults", "no-tilt-reflex"):  # each walked with its own settings
+        settings = runs[f"{v}/hand/test/s5000"]["settings"]
+        assert settings["walk"]["reflexes"]["tilt_reflex"] == (v == "defaults")
+    assert json.loads((out / "ablation.json").read_text())["variants"] == summary
+    assert (out / "ablation.md").read_text().count("| no-tilt-reflex") == 1
+
+
+def test_an_ablation_resumes_without_walking_again(walked):
+    out, summary = walked
+    lines = []
+    again = run_ablation(out, TINY, processes=1, log=lines.append)
+    assert again == summary
+    assert lines == ["ablation runs: 4 of 4 runs already stored"]
+    with pytest.raises(FootfallError, match="other settings"):
+        run_ablation(out, replace(TINY, test_runs=3), processes=1, log=lambda s: None)
+
+
+def test_the_command_refuses_an_unknown_variant(tmp_path, capsys):
+    code, _, err = run(capsys, "ablation", "--variant", "no-such", "--out", tmp_path / "a")
+    assert_user_error(code, err, "no-such")
+    assert not (tmp_path / "a").exists()
+
+
+def test_the_registry_lists_the_default_variants_first():
+    assert list(VARIANTS)[0] == "defaults"
+    assert isinstance(AblationConfig().variant_walk("none"), WalkConfig)

@@ -123,6 +123,12 @@ def test_an_ablation_resumes_without_walking_again(walked):
     assert lines == ["ablation runs: 4 of 4 runs already stored"]
     with pytest.raises(FootfallError, match="other settings"):
         run_ablation(out, replace(TINY, test_runs=3), processes=1, log=lambda s: None)
+    # fewer variants in the same folder: their runs are all stored, nothing is walked
+    lines.clear()
+    fewer = run_ablation(out, replace(TINY, variants=("defaults",)), processes=1,
+                         log=lines.append)
+    assert fewer == {"defaults": summary["defaults"]}
+    assert lines == ["ablation runs: 2 of 2 runs already stored"]
 
 
 def test_the_command_refuses_an_unknown_variant(tmp_path, capsys):

@@ -25,9 +25,11 @@ failure taxonomy counts how the failed runs ended
 
 Every run is stored under the key ``variant/who/board/sSEED`` in
 ``ablation.sqlite`` as it arrives (:class:`footfall.experiments.runs.Runner`),
-so an ablation stopped at any point resumes without walking a run twice;
-``config.json`` holds the settings, and a folder with other settings is
-refused. The results go to ``ablation.json`` and ``ablation.md``.
+so an ablation stopped at any point resumes without walking a run twice,
+and another choice of variants or choosers in the same folder walks only
+the runs it does not find; ``config.json`` holds the settings, and a folder
+with other boards, seeds or walk is refused. The store does not know the
+code: after a change to the controller, walk into a new folder. The results go to ``ablation.json`` and ``ablation.md``.
 """
 
 from __future__ import annotations
@@ -291,7 +293,7 @@ def run_ablation(out: str | os.PathLike, config: AblationConfig = AblationConfig
                  processes: int | None = None, log: Callable[[str], None] = print) -> dict:
     """Walk (or resume) the ablation into ``out``; return the summary (also ablation.json/.md)."""
     out = Path(out)
-    claim_folder(out, config.to_dict(), "an ablation")
+    claim_folder(out, config.to_dict(), "an ablation", free=("variants", "who"))
     paths = _make_boards(out, config)
     maps = {n: HeightMap.load(p) for n, p in paths.items()}
     by_hash = {m.content_hash(): m for m in maps.values()}

@@ -118,11 +118,13 @@ class Runner:
             self.on_run(record.key)
 
 
-def claim_folder(out: Path, settings: dict, what: str) -> None:
+def claim_folder(out: Path, settings: dict, what: str, free: tuple[str, ...] = ()) -> None:
     """Make the folder ``out`` an experiment's, with ``settings`` in its ``config.json``.
 
     A folder that holds ``what`` (e.g. "a reproduction") with other settings is refused,
-    so that a resumed experiment never mixes runs of two settings.
+    so that a resumed experiment never mixes runs of two settings. Settings named in
+    ``free`` may differ: they choose which runs are walked, not how (their run keys tell
+    the runs apart).
     """
     from footfall.core.errors import FootfallError
     from footfall.core.files import write_text_atomic
@@ -131,7 +133,13 @@ def claim_folder(out: Path, settings: dict, what: str) -> None:
         raise FootfallError(f"output path is not a directory: {out}")
     out.mkdir(parents=True, exist_ok=True)
     path = out / "config.json"
-    mine = json.dumps(settings, sort_keys=True, indent=1)
-    if path.exists() and path.read_text() != mine:
-        raise FootfallError(f"{out} holds {what} with other settings; use another --out")
-    write_text_atomic(path, mine)
+    if path.exists():
+        try:
+            held = json.loads(path.read_text())
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise FootfallError(f"{path}: unreadable settings ({exc})") from None
+        mine = json.loads(json.dumps(settings))  # as it would read back
+        if not isinstance(held, dict) or ({k: v for k, v in held.items() if k not in free}
+                                          != {k: v for k, v in mine.items() if k not in free}):
+            raise FootfallError(f"{out} holds {what} with other settings; use another --out")
+    write_text_atomic(path, json.dumps(settings, sort_keys=True, indent=1))

@@ -26,7 +26,9 @@ from footfall.core.stats import wilson_interval
 from footfall.data.runlog import RunRecord
 from footfall.data.schema import SUFFIXES as STORE_SUFFIXES
 from footfall.data.store import DemoStore
-from footfall.sim.episode import Frames, Walk, WalkConfig, walk
+from footfall.experiments.runs import RunJob, execute
+from footfall.expert.synthetic import walking_expert
+from footfall.sim.episode import Frames, Walk, WalkConfig
 
 
 def reward_source(model_path: str | os.PathLike | None, hmap: HeightMap):
@@ -51,21 +53,9 @@ def reward_source(model_path: str | os.PathLike | None, hmap: HeightMap):
 
 def expert_judge(config: WalkConfig):
     """The walking expert's value (:func:`footfall.expert.synthetic.walking_expert`) as a foothold judge."""
-    from footfall.expert.synthetic import SyntheticExpert, walking_expert
+    from footfall.expert.synthetic import SyntheticExpert
 
     return SyntheticExpert(walking_expert(config.footstep.lead)).values
-
-
-def _one_run(terrain_path: str, model_path: str | None, seed: int, config: WalkConfig,
-             expert: bool = False) -> RunRecord:
-    from threadpoolctl import threadpool_limits
-
-    hmap = HeightMap.load(terrain_path)
-    # One core per run: the stack's small matrix products only lose to BLAS threads
-    # fighting over the cores the other runs use.
-    with threadpool_limits(limits=1):
-        return walk(hmap, reward_source(model_path, hmap), seed, config,
-                    judge=expert_judge(config) if expert else None)
 
 
 def walk_many(terrain_path: str | os.PathLike, model_path: str | os.PathLike | None, runs: int,
@@ -86,22 +76,22 @@ def walk_many(terrain_path: str | os.PathLike, model_path: str | os.PathLike | N
     reward_source(model_path, hmap)  # fail early, in this process, on a bad model
     n = min(processes or usable_cores(), runs)
     seeds = [seed + i for i in range(runs)]
+    model = None if model_path is None else str(model_path)
+    judge = walking_expert(config.footstep.lead)  # what expert_judge(config) judges with
+    jobs = {s: RunJob(None, str(terrain_path), model, s, config, expert=judge, judge=expert)
+            for s in seeds}
     out: dict[int, RunRecord] = {}
     if n == 1:
         for s in seeds:
-            out[s] = _one_run(str(terrain_path), None if model_path is None else str(model_path),
-                              s, config, expert)
+            out[s] = execute(jobs[s])[0]
             if progress:
                 progress(out[s])
     else:
         # spawn: a fresh interpreter per worker (no forked BLAS or renderer state)
         with ProcessPoolExecutor(max_workers=n, mp_context=get_context("spawn")) as pool:
-            futures = {pool.submit(_one_run, str(terrain_path),
-                                   None if model_path is None else str(model_path), s, config,
-                                   expert): s
-                       for s in seeds}
+            futures = {pool.submit(execute, jobs[s]): s for s in seeds}
             for f in as_completed(futures):
-                out[futures[f]] = f.result()
+                out[futures[f]] = f.result()[0]
                 if progress:
                     progress(out[futures[f]])
     return [out[s] for s in seeds]

@@ -32,7 +32,7 @@ from footfall.sim.episode import WalkConfig
 class RunJob:
     """One run of an experiment; everything a worker process needs (paths, not maps)."""
 
-    key: str  # unique run key in the store
+    key: str | None  # unique run key in the store (None: a run not for a store)
     terrain: str  # board file
     model: str | None  # model file (None: the hand-tuned default reward)
     seed: int  # the run's seed (start pose, registration, friction, sensors)

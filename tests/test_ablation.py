@@ -93,7 +93,7 @@ def test_the_summary_pairs_runs_by_board_and_seed():
     assert row["causes"] == {"stance foot slipped": 3}
     assert summary["defaults"]["expert"]["won"] == summary["defaults"]["expert"]["lost"] == 0
     table = ablation_markdown(config, summary)
-    assert "| no-tilt-reflex: without the tilt reflex | 2 / 3 | 0 / 2 | +1 / -2 (1.00) |" in table
+    assert "| no-tilt-reflex: without the tilt reflex | 2 / 3 | 0 / 2 | +1 / -2 (1) |" in table
 
 
 @pytest.fixture(scope="module")

@@ -398,7 +398,7 @@ def test_walk_video_with_an_unknown_suffix_fails_before_walking(good_map, tmp_pa
     def no_walk(*args, **kwargs):
         raise AssertionError("the walk started")
 
-    monkeypatch.setattr(batch, "walk", no_walk)
+    monkeypatch.setattr(batch, "Walk", no_walk)  # what `footfall walk` runs
     code, _, err = run(capsys, "walk", "--terrain", good_map, "--seed", "0", "--video",
                        tmp_path / "out.txt")
     assert_user_error(code, err, "--video: ")

@@ -262,7 +262,7 @@ def ablation_markdown(config: AblationConfig, summary: dict) -> str:
         for who in config.who:
             r = row[who]
             cells += [_count(r["test"]), _count(r["calibration"]),
-                      "-" if v == "defaults" else f"+{r['won']} / -{r['lost']} ({r['p_value']:.2f})"]
+                      "-" if v == "defaults" else f"+{r['won']} / -{r['lost']} ({r['p_value']:.2g})"]
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", "Failure taxonomy (all boards; footfall.sim.explain's cause of each failed "
               "run):", ""]

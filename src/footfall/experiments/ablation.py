@@ -47,10 +47,9 @@ from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, at_least, param
 from footfall.data.store import DemoStore
 from footfall.experiments.reproduce import reproduction_walk
-from footfall.experiments.runs import RunJob, Runner, claim_folder
+from footfall.experiments.runs import RunJob, Runner, board_files, claim_folder
 from footfall.expert.synthetic import walking_expert
 from footfall.sim.episode import WalkConfig
-from footfall.terrain import make_board
 
 STORE_NAME = "ablation.sqlite"
 WHO = ("expert", "hand")  # who chooses the footholds: the walking expert, the hand-tuned reward
@@ -210,39 +209,40 @@ def _outcomes(store: DemoStore) -> dict[str, dict]:
     return {r["key"]: r["result"] for r in store.runs()}
 
 
+def _row(config: AblationConfig, results: dict[str, dict], v: str, who: str) -> dict:
+    """One variant's runs by one chooser, against the defaults' on the same boards and seeds."""
+    row: dict = {"boards": {}, "causes": {}, "won": 0, "lost": 0}
+    speeds = []
+    for name, (_, _, runs, seed) in config.boards().items():
+        ok = 0
+        for s in range(seed, seed + runs):
+            r = results[f"{v}/{who}/{name}/s{s}"]
+            base = results[f"defaults/{who}/{name}/s{s}"]["success"]
+            ok += bool(r["success"])
+            row["won"] += bool(r["success"]) and not base
+            row["lost"] += base and not r["success"]
+            if r["success"]:
+                speeds.append(r["speed_cm_s"])
+            else:
+                cause = (r.get("explanation") or {}).get("cause") or r.get("reason", "?")
+                row["causes"][cause] = row["causes"].get(cause, 0) + 1
+        row["boards"][name] = {"successes": ok, "runs": runs}
+    cal = [b for n, b in row["boards"].items() if n != "test"]
+    row["test"] = row["boards"].get("test")
+    row["calibration"] = ({"successes": sum(b["successes"] for b in cal),
+                           "runs": sum(b["runs"] for b in cal)} if cal else None)
+    row["speed_cm_s"] = sum(speeds) / len(speeds) if speeds else None
+    row["p_value"] = sign_test(row["won"], row["lost"])
+    return row
+
+
 def summarise_ablation(config: AblationConfig, results: dict[str, dict]) -> dict:
     """Per variant and chooser: crossings on the test and calibration boards, the failure
     taxonomy, the mean speed [cm/s] of the crossings, and the paired comparison with the
     defaults. ``results``: run key -> stored result."""
-    boards = config.boards()
-    out: dict = {}
-    for v in _variants(config):
-        out[v] = {"description": VARIANTS[v].description}
-        for who in config.who:
-            row: dict = {"boards": {}, "causes": {}, "won": 0, "lost": 0}
-            speeds = []
-            for name, (_, _, runs, seed) in boards.items():
-                ok = 0
-                for s in range(seed, seed + runs):
-                    r = results[f"{v}/{who}/{name}/s{s}"]
-                    base = results[f"defaults/{who}/{name}/s{s}"]["success"]
-                    ok += bool(r["success"])
-                    row["won"] += bool(r["success"]) and not base
-                    row["lost"] += base and not r["success"]
-                    if r["success"]:
-                        speeds.append(r["speed_cm_s"])
-                    else:
-                        cause = (r.get("explanation") or {}).get("cause") or r.get("reason", "?")
-                        row["causes"][cause] = row["causes"].get(cause, 0) + 1
-                row["boards"][name] = {"successes": ok, "runs": runs}
-            cal = [b for n, b in row["boards"].items() if n != "test"]
-            row["test"] = row["boards"].get("test")
-            row["calibration"] = ({"successes": sum(b["successes"] for b in cal),
-                                   "runs": sum(b["runs"] for b in cal)} if cal else None)
-            row["speed_cm_s"] = sum(speeds) / len(speeds) if speeds else None
-            row["p_value"] = sign_test(row["won"], row["lost"])
-            out[v][who] = row
-    return out
+    return {v: {"description": VARIANTS[v].description,
+                **{who: _row(config, results, v, who) for who in config.who}}
+            for v in _variants(config)}
 
 
 def _count(c: dict | None) -> str:
@@ -277,24 +277,13 @@ def ablation_markdown(config: AblationConfig, summary: dict) -> str:
 
 
 # ------------------------------------------------------------------ the job
-def _make_boards(out: Path, config: AblationConfig) -> dict[str, Path]:
-    folder = out / "terrain"
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = {}
-    for name, (spec, seed, _, _) in config.boards().items():
-        path = folder / f"{name}.npz"
-        if not path.exists():  # saved atomically: a file left by a stopped ablation is whole
-            make_board(list(spec), seed=seed).save(path)
-        paths[name] = path
-    return paths
-
-
 def run_ablation(out: str | os.PathLike, config: AblationConfig = AblationConfig(),
                  processes: int | None = None, log: Callable[[str], None] = print) -> dict:
     """Walk (or resume) the ablation into ``out``; return the summary (also ablation.json/.md)."""
     out = Path(out)
     claim_folder(out, config.to_dict(), "an ablation", free=("variants", "who"))
-    paths = _make_boards(out, config)
+    paths = board_files(out, {name: (spec, seed, True)
+                              for name, (spec, seed, _, _) in config.boards().items()})
     maps = {n: HeightMap.load(p) for n, p in paths.items()}
     by_hash = {m.content_hash(): m for m in maps.values()}
     jobs = ablation_jobs(config, paths)

@@ -59,13 +59,12 @@ from footfall.core.robot import LITTLEDOG
 from footfall.core.seeds import SeedStreams
 from footfall.data.store import DemoStore
 from footfall.experiments.batch import summarise
-from footfall.experiments.runs import RunJob, Runner, claim_folder
+from footfall.experiments.runs import RunJob, Runner, board_files, claim_folder
 from footfall.expert.synthetic import ExpertConfig, walking_expert
 from footfall.features.family import PAPER_FEATURE_SETS
 from footfall.learning.model import LEG_GROUPS, FootholdModel
 from footfall.learning.ranker import SELECTIONS
 from footfall.sim.episode import WalkConfig
-from footfall.terrain import make_board
 
 STORE_NAME = "reproduce.sqlite"
 ROBOT_FEATURE_SET = "both"  # the function the robot walks with between correction rounds
@@ -222,18 +221,6 @@ def planned_seeds(config: ReproduceConfig) -> dict[str, list[int]]:
             "learning": [streams.seed_for("learning")]}
 
 
-def _make_terrain(out: Path, config: ReproduceConfig) -> dict[str, Path]:
-    folder = out / "terrain"
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = {}
-    for name, (spec, seed) in boards(config).items():
-        path = folder / f"{name}.npz"
-        if not path.exists():  # a board is made from its seed; a file left by a stopped run is whole
-            make_board(list(spec), seed=seed, flat_ends=name != "flat").save(path)
-        paths[name] = path
-    return paths
-
-
 @dataclass(frozen=True)
 class Workspace:
     """A reproduction's folder: its settings, boards and seed streams (stage 1)."""
@@ -256,7 +243,8 @@ def open_workspace(out: str | os.PathLike, config: ReproduceConfig) -> Workspace
     out = Path(out)
     claim_folder(out, config.to_dict(), "a reproduction")
     (out / "models").mkdir(exist_ok=True)
-    paths = _make_terrain(out, config)
+    paths = board_files(out, {name: (spec, seed, name != "flat")
+                              for name, (spec, seed) in boards(config).items()})
     maps = {n: HeightMap.load(p) for n, p in paths.items()}
     return Workspace(out, config, paths, maps, {m.content_hash(): m for m in maps.values()},
                      seed_streams(config))

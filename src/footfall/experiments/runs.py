@@ -143,3 +143,22 @@ def claim_folder(out: Path, settings: dict, what: str, free: tuple[str, ...] = (
                                           != {k: v for k, v in mine.items() if k not in free}):
             raise FootfallError(f"{out} holds {what} with other settings; use another --out")
     write_text_atomic(path, json.dumps(settings, sort_keys=True, indent=1))
+
+
+def board_files(out: Path, boards: dict[str, tuple[tuple, int, bool]]) -> dict[str, Path]:
+    """The experiment's boards as files ``out/terrain/NAME.npz``, each made once from its seed.
+
+    ``boards``: name -> (modules as (kind, difficulty) pairs, board seed, flat ends). A board
+    is saved atomically, so a file left by a stopped experiment is whole.
+    """
+    from footfall.terrain import make_board
+
+    folder = out / "terrain"
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = {}
+    for name, (spec, seed, flat_ends) in boards.items():
+        path = folder / f"{name}.npz"
+        if not path.exists():
+            make_board(list(spec), seed=seed, flat_ends=flat_ends).save(path)
+        paths[name] = path
+    return paths

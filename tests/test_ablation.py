@@ -38,6 +38,9 @@ def test_each_variant_changes_only_its_part():
     assert not base.reflexes.slip_reflex
     assert config.variant_walk("no-load-control").lowlevel.load_gain == 0 < base.lowlevel.load_gain
     assert config.variant_walk("no-cog-reach").cog.reach is None and base.cog.reach is not None
+    anchored = config.variant_walk("with-re-anchoring")
+    assert anchored == replace(base, lowlevel=replace(base.lowlevel, anchor_follow_time=0.3))
+    assert base.lowlevel.anchor_follow_time is None
     none = config.variant_walk("none")
     assert not any(getattr(none.reflexes, r) for r in
                    ("lift_off_gate", "touchdown_check", "tilt_reflex", "slip_reflex"))

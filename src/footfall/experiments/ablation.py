@@ -105,6 +105,9 @@ register_variant("none", "no reflexes, no load control, no reach (the controller
                      slip_reflex=False))))
 register_variant("with-slip-reflex", "with the stance slip reflex (off by default)",
                  lambda w: _reflexes(w, slip_reflex=True))
+register_variant("with-re-anchoring", "with slipped stance feet re-anchored where they stand "
+                 "(0.3 s; off by default)",
+                 lambda w: replace(w, lowlevel=replace(w.lowlevel, anchor_follow_time=0.3)))
 
 
 # ------------------------------------------------------------------ settings

@@ -66,6 +66,7 @@ from footfall.control.lowlevel import (
     LowLevelConfig,
     body_rotation,
     joint_targets,
+    reanchor,
     rolled,
     shin_rotations,
     transfer_weight,
@@ -268,6 +269,8 @@ class Walk:
         self.setup_seconds = time.perf_counter() - t0
         self.goal = goal_xy
         self.period = config.lowlevel.period
+        follow = config.lowlevel.anchor_follow_time  # [s] or None (slipped feet held)
+        self._follow_rate = 0.0 if follow is None else 1.0 - math.exp(-self.period / follow)
         self.ticks = round(self.period / self.sim.timestep)
         if self.ticks < 1 or abs(self.ticks * self.sim.timestep - self.period) > 1e-9:
             raise FootfallError("the control period must be a whole number of servo periods")
@@ -306,13 +309,24 @@ class Walk:
         weight = np.where(self._stance, ramp, 1.0 - ramp)
         # Stance feet: where they touched down, moved on as far as their balls have rolled since.
         stance = self._stance
+        forces = (sim.foot_forces()[:, 2]  # [N] the force sensors' vertical readings
+                  if cfg.lowlevel.load_gain > 0 or self._follow_rate > 0
+                  else None)
+        if self._follow_rate > 0:  # slipped feet re-anchored where they stand
+            # (a foot that carries nothing, being unloaded or just set down, is not let go of:
+            # its gap is the body dragging it, not a slip)
+            held = stance & (ramp >= 1.0) & (self._unload >= 1.0) & (
+                forces > cfg.touchdown_force)
+            self._anchor, shift = reanchor(self._anchor, self._targets, self._feet_before,
+                                           held, stance, self._follow_rate)
+            self._correction.shift(shift)
         self._targets[stance] = self._anchor[stance] + rolled(
             self._shin0[stance], shin_rotations(sim.joint_angles(), rot[1])[stance],
             self.robot.foot_radius)
         if cfg.lowlevel.load_gain > 0:  # each stance foot carries its share (its force sensor)
             shares = load_shares(self._feet_before[:, :2], self._com_before,
                                  np.where(stance, ramp, 0.0) * self._unload)
-            self._press = load_offsets(self._press, sim.foot_forces()[:, 2], shares, stance,
+            self._press = load_offsets(self._press, forces, shares, stance,
                                        cfg.lowlevel.load_gain * self.period,
                                        cfg.lowlevel.load_limit)
             self._targets[:, 2] += self._press

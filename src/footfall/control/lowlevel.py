@@ -30,9 +30,10 @@ true body pose (motion capture on the real robot, the simulator here):
   centimetres on rock), and a foot just set down, which carries nothing
   yet, is moved by the whole correction as it enters the commanded frame --
   on the test board's seed 5000 with the expert, 29 mm sideways off the
-  rock rim it was put on, 40 ms after touch-down. Whether letting go of
-  slipped feet is a net gain is not settled: see the ablation variant
-  ``with-re-anchoring``.
+  rock rim it was put on, 40 ms after touch-down. Letting go of slipped
+  feet this way breaks that loop but loses more runs than it wins (the
+  ablation variant ``with-re-anchoring``, README): the feet drift to where
+  the legs' reach ends.
 
 Poses here are (position (3,) [m], rotation matrix (3, 3)) pairs, the
 rotation as :func:`footfall.core.kinematics.rotation_matrix` makes it.
@@ -85,8 +86,7 @@ class LowLevelConfig(Params):
                                              doc="a loaded stance foot off its target is "
                                                  "re-anchored where it stands with this time "
                                                  "constant (reanchor); None: never, the leg pulls "
-                                                 "it back (the default until the ablation shows "
-                                                 "a gain)")
+                                                 "it back (default: the ablation found a net loss)")
     unload_time: float = param(0.15, unit="s", range=within(0, math.inf),
                                doc="with load control, a leg is unloaded over this long before "
                                    "it lifts")
@@ -125,7 +125,6 @@ class BodyCorrection:
         rpy = np.array(desired_rpy, dtype=np.float64)
         rpy[:2] += self.attitude
         return desired_position + self.position, rpy
-
 
     def shift(self, delta: np.ndarray) -> None:
         """Move the position correction by ``delta`` (3,) [m] (what re-anchored feet gave up),
@@ -224,7 +223,7 @@ def reanchor(anchors: np.ndarray, targets: np.ndarray, feet: np.ndarray, follow:
         (anchors moved on by the rolling, and the load offsets) and measured
         foot centres [m], world frame.
     follow, stance : arrays of shape (4,), bool
-        The feet re-anchored (settled stance feet) and all stance feet.
+        The feet re-anchored (settled, loaded stance feet) and all stance feet.
     rate : float
         Share [-] in [0, 1] of the gap closed in this period.
 

@@ -315,10 +315,10 @@ class Walk:
         if self._follow_rate > 0:  # slipped feet re-anchored where they stand
             # (a foot that carries nothing, being unloaded or just set down, is not let go of:
             # its gap is the body dragging it, not a slip)
-            held = stance & (ramp >= 1.0) & (self._unload >= 1.0) & (
+            loaded = stance & (ramp >= 1.0) & (self._unload >= 1.0) & (
                 forces > cfg.touchdown_force)
             self._anchor, shift = reanchor(self._anchor, self._targets, self._feet_before,
-                                           held, stance, self._follow_rate)
+                                           loaded, stance, self._follow_rate)
             self._correction.shift(shift)
         self._targets[stance] = self._anchor[stance] + rolled(
             self._shin0[stance], shin_rotations(sim.joint_angles(), rot[1])[stance],

@@ -21,6 +21,7 @@ from footfall.sim.episode import WalkConfig
 
 TINY = AblationConfig(variants=("defaults", "no-tilt-reflex"), who=("hand",),
                       test_board=(("rocky", 0.3),), test_runs=2, calibration_difficulties=(),
+                      hard_runs=0,
                       walk=replace(AblationConfig().walk, max_steps=6))  # six steps a run
 
 
@@ -41,6 +42,9 @@ def test_each_variant_changes_only_its_part():
     anchored = config.variant_walk("with-re-anchoring")
     assert anchored == replace(base, lowlevel=replace(base.lowlevel, anchor_follow_time=0.3))
     assert base.lowlevel.anchor_follow_time is None
+    handed = config.variant_walk("with-hand-over")
+    assert handed == replace(base, lowlevel=replace(base.lowlevel, hand_over=True))
+    assert not base.lowlevel.hand_over
     none = config.variant_walk("none")
     assert not any(getattr(none.reflexes, r) for r in
                    ("lift_off_gate", "touchdown_check", "tilt_reflex", "slip_reflex"))
@@ -50,7 +54,10 @@ def test_each_variant_changes_only_its_part():
 def test_the_default_boards_are_the_issue_s():
     boards = AblationConfig().boards()
     assert boards["test"] == ((("rocky", 0.7), ("steps", 0.7)), 500, 21, 5000)
-    cal = {k: v for k, v in boards.items() if k != "test"}
+    hard = {k: v for k, v in boards.items() if k.startswith("hard")}
+    assert len(hard) == 4 and sum(v[2] for v in hard.values()) == 64
+    assert hard["hard0.85-902"] == ((("rocky", 0.85), ("steps", 0.85)), 902, 16, 0)
+    cal = {k: v for k, v in boards.items() if k.startswith("cal")}
     assert len(cal) == 6 and sum(v[2] for v in cal.values()) == 48
     assert cal["cal0.6-801"] == ((("rocky", 0.6), ("steps", 0.6)), 801, 8, 0)
 
@@ -78,9 +85,12 @@ def _result(ok, cause="stance foot slipped"):
 def test_the_summary_pairs_runs_by_board_and_seed():
     config = AblationConfig(variants=("defaults", "no-tilt-reflex"), who=("expert",),
                             test_runs=3, calibration_difficulties=(0.5,),
-                            calibration_board_seeds=(800,), calibration_runs=2)
-    base = {"test": [True, True, False], "cal0.5-800": [True, False]}
-    other = {"test": [False, True, True], "cal0.5-800": [False, False]}
+                            calibration_board_seeds=(800,), calibration_runs=2,
+                            hard_board_seeds=(900,), hard_runs=3)
+    base = {"test": [True, True, False], "cal0.5-800": [True, False],
+            "hard0.85-900": [False, False, True]}
+    other = {"test": [False, True, True], "cal0.5-800": [False, False],
+             "hard0.85-900": [True, True, True]}
     results = {}
     for v, outcome in (("defaults", base), ("no-tilt-reflex", other)):
         for board, oks in outcome.items():
@@ -94,9 +104,14 @@ def test_the_summary_pairs_runs_by_board_and_seed():
     assert (row["won"], row["lost"]) == (1, 2)  # seed 5002 won; 5000 and cal seed 0 lost
     assert row["p_value"] == pytest.approx(sign_test(1, 2))
     assert row["causes"] == {"stance foot slipped": 3}
+    # the hard boards are counted and paired apart (seeds 0 and 1 won there, none lost)
+    assert row["hard"] == {"successes": 3, "runs": 3}
+    assert (row["hard_won"], row["hard_lost"]) == (2, 0)
+    assert row["hard_p_value"] == pytest.approx(sign_test(2, 0))
     assert summary["defaults"]["expert"]["won"] == summary["defaults"]["expert"]["lost"] == 0
     table = ablation_markdown(config, summary)
-    assert "| no-tilt-reflex: without the tilt reflex | 2 / 3 | 0 / 2 | +1 / -2 (1) |" in table
+    assert ("| no-tilt-reflex: without the tilt reflex | 2 / 3 | 0 / 2 | +1 / -2 (1) | 3 / 3 "
+            "| +2 / -0 (0.5) |") in table
 
 
 @pytest.fixture(scope="module")

@@ -21,6 +21,12 @@ true body pose (motion capture on the real robot, the simulator here):
   ball has rolled since (:func:`rolled`): the ball foot is fixed to the shin,
   so it rolls a few millimetres forward as the body passes over it, and a
   target that stayed put would make the leg drag it back;
+* optionally (``hand_over``, off by default), whenever a foot takes a new
+  anchor (touch-down) the horizontal body correction is handed over to the
+  stance feet's anchors (:func:`handed_over`): their set-points do not
+  change, and the new foot enters a commanded frame without a correction, so
+  it stays where it was put down instead of being moved by the legs' pulls
+  on slipped feet (below);
 * optionally (``anchor_follow_time``, off by default), a loaded stance foot
   that has moved from its target anyway (a slip, a roll the model does not
   know) is re-anchored where it stands, gradually (:func:`reanchor`), and
@@ -87,6 +93,11 @@ class LowLevelConfig(Params):
                                                  "re-anchored where it stands with this time "
                                                  "constant (reanchor); None: never, the leg pulls "
                                                  "it back (default: the ablation found a net loss)")
+    hand_over: bool = param(False,
+                            doc="when a foot takes a new anchor (touch-down), the horizontal "
+                                "body correction is handed to the stance feet's anchors, their "
+                                "set-points unchanged, so the new foot enters a commanded frame "
+                                "without it and is not dragged by it (handed_over)")
     unload_time: float = param(0.15, unit="s", range=within(0, math.inf),
                                doc="with load control, a leg is unloaded over this long before "
                                    "it lifts")
@@ -131,6 +142,14 @@ class BodyCorrection:
         within its bound."""
         bound = self.config.max_position_correction
         self.position = np.minimum(np.maximum(self.position + delta, -bound), bound)
+
+    def take_horizontal(self) -> np.ndarray:
+        """Zero the x, y position correction; returns what it was (3,) [m], z 0 (its height
+        part, the servo's sag under load, stays)."""
+        taken = np.zeros(3)
+        taken[:2] = self.position[:2]
+        self.position = self.position - taken
+        return taken
 
     def rebase(self, desired_rpy: np.ndarray, new_desired_rpy: np.ndarray) -> None:
         """The desired roll and pitch change from ``desired_rpy`` to ``new_desired_rpy`` (3,)
@@ -238,6 +257,32 @@ def reanchor(anchors: np.ndarray, targets: np.ndarray, feet: np.ndarray, follow:
     move[follow, :2] = rate * (np.asarray(feet)[follow, :2] - np.asarray(targets)[follow, :2])
     count = int(np.count_nonzero(stance))
     return np.asarray(anchors) + move, move.sum(axis=0) / max(count, 1)
+
+
+def handed_over(anchors: np.ndarray, stance: np.ndarray, taken: np.ndarray) -> np.ndarray:
+    """Stance anchors (4, 3) [m] that keep their legs' set-points once the body correction has
+    given up ``taken`` (3,) [m] (:meth:`BodyCorrection.take_horizontal`).
+
+    A stance leg is solved for ``anchor - (desired + correction)`` in the
+    body frame, so moving every stance anchor by ``-taken`` while the
+    correction loses ``taken`` changes no set-point. What changes is the
+    frame a foot set down now enters: the desired one, without the
+    correction. On rock the correction grows to two or three centimetres
+    (the legs' pulls on slipped feet, :func:`reanchor`); entered with it, a
+    foot that carries nothing yet is moved by all of it.
+
+    Parameters
+    ----------
+    anchors : array of shape (4, 3)
+        Anchors [m], world frame.
+    stance : array of shape (4,), bool
+        The stance legs (the foot being set down is not yet one).
+    taken : array of shape (3,)
+        What the correction gave up [m].
+    """
+    out = np.array(anchors, dtype=np.float64)
+    out[np.asarray(stance, dtype=bool)] -= np.asarray(taken, dtype=np.float64)
+    return out
 
 
 def transfer_weight(elapsed: np.ndarray, duration: float) -> np.ndarray:

@@ -14,7 +14,8 @@ logs an event in the run log when it acts:
   they actually stand, by ``gate_margin``; until then the body keeps moving
   toward the triangle's incentre, for at most ``gate_timeout``, after which
   the step is planned anew from where the feet stand;
-* **stance slip reflex** (``slip_reflex``): a loaded stance foot more than
+* **stance slip reflex** (``slip_reflex``): a loaded stance foot (its force
+  sensor reads more than the walk's ``touchdown_force``) more than
   ``slip_distance`` (horizontally) from where it was put down, the ball's
   rolling allowed for, and moving faster than ``slip_speed``, is sliding.
   The body stops, a swinging foot comes down at once; once the slipped foot

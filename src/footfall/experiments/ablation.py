@@ -12,7 +12,11 @@ choosing every foothold and with the hand-tuned reward, over
 * the test board of issue 18 -- ``rocky:0.7 steps:0.7``, board seed 500,
   the board ``make run`` makes for seed 0 -- with run seeds 5000-5020, and
 * the six calibration boards ``rocky:D steps:D``, D = 0.5, 0.6, 0.7, board
-  seeds 800 and 801, with run seeds 0-7,
+  seeds 800 and 801, with run seeds 0-7, and
+* four hard boards ``rocky:0.85 steps:0.85``, board seeds 900-903, with run
+  seeds 0-15: on issue 18's boards the defaults fail about one run in
+  fifteen, too few for 69 paired runs to tell a part's worth from the luck
+  of the seeds; on these about two in five, so their 64 paired runs can,
 
 with the candidate set F within 3 cm of the gait-nominal foothold, as the
 reproduction walks. The same board and seed give every variant the same
@@ -44,7 +48,7 @@ from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
 from footfall.core.files import write_text_atomic
 from footfall.core.heightmap import HeightMap
-from footfall.core.params import Params, at_least, param
+from footfall.core.params import Params, at_least, param, within
 from footfall.data.store import DemoStore
 from footfall.experiments.reproduce import reproduction_walk
 from footfall.experiments.runs import RunJob, Runner, board_files, claim_folder
@@ -108,6 +112,9 @@ register_variant("with-slip-reflex", "with the stance slip reflex (off by defaul
 register_variant("with-re-anchoring", "with slipped stance feet re-anchored where they stand "
                  "(0.3 s; off by default)",
                  lambda w: replace(w, lowlevel=replace(w.lowlevel, anchor_follow_time=0.3)))
+register_variant("with-hand-over", "with the body correction handed to the stance anchors at "
+                 "each touch-down (off by default)",
+                 lambda w: replace(w, lowlevel=replace(w.lowlevel, hand_over=True)))
 
 
 # ------------------------------------------------------------------ settings
@@ -150,6 +157,14 @@ class AblationConfig(Params):
         doc="board seeds of the calibration boards")
     calibration_runs: int = param(8, range=at_least(0), doc="runs on each calibration board")
     calibration_seed: int = param(0, range=at_least(0), doc="first run seed on each")
+    hard_difficulty: float = param(0.85, unit="-", range=within(0, 1),
+                                   doc="difficulty D of the hard boards rocky:D steps:D")
+    hard_board_seeds: tuple[int, ...] = param(
+        (900, 901, 902, 903), check=lambda v: isinstance(v, tuple) and all(
+            isinstance(s, int) and s >= 0 for s in v), must="a tuple of seeds >= 0",
+        doc="board seeds of the hard boards (paired runs that separate the variants)")
+    hard_runs: int = param(16, range=at_least(0), doc="runs on each hard board")
+    hard_seed: int = param(0, range=at_least(0), doc="first run seed on each hard board")
     walk: WalkConfig = param(factory=lambda: reproduction_walk(),
                              doc="the walk every variant changes: the defaults with F within "
                                  "the reproduction's search radius")
@@ -159,7 +174,7 @@ class AblationConfig(Params):
         """A small version (about a minute on two cores) for a smoke test."""
         return cls(variants=("defaults", "no-tilt-reflex"), who=("hand",),
                    test_board=(("rocky", 0.5),), test_runs=2, calibration_difficulties=(0.4,),
-                   calibration_board_seeds=(800,), calibration_runs=1)
+                   calibration_board_seeds=(800,), calibration_runs=1, hard_runs=0)
 
     def variant_walk(self, variant: str) -> WalkConfig:
         """The walking settings of ``variant``: its change of :attr:`walk`."""
@@ -172,6 +187,10 @@ class AblationConfig(Params):
             for s in self.calibration_board_seeds:
                 out[f"cal{d:g}-{s}"] = ((("rocky", d), ("steps", d)), s, self.calibration_runs,
                                         self.calibration_seed)
+        d = self.hard_difficulty
+        for s in self.hard_board_seeds:
+            out[f"hard{d:g}-{s}"] = ((("rocky", d), ("steps", d)), s, self.hard_runs,
+                                     self.hard_seed)
         return {k: v for k, v in out.items() if v[2] > 0}
 
 
@@ -213,29 +232,33 @@ def _outcomes(store: DemoStore) -> dict[str, dict]:
 
 
 def _row(config: AblationConfig, results: dict[str, dict], v: str, who: str) -> dict:
-    """One variant's runs by one chooser, against the defaults' on the same boards and seeds."""
-    row: dict = {"boards": {}, "causes": {}, "won": 0, "lost": 0}
+    """One variant's runs by one chooser, against the defaults' on the same boards and seeds:
+    won / lost over issue 18's boards (test and calibration), and apart over the hard ones."""
+    row: dict = {"boards": {}, "causes": {}, "won": 0, "lost": 0, "hard_won": 0, "hard_lost": 0}
     speeds = []
     for name, (_, _, runs, seed) in config.boards().items():
         ok = 0
+        prefix = "hard_" if name.startswith("hard") else ""
         for s in range(seed, seed + runs):
             r = results[f"{v}/{who}/{name}/s{s}"]
             base = results[f"defaults/{who}/{name}/s{s}"]["success"]
             ok += bool(r["success"])
-            row["won"] += bool(r["success"]) and not base
-            row["lost"] += base and not r["success"]
+            row[prefix + "won"] += bool(r["success"]) and not base
+            row[prefix + "lost"] += base and not r["success"]
             if r["success"]:
                 speeds.append(r["speed_cm_s"])
             else:
                 cause = (r.get("explanation") or {}).get("cause") or r.get("reason", "?")
                 row["causes"][cause] = row["causes"].get(cause, 0) + 1
         row["boards"][name] = {"successes": ok, "runs": runs}
-    cal = [b for n, b in row["boards"].items() if n != "test"]
     row["test"] = row["boards"].get("test")
-    row["calibration"] = ({"successes": sum(b["successes"] for b in cal),
-                           "runs": sum(b["runs"] for b in cal)} if cal else None)
+    for group, prefix in (("calibration", "cal"), ("hard", "hard")):
+        boards = [b for n, b in row["boards"].items() if n.startswith(prefix)]
+        row[group] = ({"successes": sum(b["successes"] for b in boards),
+                       "runs": sum(b["runs"] for b in boards)} if boards else None)
     row["speed_cm_s"] = sum(speeds) / len(speeds) if speeds else None
     row["p_value"] = sign_test(row["won"], row["lost"])
+    row["hard_p_value"] = sign_test(row["hard_won"], row["hard_lost"])
     return row
 
 
@@ -252,20 +275,27 @@ def _count(c: dict | None) -> str:
     return "-" if c is None else f"{c['successes']} / {c['runs']}"
 
 
+def _paired(row: dict, prefix: str, any_runs: bool) -> str:
+    won, lost, p = row[prefix + "won"], row[prefix + "lost"], row[prefix + "p_value"]
+    return f"+{won} / -{lost} ({p:.2g})" if any_runs else "-"
+
+
 def ablation_markdown(config: AblationConfig, summary: dict) -> str:
     """The ablation table and the failure taxonomy, as Markdown."""
     head = ["variant"]
     for who in config.who:
         label = "expert" if who == "expert" else "hand-tuned"
         head += [f"{label}, test board", f"{label}, calibration boards",
-                 f"{label}: won / lost vs defaults (p)"]
+                 f"{label}: won / lost vs defaults (p)", f"{label}, hard boards",
+                 f"{label}, hard boards: won / lost (p)"]
     lines = ["| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
     for v, row in summary.items():
         cells = [row["description"] if v == "defaults" else f"{v}: {row['description']}"]
         for who in config.who:
             r = row[who]
-            cells += [_count(r["test"]), _count(r["calibration"]),
-                      "-" if v == "defaults" else f"+{r['won']} / -{r['lost']} ({r['p_value']:.2g})"]
+            other = v != "defaults"
+            cells += [_count(r["test"]), _count(r["calibration"]), _paired(r, "", other),
+                      _count(r["hard"]), _paired(r, "hard_", other and r["hard"] is not None)]
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", "Failure taxonomy (all boards; footfall.sim.explain's cause of each failed "
               "run):", ""]

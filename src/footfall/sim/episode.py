@@ -65,6 +65,7 @@ from footfall.control.lowlevel import (
     BodyCorrection,
     LowLevelConfig,
     body_rotation,
+    handed_over,
     joint_targets,
     reanchor,
     rolled,
@@ -310,7 +311,7 @@ class Walk:
         # Stance feet: where they touched down, moved on as far as their balls have rolled since.
         stance = self._stance
         forces = (sim.foot_forces()[:, 2]  # [N] the force sensors' vertical readings
-                  if cfg.lowlevel.load_gain > 0 or self._follow_rate > 0
+                  if cfg.lowlevel.load_gain > 0 or self._follow_rate > 0 or cfg.reflexes.slip_reflex
                   else None)
         if self._follow_rate > 0:  # slipped feet re-anchored where they stand
             # (a foot that carries nothing, being unloaded or just set down, is not let go of:
@@ -345,7 +346,7 @@ class Walk:
         if swing is not None:
             self._com.append(com[:2])
             self._support.append(feet[_OTHER_LEGS[swing], :2])
-        self._watch(feet, ramp >= 1.0, mrpy, rpy)
+        self._watch(feet, ramp >= 1.0, mrpy, rpy, forces)
         if abs(mrpy[0]) > cfg.fall_tilt or abs(mrpy[1]) > cfg.fall_tilt:
             raise _Failure("fall: trunk tilted")
         if sim.trunk_touches_terrain():
@@ -358,7 +359,7 @@ class Walk:
             raise _Failure("time limit")
 
     def _watch(self, feet: np.ndarray, settled: np.ndarray, measured_rpy: np.ndarray,
-               desired_rpy: np.ndarray) -> None:
+               desired_rpy: np.ndarray, forces: np.ndarray | None = None) -> None:
         """Stance watch: raise the alarm of a slipping stance foot or a tipping trunk.
 
         ``feet`` (4, 3) [m] are the measured foot centres, ``settled`` (4,) the legs whose role
@@ -370,7 +371,8 @@ class Walk:
         if self._alarm is not None:
             return
         if rc.slip_reflex:
-            bad = slipped(feet[:, :2], self._targets[:, :2], self._stance & settled,
+            loaded = self._stance & settled & (forces > self.config.touchdown_force)
+            bad = slipped(feet[:, :2], self._targets[:, :2], loaded,
                           rc.slip_distance) & (speed > rc.slip_speed)
             if bad.any():
                 leg = int(np.flatnonzero(bad)[0])
@@ -666,6 +668,7 @@ class Walk:
         """Foot ``s`` stands where it touched down and starts to take its load; log it."""
         sim = self.sim
         centre = sim.foot_positions()[s]
+        self._hand_over()
         self._targets[s] = centre
         self._down[s] = centre
         self._anchor[s] = centre
@@ -674,6 +677,16 @@ class Walk:
         record["t_touchdown"] = sim.time
         record["touchdown"] = centre.copy()
         self._stood[s] = (k, centre.copy())
+
+    def _hand_over(self) -> None:
+        """A foot is about to take a new anchor where it stands: with ``hand_over``, the
+        horizontal body correction passes to the stance feet's anchors (their set-points stay),
+        so that the foot enters a commanded frame without it (:func:`handed_over`)."""
+        if not self.config.lowlevel.hand_over:
+            return
+        taken = self._correction.take_horizontal()
+        self._anchor = handed_over(self._anchor, self._stance, taken)
+        self._targets = handed_over(self._targets, self._stance, taken)
 
     def _settle(self, leg: int, t0: float) -> None:
         """The body held, wait until slipped foot ``leg`` stops sliding (or recover_timeout
@@ -697,6 +710,7 @@ class Walk:
                 self._settle(leg, t0)
                 centre = sim.foot_positions()[leg]
                 moved = float(np.hypot(*(centre[:2] - self._down[leg, :2])))
+                self._hand_over()
                 self._anchor[leg] = self._targets[leg] = self._down[leg] = centre
                 self._shin0[leg] = shin_rotations(sim.joint_angles(),
                                                   body_rotation(self._pose[1]))[leg]

@@ -359,10 +359,11 @@ class Walk:
             raise _Failure("time limit")
 
     def _watch(self, feet: np.ndarray, settled: np.ndarray, measured_rpy: np.ndarray,
-               desired_rpy: np.ndarray, forces: np.ndarray | None = None) -> None:
+               desired_rpy: np.ndarray, forces: np.ndarray | None) -> None:
         """Stance watch: raise the alarm of a slipping stance foot or a tipping trunk.
 
-        ``feet`` (4, 3) [m] are the measured foot centres, ``settled`` (4,) the legs whose role
+        ``feet`` (4, 3) [m] are the measured foot centres, ``forces`` (4,) [N] the force sensors'
+        vertical readings (read whenever the slip reflex is on), ``settled`` (4,) the legs whose role
         change is complete; one alarm at a time, until the phase has acted on it.
         """
         rc = self.config.reflexes
@@ -685,8 +686,8 @@ class Walk:
         if not self.config.lowlevel.hand_over:
             return
         taken = self._correction.take_horizontal()
-        self._anchor = handed_over(self._anchor, self._stance, taken)
-        self._targets = handed_over(self._targets, self._stance, taken)
+        self._anchor = handed_over(self._anchor, self._stance, taken)  # (the stance targets
+        # follow from the anchors at the next control period)
 
     def _settle(self, leg: int, t0: float) -> None:
         """The body held, wait until slipped foot ``leg`` stops sliding (or recover_timeout

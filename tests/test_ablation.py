@@ -42,13 +42,21 @@ def test_each_variant_changes_only_its_part():
     anchored = config.variant_walk("with-re-anchoring")
     assert anchored == replace(base, lowlevel=replace(base.lowlevel, anchor_follow_time=0.3))
     assert base.lowlevel.anchor_follow_time is None
-    handed = config.variant_walk("with-hand-over")
-    assert handed == replace(base, lowlevel=replace(base.lowlevel, hand_over=True))
-    assert not base.lowlevel.hand_over
+    handed = config.variant_walk("no-hand-over")
+    assert handed == replace(base, lowlevel=replace(base.lowlevel, hand_over=False))
+    assert base.lowlevel.hand_over
+    unsupported = config.variant_walk("no-support-feedforward")
+    assert unsupported == replace(base, lowlevel=replace(base.lowlevel, support_feedforward=0.0))
+    assert base.lowlevel.support_feedforward > 0
+    rebased = config.variant_walk("with-rebase")
+    assert rebased == replace(base, reflexes=replace(base.reflexes, rebase_distance=0.03))
+    assert base.reflexes.rebase_distance is None
     none = config.variant_walk("none")
     assert not any(getattr(none.reflexes, r) for r in
                    ("lift_off_gate", "touchdown_check", "tilt_reflex", "slip_reflex"))
+    assert none.reflexes.rebase_distance is None
     assert none.lowlevel.load_gain == 0 and none.cog.reach is None
+    assert not none.lowlevel.hand_over and none.lowlevel.support_feedforward == 0
 
 
 def test_the_default_boards_are_the_issue_s():

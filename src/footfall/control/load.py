@@ -17,7 +17,10 @@ each foot's target height is moved by the force error its sensor measures
 carries too much. A leg about to lift is unloaded this way first, and a leg
 just set down takes its share gradually. The offsets sum to nothing over
 the stance feet (the measured total is shared out), so the body height is
-left to the body controller.
+left to the body controller. The same shares, times the weight, give each
+stance leg's servos the joint torques that carry its foot's part as a
+feed-forward (:func:`support_torques`), so that the servos' stiffness does
+not have to.
 """
 
 from __future__ import annotations
@@ -91,3 +94,23 @@ def load_offsets(offsets: np.ndarray, measured: np.ndarray, shares: np.ndarray,
     error = f - shares * f.sum()
     out = np.clip(np.asarray(offsets, dtype=np.float64) + gain * error, -limit, limit)
     return np.where(stance, out, 0.0)
+
+
+def support_torques(jacobians: np.ndarray, forces: np.ndarray) -> np.ndarray:
+    """Joint torques (4, 3) [N m] with which each leg carries a vertical ground force.
+
+    A foot pressed onto the ground with the upward force ``f`` (the ground
+    on the foot) is held in balance by the torques ``-J^T (0, 0, f)``: fed
+    forward to the position servos, they carry the foot's share of the
+    weight, so the servos' stiffness no longer has to, and a loaded leg no
+    longer sags by ``torque / kp`` at every joint.
+
+    Parameters
+    ----------
+    jacobians : array of shape (4, 3, 3)
+        World-frame Jacobians [m/rad] of the foot centres with respect to each
+        leg's joint angles (:meth:`footfall.sim.simulation.Simulation.foot_jacobians`).
+    forces : array of shape (4,)
+        Upward ground forces [N] each foot is to carry (0 for a swing leg).
+    """
+    return -np.asarray(forces, dtype=np.float64)[:, None] * np.asarray(jacobians)[:, 2, :]

@@ -21,12 +21,17 @@ true body pose (motion capture on the real robot, the simulator here):
   ball has rolled since (:func:`rolled`): the ball foot is fixed to the shin,
   so it rolls a few millimetres forward as the body passes over it, and a
   target that stayed put would make the leg drag it back;
-* optionally (``hand_over``, off by default), whenever a foot takes a new
-  anchor (touch-down) the horizontal body correction is handed over to the
-  stance feet's anchors (:func:`handed_over`): their set-points do not
-  change, and the new foot enters a commanded frame without a correction, so
-  it stays where it was put down instead of being moved by the legs' pulls
-  on slipped feet (below);
+* whenever a foot takes a new anchor (touch-down), the horizontal body
+  correction is handed over to the stance feet's anchors (``hand_over``,
+  :func:`handed_over`): their set-points do not change, and the new foot
+  enters a commanded frame without a correction, so it stays where it was
+  put down instead of being moved by the legs' pulls on slipped feet
+  (below);
+* each stance leg's servos are given, as feed-forward torques, the torques
+  that carry ``support_feedforward`` of its foot's share of the weight
+  (:func:`footfall.control.load.support_torques`, the shares of
+  :func:`footfall.control.load.load_shares`), so the servos' stiffness
+  carries less of the weight and a loaded leg sags less;
 * optionally (``anchor_follow_time``, off by default), a loaded stance foot
   that has moved from its target anyway (a slip, a roll the model does not
   know) is re-anchored where it stands, gradually (:func:`reanchor`), and
@@ -87,13 +92,18 @@ class LowLevelConfig(Params):
                                  "this times its load error (footfall.control.load); 0: off")
     load_limit: float = param(0.015, unit="m", range=within(0, math.inf),
                               doc="bound of a stance foot's load control offset")
+    support_feedforward: float = param(1.0, unit="-", range=within(0, 1),
+                                       doc="this share of each stance foot's part of the weight "
+                                           "(load_shares) is fed forward to its leg's servos as "
+                                           "the joint torques that carry it (support_torques), "
+                                           "so loaded legs do not sag; 0: off")
     anchor_follow_time: float | None = param(None, unit="s",
                                              range=within(0, math.inf, low_open=True),
                                              doc="a loaded stance foot off its target is "
                                                  "re-anchored where it stands with this time "
                                                  "constant (reanchor); None: never, the leg pulls "
                                                  "it back (default: the ablation found a net loss)")
-    hand_over: bool = param(False,
+    hand_over: bool = param(True,
                             doc="when a foot takes a new anchor (touch-down), the horizontal "
                                 "body correction is handed to the stance feet's anchors, their "
                                 "set-points unchanged, so the new foot enters a commanded frame "

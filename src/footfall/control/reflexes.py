@@ -31,7 +31,13 @@ logs an event in the run log when it acts:
 * **tilt reflex** (``tilt_reflex``): trunk roll or pitch more than
   ``tilt_threshold`` from the planned attitude stops the body and brings a
   swinging foot down at once; the gait goes on once the error is below
-  ``tilt_recovered`` (or after ``recover_timeout``).
+  ``tilt_recovered`` (or after ``recover_timeout``);
+* **re-basing** (``rebase_distance``): a recovery after which the body is
+  still more than ``rebase_distance`` from where it is wanted -- the whole
+  robot has slid, and the legs push on feet that are no longer where they
+  were put -- takes the stance as it now is: every stance foot is
+  re-anchored where it stands, the body is wanted where it is, and the next
+  step is planned from there.
 
 Everything here is a pure function of measured arrays; the walk
 (:mod:`footfall.sim.episode`) calls them and acts.
@@ -94,6 +100,12 @@ class ReflexConfig(Params):
                                   doc="roll and pitch errors below this: posture recovered")
     recover_timeout: float = param(1.5, unit="s", range=_POSITIVE,
                                    doc="longest posture recovery before the gait goes on")
+    rebase_distance: float | None = param(None, unit="m", range=_POSITIVE,
+                                          doc="after a recovery, a body farther than this "
+                                              "(horizontally) from where it is wanted re-bases "
+                                              "the stance: the stance feet re-anchored where they "
+                                              "stand, the body wanted where it is, the "
+                                              "horizontal correction cleared; None: never")
 
     def without(self, reflex: str) -> ReflexConfig:
         """This configuration with one reflex (a name of :data:`REFLEXES`) switched off."""

@@ -82,12 +82,12 @@ def register_variant(name: str, description: str,
     return VARIANTS[name]
 
 
-def _reflexes(walk: WalkConfig, **switches: bool) -> WalkConfig:
+def _reflexes(walk: WalkConfig, **switches) -> WalkConfig:
     return replace(walk, reflexes=replace(walk.reflexes, **switches))
 
 
-def _no_load_control(walk: WalkConfig) -> WalkConfig:
-    return replace(walk, lowlevel=replace(walk.lowlevel, load_gain=0.0))
+def _lowlevel(walk: WalkConfig, **settings) -> WalkConfig:
+    return replace(walk, lowlevel=replace(walk.lowlevel, **settings))
 
 
 def _no_reach(walk: WalkConfig) -> WalkConfig:
@@ -101,20 +101,26 @@ register_variant("no-touchdown-check", "without the touch-down check",
                  lambda w: _reflexes(w, touchdown_check=False))
 register_variant("no-tilt-reflex", "without the tilt reflex",
                  lambda w: _reflexes(w, tilt_reflex=False))
-register_variant("no-load-control", "without the stance load control", _no_load_control)
+register_variant("no-load-control", "without the stance load control",
+                 lambda w: _lowlevel(w, load_gain=0.0))
 register_variant("no-cog-reach", "without the COG plan within the legs' reach", _no_reach)
-register_variant("none", "no reflexes, no load control, no reach (the controller before "
-                 "issue 18)", lambda w: _no_reach(_no_load_control(_reflexes(
+register_variant("no-hand-over", "without the body correction handed to the stance anchors at "
+                 "each touch-down", lambda w: _lowlevel(w, hand_over=False))
+register_variant("no-support-feedforward", "without the support torques fed forward",
+                 lambda w: _lowlevel(w, support_feedforward=0.0))
+register_variant("none", "no reflexes, no load control, no reach, no hand-over, no support "
+                 "torques (the controller before issue 18)",
+                 lambda w: _no_reach(_lowlevel(_reflexes(
                      w, lift_off_gate=False, touchdown_check=False, tilt_reflex=False,
-                     slip_reflex=False))))
+                     slip_reflex=False, rebase_distance=None),
+                     load_gain=0.0, hand_over=False, support_feedforward=0.0)))
 register_variant("with-slip-reflex", "with the stance slip reflex (off by default)",
                  lambda w: _reflexes(w, slip_reflex=True))
 register_variant("with-re-anchoring", "with slipped stance feet re-anchored where they stand "
-                 "(0.3 s; off by default)",
-                 lambda w: replace(w, lowlevel=replace(w.lowlevel, anchor_follow_time=0.3)))
-register_variant("with-hand-over", "with the body correction handed to the stance anchors at "
-                 "each touch-down (off by default)",
-                 lambda w: replace(w, lowlevel=replace(w.lowlevel, hand_over=True)))
+                 "(0.3 s; off by default)", lambda w: _lowlevel(w, anchor_follow_time=0.3))
+register_variant("with-rebase", "with the stance re-based after a recovery that leaves the body "
+                 "more than 30 mm off (off by default)",
+                 lambda w: _reflexes(w, rebase_distance=0.03))
 
 
 # ------------------------------------------------------------------ settings

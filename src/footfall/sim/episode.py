@@ -15,7 +15,8 @@ The hierarchy, top to bottom, each stage in its own module:
 6. low-level control (:mod:`footfall.control.lowlevel`) -- inverse
    kinematics at 100 Hz, closed on the true body pose, with each stance
    foot's height set by its force sensor so that it carries its share of
-   the weight (:mod:`footfall.control.load`), and the simulator's 400 Hz PD
+   the weight and the torques that carry that share fed forward to its
+   servos (:mod:`footfall.control.load`), and the simulator's 400 Hz PD
    servo.
 
 A step goes through its phases (:meth:`Walk._step`): *plan* (foothold, COG
@@ -60,7 +61,7 @@ from footfall.control.footstep import (
     JudgedFootstepPlanner,
     NoFootholdError,
 )
-from footfall.control.load import load_offsets, load_shares
+from footfall.control.load import load_offsets, load_shares, support_torques
 from footfall.control.lowlevel import (
     BodyCorrection,
     LowLevelConfig,
@@ -276,6 +277,7 @@ class Walk:
         if self.ticks < 1 or abs(self.ticks * self.sim.timestep - self.period) > 1e-9:
             raise FootfallError("the control period must be a whole number of servo periods")
         self._lift = np.array([0.0, 0.0, robot.foot_radius])  # contact point -> ball centre
+        self._weight = robot.total_mass * -float(self.sim.model.opt.gravity[2])  # [N]
         self.trace = RunTrace(config.trace_window, self.period)  # the last seconds, at 100 Hz
 
     # ------------------------------------------------------------ the 100 Hz loop
@@ -324,16 +326,21 @@ class Walk:
         self._targets[stance] = self._anchor[stance] + rolled(
             self._shin0[stance], shin_rotations(sim.joint_angles(), rot[1])[stance],
             self.robot.foot_radius)
-        if cfg.lowlevel.load_gain > 0:  # each stance foot carries its share (its force sensor)
+        torque = None
+        if cfg.lowlevel.load_gain > 0 or cfg.lowlevel.support_feedforward > 0:
             shares = load_shares(self._feet_before[:, :2], self._com_before,
                                  np.where(stance, ramp, 0.0) * self._unload)
+        if cfg.lowlevel.load_gain > 0:  # each stance foot carries its share (its force sensor)
             self._press = load_offsets(self._press, forces, shares, stance,
                                        cfg.lowlevel.load_gain * self.period,
                                        cfg.lowlevel.load_limit)
             self._targets[:, 2] += self._press
+        if cfg.lowlevel.support_feedforward > 0:  # the servos are given the torques that carry it
+            torque = support_torques(sim.foot_jacobians(),
+                                     cfg.lowlevel.support_feedforward * self._weight * shares)
         q, _ = joint_targets(self.robot, self._targets, (cpos, rot[0]), (mpos, rot[1]), weight,
                              self._q)
-        sim.set_targets(q, (q - self._q) / self.period)
+        sim.set_targets(q, (q - self._q) / self.period, torque)
         self._q = q
         sim.step(self.ticks)
         self._capture()
@@ -689,6 +696,20 @@ class Walk:
         self._anchor = handed_over(self._anchor, self._stance, taken)  # (the stance targets
         # follow from the anchors at the next control period)
 
+    def _rebase(self, off: float) -> None:
+        """Take the stance as it is: the body, ``off`` [m] from where it is wanted, is wanted
+        where it stands, and every stance foot is anchored where it stands (the touch-down
+        points, from which slip and the flight recorder measure, stay)."""
+        sim = self.sim
+        self._correction.take_horizontal()
+        self._desired[0][:2] = self._pose[0][:2]
+        feet = sim.foot_positions()
+        stance = self._stance
+        self._anchor[stance] = self._targets[stance] = feet[stance]
+        self._shin0[stance] = shin_rotations(sim.joint_angles(),
+                                             body_rotation(self._pose[1]))[stance]
+        self._event("re-based", None, off_mm=round(1e3 * off, 1))
+
     def _settle(self, leg: int, t0: float) -> None:
         """The body held, wait until slipped foot ``leg`` stops sliding (or recover_timeout
         after ``t0`` [s])."""
@@ -732,6 +753,10 @@ class Walk:
                 self._desired[1][:2] = self._pose[1][:2]
         self._held = False
         self._unload[:] = 1.0  # a step called off keeps its leg's load
+        if rc.rebase_distance is not None:
+            off = float(np.hypot(*(self._pose[0][:2] - self._desired[0][:2])))
+            if off > rc.rebase_distance:
+                self._rebase(off)
         self._cog = self._desired[0][:2].copy(), np.zeros(2)  # the body at rest where it is
 
     # ------------------------------------------------------------------ a run

@@ -202,6 +202,7 @@ class Simulation:
         self._trunk = mujoco.mj_name2id(m, obj.mjOBJ_BODY, "trunk")
         self._feet = model_ids(m, obj.mjOBJ_BODY, [f"{leg}_foot" for leg in LEG_NAMES])
         self._qd_gain = robot.joint_kd / robot.joint_kp  # [s] see set_targets
+        self._jac = np.zeros((3, m.nv))  # foot_jacobians' work array
         mujoco.mj_forward(self.model, self.data)
 
     @classmethod
@@ -274,18 +275,21 @@ class Simulation:
         self.reset(pos, rpy, q)
         return q
 
-    def set_targets(self, q, qd=None) -> None:
-        """Joint set-points of the PD servo: angles ``q`` (4, 3) [rad], velocities ``qd`` (4, 3) [rad/s].
+    def set_targets(self, q, qd=None, torque=None) -> None:
+        """Joint set-points of the PD servo: angles ``q`` (4, 3) [rad], velocities ``qd`` (4, 3)
+        [rad/s] and feed-forward torques ``torque`` (4, 3) [N m].
 
-        The servo applies ``kp (q - q_meas) + kd (qd - qd_meas)`` clipped to
-        the torque limit at every physics step (400 Hz), holding the
+        The servo applies ``kp (q - q_meas) + kd (qd - qd_meas) + torque``
+        clipped to the torque limit at every physics step (400 Hz), holding the
         set-points until the next call (the controller's 100 Hz). MuJoCo's
         position actuator computes ``kp (ctrl - q_meas) - kd qd_meas``, so
-        the control is ``ctrl = q + (kd / kp) qd``.
+        the control is ``ctrl = q + (kd / kp) qd + torque / kp``.
         """
         target = _array(q, (4, 3), "joint set-points q")
         if qd is not None:
             target = target + self._qd_gain * _array(qd, (4, 3), "joint velocity set-points qd")
+        if torque is not None:
+            target = target + _array(torque, (4, 3), "feed-forward torques") / self.robot.joint_kp
         self.data.ctrl[self._act] = target
 
     def step(self, n: int = 1) -> None:
@@ -353,6 +357,18 @@ class Simulation:
     def foot_positions(self) -> np.ndarray:
         """World positions (4, 3) [m] of the ball-foot centres."""
         return self.data.xpos[self._feet].copy()
+
+    def foot_jacobians(self) -> np.ndarray:
+        """Jacobians (4, 3, 3) [m/rad] of the ball-foot centres (world frame) with respect to
+        their own leg's joint angles: ``J[i, :, j]`` is how far foot i moves per radian of its
+        joint j (hip roll, hip pitch, knee), at the current state."""
+        m, d = self.model, self.data
+        jac = self._jac
+        out = np.empty((4, 3, 3))
+        for i, body in enumerate(self._feet):  # four bodies: MuJoCo's own call per body
+            mujoco.mj_jacBody(m, d, jac, None, int(body))
+            out[i] = jac[:, self._vadr[i]]
+        return out
 
     # --------------------------------------------------------------- sensing
     def foot_forces(self, frame: str = "world", noise: bool = True) -> np.ndarray:

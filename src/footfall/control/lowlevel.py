@@ -92,7 +92,7 @@ class LowLevelConfig(Params):
                                  "this times its load error (footfall.control.load); 0: off")
     load_limit: float = param(0.015, unit="m", range=within(0, math.inf),
                               doc="bound of a stance foot's load control offset")
-    support_feedforward: float = param(1.0, unit="-", range=within(0, 1),
+    support_feedforward: float = param(0.5, unit="-", range=within(0, 1),
                                        doc="this share of each stance foot's part of the weight "
                                            "(load_shares) is fed forward to its leg's servos as "
                                            "the joint torques that carry it (support_torques), "

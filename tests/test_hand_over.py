@@ -13,9 +13,8 @@ from footfall.control.lowlevel import (
 )
 from footfall.core.kinematics import body_to_world, forward_kinematics
 from footfall.core.robot import LITTLEDOG
-from footfall.features.reward import default_reward
-from footfall.sim.episode import Walk, WalkConfig
-from maps import short_flat_board
+from footfall.sim.episode import Walk
+from scenes import staged
 
 R = LITTLEDOG
 Q0 = np.array([[0.0, -0.6, 1.2], [0.0, -0.6, 1.2], [0.0, 0.6, -1.2], [0.0, 0.6, -1.2]])  # [rad]
@@ -99,11 +98,8 @@ class Stale(Walk):
 
 
 def _stand(hand: bool) -> Stale:
-    config = WalkConfig(start_setback=0.2, max_steps=1, lowlevel=LowLevelConfig(hand_over=True))
-    run = Stale(short_flat_board(), lambda leg: default_reward(), 1, config)
-    run.hand = hand
-    run.run()
-    return run
+    return staged(type("Handed" if hand else "Kept", (Stale,), {"hand": hand}),
+                  lowlevel=LowLevelConfig(hand_over=True))
 
 
 def test_on_the_robot_the_hand_over_moves_nothing_and_leaves_the_correction_small():

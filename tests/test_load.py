@@ -5,9 +5,8 @@ import pytest
 
 from footfall.control.load import load_offsets, load_shares
 from footfall.control.lowlevel import LowLevelConfig
-from footfall.features.reward import default_reward
-from footfall.sim.episode import Walk, WalkConfig
-from maps import short_flat_board
+from footfall.sim.episode import Walk
+from scenes import staged
 
 FEET = np.array([[0.1, 0.08], [0.1, -0.08], [-0.1, 0.08], [-0.1, -0.08]])  # [m] LF RF LH RH
 
@@ -101,11 +100,7 @@ class Wobbles(Walk):
 
 
 def _stand(load_gain: float) -> np.ndarray:
-    config = WalkConfig(start_setback=0.2, max_steps=1,
-                        lowlevel=LowLevelConfig(load_gain=load_gain))
-    run = Wobbles(short_flat_board(), lambda leg: default_reward(), 1, config)
-    run.run()
-    return run.loads
+    return staged(Wobbles, lowlevel=LowLevelConfig(load_gain=load_gain)).loads
 
 
 def test_load_control_spreads_the_weight_over_a_wobbling_stance():

@@ -6,9 +6,8 @@ import numpy as np
 import pytest
 
 from footfall.control.lowlevel import BodyCorrection, LowLevelConfig, reanchor
-from footfall.features.reward import default_reward
-from footfall.sim.episode import Walk, WalkConfig
-from maps import short_flat_board
+from footfall.sim.episode import Walk
+from scenes import staged
 
 ANCHORS = np.array([[0.1, 0.08, 0.01], [0.1, -0.08, 0.01], [-0.1, 0.08, 0.01],
                     [-0.1, -0.08, 0.01]])  # [m] LF RF LH RH
@@ -66,11 +65,7 @@ class Slipped(Walk):
 
 
 def _stand(follow_time: float | None) -> Slipped:
-    config = WalkConfig(start_setback=0.2, max_steps=1,
-                        lowlevel=LowLevelConfig(anchor_follow_time=follow_time))
-    run = Slipped(short_flat_board(), lambda leg: default_reward(), 1, config)
-    run.run()
-    return run
+    return staged(Slipped, lowlevel=LowLevelConfig(anchor_follow_time=follow_time))
 
 
 def test_re_anchored_feet_stop_pulling_and_the_body_correction_stays_small():

@@ -4,9 +4,8 @@
 import numpy as np
 
 from footfall.control.reflexes import ReflexConfig
-from footfall.features.reward import default_reward
-from footfall.sim.episode import Walk, WalkConfig
-from maps import short_flat_board
+from footfall.sim.episode import Walk
+from scenes import staged
 
 
 class Slid(Walk):
@@ -29,11 +28,8 @@ class Slid(Walk):
 
 
 def _slide(rebase: float | None) -> Slid:
-    config = WalkConfig(start_setback=0.2, max_steps=1,
-                        reflexes=ReflexConfig(rebase_distance=rebase))
-    run = Slid(short_flat_board(), lambda leg: default_reward(), 1, config)
-    result = run.run().result
-    run.events = result["events"]
+    run = staged(Slid, reflexes=ReflexConfig(rebase_distance=rebase))
+    run.events = run.record.result["events"]
     return run
 
 

@@ -8,10 +8,9 @@ import pytest
 from footfall.control.load import support_torques
 from footfall.control.lowlevel import LowLevelConfig
 from footfall.core.robot import LITTLEDOG
-from footfall.features.reward import default_reward
-from footfall.sim.episode import Walk, WalkConfig
+from footfall.sim.episode import Walk
 from footfall.sim.simulation import Simulation
-from maps import short_flat_board
+from scenes import staged
 
 R = LITTLEDOG
 Q = np.array([[0.1, -0.5, 1.1], [-0.05, -0.7, 1.3], [0.08, 0.6, -1.2], [0.0, 0.5, -1.0]])  # [rad]
@@ -57,11 +56,7 @@ def _standing(feedforward: float) -> Walk:
             self.jac = self.sim.foot_jacobians()
             return True
 
-    config = WalkConfig(start_setback=0.2, max_steps=1,
-                        lowlevel=LowLevelConfig(support_feedforward=feedforward))
-    run = Stands(short_flat_board(), lambda leg: default_reward(), 1, config)
-    run.run()
-    return run
+    return staged(Stands, lowlevel=LowLevelConfig(support_feedforward=feedforward))
 
 
 def test_the_servos_of_a_standing_robot_carry_minus_j_transpose_of_the_foot_forces():

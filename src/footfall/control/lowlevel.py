@@ -96,7 +96,7 @@ class LowLevelConfig(Params):
                                        doc="this share of each stance foot's part of the weight "
                                            "(load_shares) is fed forward to its leg's servos as "
                                            "the joint torques that carry it (support_torques), "
-                                           "so loaded legs do not sag; 0: off")
+                                           "so loaded legs sag less; 0: off")
     anchor_follow_time: float | None = param(None, unit="s",
                                              range=within(0, math.inf, low_open=True),
                                              doc="a loaded stance foot off its target is "

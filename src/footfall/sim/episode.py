@@ -677,10 +677,8 @@ class Walk:
         sim = self.sim
         centre = sim.foot_positions()[s]
         self._hand_over()
-        self._targets[s] = centre
         self._down[s] = centre
-        self._anchor[s] = centre
-        self._shin0[s] = shin_rotations(sim.joint_angles(), body_rotation(self._pose[1]))[s]
+        self._anchor_here(s, centre)
         self._set_role(s, stance=True)
         record["t_touchdown"] = sim.time
         record["touchdown"] = centre.copy()
@@ -700,15 +698,19 @@ class Walk:
         """Take the stance as it is: the body, ``off`` [m] from where it is wanted, is wanted
         where it stands, and every stance foot is anchored where it stands (the touch-down
         points, from which slip and the flight recorder measure, stay)."""
-        sim = self.sim
         self._correction.take_horizontal()
         self._desired[0][:2] = self._pose[0][:2]
-        feet = sim.foot_positions()
-        stance = self._stance
-        self._anchor[stance] = self._targets[stance] = feet[stance]
-        self._shin0[stance] = shin_rotations(sim.joint_angles(),
-                                             body_rotation(self._pose[1]))[stance]
+        stance = self._stance.copy()
+        self._anchor_here(stance, self.sim.foot_positions()[stance])
         self._event("re-based", None, off_mm=round(1e3 * off, 1))
+
+    def _anchor_here(self, legs: int | np.ndarray, centres: np.ndarray) -> None:
+        """Anchor ``legs`` (an index or a mask) at their foot centres ``centres`` [m], where
+        they stand now, with their shins' orientation now (the ball's rolling counts from
+        here)."""
+        self._anchor[legs] = self._targets[legs] = centres
+        self._shin0[legs] = shin_rotations(self.sim.joint_angles(),
+                                           body_rotation(self._pose[1]))[legs]
 
     def _settle(self, leg: int, t0: float) -> None:
         """The body held, wait until slipped foot ``leg`` stops sliding (or recover_timeout
@@ -733,9 +735,8 @@ class Walk:
                 centre = sim.foot_positions()[leg]
                 moved = float(np.hypot(*(centre[:2] - self._down[leg, :2])))
                 self._hand_over()
-                self._anchor[leg] = self._targets[leg] = self._down[leg] = centre
-                self._shin0[leg] = shin_rotations(sim.joint_angles(),
-                                                  body_rotation(self._pose[1]))[leg]
+                self._down[leg] = centre
+                self._anchor_here(leg, centre)
                 if moved > rc.replace_distance:
                     self._replace = leg
             self._alarm = None

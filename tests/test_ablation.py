@@ -166,3 +166,22 @@ def test_the_command_refuses_an_unknown_variant(tmp_path, capsys):
 def test_the_registry_lists_the_default_variants_first():
     assert list(VARIANTS)[0] == "defaults"
     assert isinstance(AblationConfig().variant_walk("none"), WalkConfig)
+
+
+def test_no_hard_walks_issue_18_s_boards_only(tmp_path, capsys, monkeypatch):
+    import footfall.experiments.ablation as ablation
+
+    seen = []
+
+    def fake(out, config, processes=None, log=print):
+        seen.append(config)
+        return {}
+
+    monkeypatch.setattr(ablation, "run_ablation", fake)
+    monkeypatch.setattr(ablation, "ablation_markdown", lambda config, summary: "")
+    for flag, hard_runs in (("--no-hard", 0), ("--hard", AblationConfig().hard_runs)):
+        code, _, _ = run(capsys, "ablation", flag, "--out", tmp_path / "a")
+        assert code == 0
+        assert seen[-1].hard_runs == hard_runs
+    boards = seen[0].boards()
+    assert not any(b.startswith("hard") for b in boards) and len(boards) == 7

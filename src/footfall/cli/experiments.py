@@ -66,11 +66,15 @@ def _variant_names() -> list[str]:
 @click.option("--who", "who", multiple=True, type=click.Choice(["expert", "hand"]),
               help="Who chooses the footholds (repeatable) [default: both]: the walking expert "
                    "or the hand-tuned reward.")
+@click.option("--hard/--no-hard", default=True, show_default=True,
+              help="Walk the four hard boards too (rocky:0.85 steps:0.85, 64 runs per variant "
+                   "and chooser); --no-hard walks issue 18's boards only. A folder keeps its "
+                   "choice.")
 @click.option("--quick", is_flag=True, help="A small version (about a minute) for a smoke test.")
 @click.option("--processes", type=click.IntRange(1, 1024), default=None,
               help="Parallel runs [default: the available cores].")
 @json_option
-def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], quick: bool,
+def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], hard: bool, quick: bool,
              processes: int | None, as_json: bool) -> None:
     """The walking controller's ablation: each part switched off alone, paired runs."""
     from dataclasses import replace
@@ -78,6 +82,8 @@ def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], quick: b
     from footfall.experiments.ablation import AblationConfig, ablation_markdown, run_ablation
 
     config = AblationConfig.quick() if quick else AblationConfig()
+    if not hard:
+        config = replace(config, hard_runs=0)
     if variants:
         config = replace(config, variants=variants)
     if who:

@@ -69,7 +69,7 @@ class ReflexConfig(Params):
                                             "is put on the next-best candidate")
     tilt_reflex: bool = param(True, doc="a tipping trunk brings the swing foot down at once and "
                                         "recovers the posture first")
-    gate_margin: float = param(0.008, unit="m", range=within(0, math.inf),
+    gate_margin: float = param(0.015, unit="m", range=within(0, math.inf),
                                doc="least distance of the measured centre of mass inside the "
                                    "triangle of the three feet that stay down, at lift-off")
     gate_timeout: float = param(1.0, unit="s", range=_POSITIVE,

@@ -1,4 +1,5 @@
-"""Each reflex on a scripted case: a short walk on flat ground, disturbed on purpose."""
+"""Each reflex on a scripted case: a short walk on flat ground (one with a slab), disturbed on
+purpose."""
 
 from dataclasses import replace
 
@@ -8,8 +9,10 @@ import pytest
 
 from footfall.control.cog import support_margin
 from footfall.control.reflexes import ReflexConfig
+from footfall.core.heightmap import HeightMap
+from footfall.core.robot import LITTLEDOG
 from footfall.features.reward import default_reward
-from footfall.sim.episode import WALL_CLOCK_FIELDS, Walk, WalkConfig, walk
+from footfall.sim.episode import WALL_CLOCK_FIELDS, Walk, WalkConfig, board_line, walk
 from maps import short_flat_board
 
 REWARD = default_reward()
@@ -118,6 +121,56 @@ def test_a_stance_foot_pushed_off_its_spot_sets_off_the_slip_reflex_and_the_robo
     assert slips and slips[0]["leg"] == "RF" and slips[0]["moved_mm"] > 12.0
     assert record.result["reason"] == "step limit"  # no fall
     assert not _events(_pushed(replace(ALL_ON, slip_reflex=False), *shove), "stance slip")
+
+
+SLAB = 0.015  # [m] height of the slab the right front foot stands on
+SLAB_GAP = 0.008  # [m] from the right front foot's nominal contact point out to the slab's edge
+
+
+def _slab_board() -> HeightMap:
+    """Flat ground with a 15 mm slab under the right front foot's start, its outer edge 8 mm
+    from the foot."""
+    board = short_flat_board()
+    start, _ = board_line(board, LITTLEDOG, _config(ALL_ON, 6))
+    fx, fy, _ = LITTLEDOG.nominal_foot("RF")
+    fx, fy = start[0] + fx, start[1] + fy
+    x = board.origin[0] + (np.arange(board.heights.shape[0]) + 0.5) * board.resolution
+    y = board.origin[1] + (np.arange(board.heights.shape[1]) + 0.5) * board.resolution
+    X, Y = np.meshgrid(x, y, indexing="ij")
+    heights = board.heights.copy()
+    heights[(abs(X - fx) < 0.06) & (Y > fy - SLAB_GAP) & (Y < fy + 0.04)] = SLAB
+    return HeightMap(heights, board.resolution, board.origin, metadata=board.metadata)
+
+
+class PushedOffSlab(Pushed):
+    """A shove outward on the right front foot; the foot's ball-centre heights [m] recorded."""
+
+    def _tick(self, position, rpy, swing):
+        self.rf_heights.append(float(self.sim.foot_positions()[1, 2]))
+        super()._tick(position, rpy, swing)
+
+
+def _off_the_slab(reflexes: ReflexConfig, force: float):
+    run = PushedOffSlab(_slab_board(), lambda leg: REWARD, 2, _config(reflexes, 6))
+    run.rf_heights = []
+    run.body, run.wrench, run.start, run.duration = ("RF_foot", (0.0, -force, 0.0, 0.0, 0.0, 0.0),
+                                                     0.5, 0.15)
+    return run.run(), np.array(run.rf_heights)
+
+
+def test_a_stance_foot_pushed_off_a_slab_edge_is_detected_and_the_robot_does_not_fall():
+    record, heights = _off_the_slab(ALL_ON, 14.0)
+    on_slab = SLAB + LITTLEDOG.foot_radius
+    assert heights[0] > on_slab - 0.002  # it starts on the slab
+    assert heights.min() < on_slab - 0.01  # and is pushed off its edge
+    slips = _events(record, "stance slip")
+    assert slips[0]["leg"] == "RF" and slips[0]["moved_mm"] > ReflexConfig().slip_distance * 1e3
+    assert 0.5 < slips[0]["t"] < 0.75  # detected within a quarter second of the shove
+    assert record.result["reason"] == "step limit"  # no fall: it walked all six steps
+    # unpushed, the foot stays on the slab and nothing slips
+    quiet, heights = _off_the_slab(ALL_ON, 0.0)
+    assert not _events(quiet, "stance slip") and quiet.result["reason"] == "step limit"
+    assert heights[: len(heights) // 4].min() > on_slab - 0.002
 
 
 def test_a_shoved_trunk_sets_off_the_tilt_reflex_and_the_robot_recovers():

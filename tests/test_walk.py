@@ -1,5 +1,6 @@
 """Walking runs: the low-level control pieces, the slip measure, a short seeded walk, the CLI."""
 
+import json
 import math
 
 import numpy as np
@@ -234,3 +235,18 @@ def test_cli_walk_expert_and_model_together_is_one_line_and_exit_2(tmp_path, cap
     code, _, err = run(capsys, "walk-many", "--terrain", board, "--seed", "0", "--runs", "2",
                        "--search-radius", "0")
     assert_user_error(code, err, "search_radius must be > 0")
+
+
+def test_cli_walk_many_in_a_log_prints_progress_lines_on_stderr(tmp_path, capsys):
+    # standard error is not a terminal here (as in `make run > log`): lines, not a bar
+    board = tmp_path / "board.npz"
+    assert run(capsys, "terrain", "board", "flat", "flat", "flat", "--seed", "1",
+               "-o", board)[0] == 0
+    code, out, err = run(capsys, "walk-many", "--terrain", board, "--seed", "0", "--runs", "2",
+                         "--json")
+    assert code == 0
+    lines = err.splitlines()
+    assert [line.split(",")[0] for line in lines] == ["runs: 1 / 2 runs done",
+                                                      "runs: 2 / 2 runs done"]
+    failed = 2 - json.loads(out)["successes"]
+    assert lines[-1].startswith(f"runs: 2 / 2 runs done, {failed} failed, ")

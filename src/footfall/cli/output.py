@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import sys
 from collections.abc import Callable, Iterator
 from typing import Any
 
@@ -38,22 +37,26 @@ def progress_log(as_json: bool) -> Callable[[str], None]:
 
 
 @contextlib.contextmanager
-def progress_bar(total: int, desc: str, unit: str, quiet: bool) -> Iterator[Callable[[Any], None]]:
-    """A step counter shown as a bar on standard error (a terminal only, not with ``quiet``).
+def progress_bar(total: int, desc: str, unit: str, quiet: bool,
+                 failed: Callable[[Any], bool] | None = None,
+                 log_lines: bool = False) -> Iterator[Callable[[Any], None]]:
+    """A step counter on standard error (not with ``quiet``): a bar on a terminal; with
+    ``log_lines`` (batches of runs, minutes long) a line every few steps otherwise
+    (:class:`footfall.core.progress.BatchProgress`).
 
-    The bar opens at the first step, so that an argument refused before any
-    work leaves the error as the only line.
+    ``failed`` says of a finished item whether it failed (counted in the lines). The
+    progress opens at the first step, so that an argument refused before any work leaves
+    the error as the only line.
     """
-    from tqdm import tqdm
+    from footfall.core.progress import BatchProgress
 
     bar = None
 
-    def step(_: Any) -> None:
+    def step(item: Any) -> None:
         nonlocal bar
         if bar is None:
-            bar = tqdm(total=total, unit=unit, desc=desc, file=sys.stderr, dynamic_ncols=True,
-                       disable=quiet or not sys.stderr.isatty())
-        bar.update(1)
+            bar = BatchProgress(total, desc, unit, quiet=quiet, lines=log_lines)
+        bar.update(None if failed is None else failed(item))
 
     try:
         yield step

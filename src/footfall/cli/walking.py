@@ -101,7 +101,9 @@ def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: in
     """N runs in parallel processes: success rate (Wilson 95 % CI), slip, speed."""
     from footfall.experiments.batch import walk_batch
 
-    with progress_bar(runs, "runs", "run", quiet=False) as step:  # also with --json
+    with progress_bar(runs, "runs", "run", quiet=False,  # also with --json
+                      failed=lambda record: not record.result["success"],
+                      log_lines=True) as step:
         batch = walk_batch(terrain_path, runs, seed, model_path=model_path, expert=expert,
                            search_radius=search_radius, log_path=log_path, progress=step)
     s = batch.summary

@@ -339,10 +339,10 @@ def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
     store = _open_log(log_path)
 
     def finished(record: RunRecord) -> None:
-        if progress is not None:
-            progress(record)
         if store is not None:  # each finished run is kept at once
             store.add_run(record, terrains=[hmap])
+        if progress is not None:
+            progress(record)
 
     try:
         records = walk_many(terrain_path, model_path, runs, seed, config, progress=finished,

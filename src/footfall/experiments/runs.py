@@ -85,8 +85,9 @@ class Runner:
     log: Callable[[str], None]
 
     def run(self, jobs: list[RunJob], desc: str) -> None:
-        """Walk the jobs whose keys are not stored yet, with a progress bar named ``desc``."""
-        from tqdm import tqdm
+        """Walk the jobs whose keys are not stored yet, their progress named ``desc`` (a bar on a
+        terminal, a line every few runs in a log: :class:`footfall.core.progress.BatchProgress`)."""
+        from footfall.core.progress import BatchProgress
 
         done = {r["key"] for r in self.store.runs()}
         todo = [j for j in jobs if j.key not in done]
@@ -94,7 +95,8 @@ class Runner:
             self.log(f"{desc}: {len(jobs) - len(todo)} of {len(jobs)} runs already stored")
         if not todo:
             return
-        with tqdm(total=len(todo), desc=desc, unit="run", disable=None, dynamic_ncols=True) as bar:
+        bar = BatchProgress(len(todo), desc, "run")
+        try:
             if self.processes <= 1 or len(todo) == 1:
                 for job in todo:
                     self._keep(*execute(job), bar)
@@ -109,11 +111,13 @@ class Runner:
                     for f in futures:
                         f.cancel()
                     raise
+        finally:
+            bar.close()
 
     def _keep(self, record: RunRecord, demos: list, bar) -> None:
         self.store.add_run(record, terrains=[self.terrains[record.terrain_hash]],
                            demonstrations=demos)
-        bar.update(1)
+        bar.update(failed=not record.result["success"])
         if self.on_run is not None:
             self.on_run(record.key)
 

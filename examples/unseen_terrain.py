@@ -1,7 +1,7 @@
 """Two terrains of kinds footfall's generators never make, as height-map files.
 
 * ``stones.npz``: stepping stones -- square blocks 30-50 mm tall and 50-70 mm
-  wide on a 70 mm grid, with 10-25 mm gaps down to the ground between them --
+  wide on a 70 mm grid, with gaps of up to 20 mm down to the ground between them --
   stored at 2 mm, so a board resamples it to its 1 mm.
 * ``washboard.npz``: a 14 mm (peak to peak) ripple across the direction of
   walking, 40 mm long, with 2 mm of roughness and a no-data hole 60 mm across
@@ -37,16 +37,16 @@ SEED = 3  # seed of both terrains
 def stepping_stones(rng: np.random.Generator, resolution: float = 0.002) -> HeightMap:
     """Square blocks on a 70 mm grid [m]: 30-50 mm tall, 50-70 mm wide, ground at z = 0."""
     n = round(SIDE / resolution)
-    centres = (np.arange(n) + 0.5) * resolution  # [m] cell centres along x and along y
+    centres = (np.arange(n) + 0.5) * resolution  # [m] cell centres, along x and along y alike
     pitch = 0.07  # [m]
-    ix, iy = np.floor(centres / pitch).astype(int), np.floor(centres / pitch).astype(int)
+    stone = np.floor(centres / pitch).astype(int)  # the stone's row (x) or column (y) per cell
     stones = int(np.ceil(SIDE / pitch))
     tall = rng.uniform(0.03, 0.05, (stones, stones))  # [m] each stone's height
     half = 0.5 * rng.uniform(0.05, 0.07, (stones, stones))  # [m] each stone's half width
-    dx = np.abs(centres - (ix + 0.5) * pitch)  # [m] from the stone's centre, per cell
-    dy = np.abs(centres - (iy + 0.5) * pitch)
-    on = (dx[:, None] <= half[ix][:, iy]) & (dy[None, :] <= half[ix][:, iy])
-    heights = np.where(on, tall[ix][:, iy], 0.0)
+    off = np.abs(centres - (stone + 0.5) * pitch)  # [m] from the stone's centre line
+    half_here = half[np.ix_(stone, stone)]
+    on = (off[:, None] <= half_here) & (off[None, :] <= half_here)
+    heights = np.where(on, tall[np.ix_(stone, stone)], 0.0)
     return HeightMap(heights, resolution, (0.0, 0.0))
 
 
@@ -57,8 +57,7 @@ def washboard(rng: np.random.Generator, resolution: float = 0.001) -> HeightMap:
     ripple = 0.007 * np.sin(2 * np.pi * x / 0.04)  # [m] 14 mm peak to peak, 40 mm long
     rough = gaussian_filter(rng.normal(size=(n, n)), 3)
     heights = ripple[:, None] + 0.002 * rough / rough.std()
-    y = x
-    hole = np.hypot(x[:, None] - 0.3, y[None, :] - 0.2) < 0.03  # [m] 60 mm across
+    hole = np.hypot(x[:, None] - 0.3, x[None, :] - 0.2) < 0.03  # [m] 60 mm across, at (0.3, 0.2)
     heights[hole] = np.nan
     return HeightMap(heights, resolution, (0.0, 0.0))
 

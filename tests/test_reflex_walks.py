@@ -134,9 +134,7 @@ def _slab_board() -> HeightMap:
     start, _ = board_line(board, LITTLEDOG, _config(ALL_ON, 6))
     fx, fy, _ = LITTLEDOG.nominal_foot("RF")
     fx, fy = start[0] + fx, start[1] + fy
-    x = board.origin[0] + (np.arange(board.heights.shape[0]) + 0.5) * board.resolution
-    y = board.origin[1] + (np.arange(board.heights.shape[1]) + 0.5) * board.resolution
-    X, Y = np.meshgrid(x, y, indexing="ij")
+    X, Y = np.meshgrid(board.x, board.y, indexing="ij")
     heights = board.heights.copy()
     heights[(abs(X - fx) < 0.06) & (Y > fy - SLAB_GAP) & (Y < fy + 0.04)] = SLAB
     return HeightMap(heights, board.resolution, board.origin, metadata=board.metadata)

@@ -40,6 +40,7 @@ bench: $(STAMP)
 	$(BIN)/footfall bench learning
 	$(BIN)/footfall bench expert
 	$(BIN)/footfall bench sim
+	$(BIN)/footfall bench executors
 
 clean:
 	rm -rf $(VENV) out

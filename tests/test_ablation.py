@@ -173,7 +173,7 @@ def test_no_hard_walks_issue_18_s_boards_only(tmp_path, capsys, monkeypatch):
 
     seen = []
 
-    def fake(out, config, processes=None, log=print):
+    def fake(out, config, processes=None, log=print, executor=None):
         seen.append(config)
         return {}
 

@@ -250,3 +250,31 @@ def test_cli_walk_many_in_a_log_prints_progress_lines_on_stderr(tmp_path, capsys
                                                       "runs: 2 / 2 runs done"]
     failed = 2 - json.loads(out)["successes"]
     assert lines[-1].startswith(f"runs: 2 / 2 runs done, {failed} failed, ")
+
+
+def test_cli_walk_many_with_a_log_walks_only_the_runs_it_does_not_hold(tmp_path, capsys):
+    board = tmp_path / "board.npz"
+    assert run(capsys, "terrain", "board", "flat", "flat", "flat", "--seed", "1",
+               "-o", board)[0] == 0
+    log = tmp_path / "runs.sqlite"
+    common = ["walk-many", "--terrain", board, "--seed", "4", "--log", log, "--json"]
+    code, first, _ = run(capsys, *common, "--runs", "2")
+    assert code == 0
+    code, again, err = run(capsys, *common, "--runs", "3")  # seeds 4, 5 held; 6 walked
+    assert code == 0
+    lines = err.splitlines()
+    assert lines[0] == f"runs: 2 of 3 already in {log}"
+    assert [line.split(",")[0] for line in lines[1:]] == ["runs: 1 / 1 runs done"]
+    strip = lambda out: [{k: v for k, v in r.items() if k not in WALL_CLOCK_FIELDS}
+                         for r in json.loads(out)["runs_detail"]]
+    assert strip(again)[:2] == strip(first)  # read back from the store, as walked
+    from footfall.data.store import DemoStore
+
+    with DemoStore(log) as store:
+        keys = [r["key"] for r in store.runs()]
+    assert len(keys) == len(set(keys)) == 3 and all(k.endswith(f"/s{s}") for k, s in
+                                                    zip(keys, (4, 5, 6)))
+    code, _, err = run(capsys, *common, "--runs", "1", "--search-radius", "0.03")
+    assert code == 0 and "already" not in err  # other settings: another run
+    with DemoStore(log) as store:
+        assert len(store.runs()) == 4

@@ -50,6 +50,18 @@ def bench_sim_cmd(seed: int, as_json: bool) -> None:
     emit(as_json, result, format_sim(result))
 
 
+@bench.command("executors")
+@click.option("--runs", type=click.IntRange(2, 1000), default=8, show_default=True)
+@click.option("--processes", type=click.IntRange(1, 1024), default=2, show_default=True)
+@json_option
+def bench_executors_cmd(runs: int, processes: int, as_json: bool) -> None:
+    """Runs per minute of a batch on the local process pool against a Ray cluster."""
+    from footfall.experiments.bench import bench_executors, format_executors
+
+    result = bench_executors(runs=runs, processes=processes)
+    emit(as_json, result, format_executors(result))
+
+
 @bench.command("expert")
 @click.option("--states", type=click.IntRange(1, 1000), default=16, show_default=True)
 @json_option

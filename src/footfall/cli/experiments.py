@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from footfall.cli.choices import SEED, RegistryChoice
+from footfall.cli.executors import executor_options, opened_executor
 from footfall.cli.output import emit, json_option, progress_log
 
 
@@ -38,15 +39,17 @@ def _table2_line(name: str, row: dict) -> str:
               "(and the store of every run; run again with the same arguments to resume).")
 @click.option("--seed", type=SEED, default=0, show_default=True)
 @click.option("--quick", is_flag=True, help="A small version (a few minutes) for a smoke test.")
-@click.option("--processes", type=click.IntRange(1, 1024), default=None,
-              help="Parallel runs [default: the available cores].")
+@executor_options
 @json_option
-def reproduce(out: str, seed: int, quick: bool, processes: int | None, as_json: bool) -> None:
+def reproduce(out: str, seed: int, quick: bool, processes: int | None, executor_name: str,
+              ray_address: str | None, as_json: bool) -> None:
     """The paper's walking experiment end to end: corrections, learning, Tables I and II."""
     from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
 
     config = ReproduceConfig.quick(seed) if quick else ReproduceConfig(seed=seed)
-    results = run_reproduction(Path(out), config, processes=processes, log=progress_log(as_json))
+    with opened_executor(executor_name, processes, ray_address) as executor:
+        results = run_reproduction(Path(out), config, log=progress_log(as_json),
+                                   executor=executor)
     lines = [_table2_line(k, v) for k, v in results["table2"].items()]
     emit(as_json, results, "\n".join(lines + [f"wrote {Path(out) / 'report.md'} and report.html"]))
 
@@ -71,11 +74,11 @@ def _variant_names() -> list[str]:
                    "and chooser); --no-hard walks issue 18's boards only. A folder keeps its "
                    "choice.")
 @click.option("--quick", is_flag=True, help="A small version (about a minute) for a smoke test.")
-@click.option("--processes", type=click.IntRange(1, 1024), default=None,
-              help="Parallel runs [default: the available cores].")
+@executor_options
 @json_option
 def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], hard: bool, quick: bool,
-             processes: int | None, as_json: bool) -> None:
+             processes: int | None, executor_name: str, ray_address: str | None,
+             as_json: bool) -> None:
     """The walking controller's ablation: each part switched off alone, paired runs."""
     from dataclasses import replace
 
@@ -88,7 +91,8 @@ def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], hard: bo
         config = replace(config, variants=variants)
     if who:
         config = replace(config, who=tuple(dict.fromkeys(who)))
-    summary = run_ablation(Path(out), config, processes=processes, log=progress_log(as_json))
+    with opened_executor(executor_name, processes, ray_address) as executor:
+        summary = run_ablation(Path(out), config, log=progress_log(as_json), executor=executor)
     emit(as_json, summary, ablation_markdown(config, summary)
          + f"wrote {Path(out) / 'ablation.md'} and ablation.json")
 

@@ -37,7 +37,7 @@ def progress_log(as_json: bool) -> Callable[[str], None]:
 
 
 @contextlib.contextmanager
-def progress_bar(total: int, desc: str, unit: str, quiet: bool,
+def progress_bar(total: int | Callable[[], int], desc: str, unit: str, quiet: bool,
                  failed: Callable[[Any], bool] | None = None,
                  log_lines: bool = False) -> Iterator[Callable[[Any], None]]:
     """A step counter on standard error (not with ``quiet``): a bar on a terminal; with
@@ -46,16 +46,21 @@ def progress_bar(total: int, desc: str, unit: str, quiet: bool,
 
     ``failed`` says of a finished item whether it failed (counted in the lines). The
     progress opens at the first step, so that an argument refused before any work leaves
-    the error as the only line.
+    the error as the only line; ``total`` may be a function, asked then (the items left
+    once a resumed batch knows what it holds).
     """
+    import time
+
     from footfall.core.progress import BatchProgress
 
     bar = None
+    started = time.monotonic()  # the work began here, before the first item finished
 
     def step(item: Any) -> None:
         nonlocal bar
         if bar is None:
-            bar = BatchProgress(total, desc, unit, quiet=quiet, lines=log_lines)
+            bar = BatchProgress(total() if callable(total) else total, desc, unit, quiet=quiet,
+                                lines=log_lines, started=started)
         bar.update(None if failed is None else failed(item))
 
     try:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import click
 
 from footfall.cli.choices import SEED, count_range
+from footfall.cli.executors import executor_options, opened_executor
 from footfall.cli.output import emit, json_option, progress_bar
 
 TERRAIN_OPTION = click.option("--terrain", "terrain_path", required=True,
@@ -92,20 +93,33 @@ def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: st
 @click.option("--runs", type=count_range(1), default=21, show_default=True)
 @click.option("--seed", type=SEED, required=True,
               help="Run i has seed SEED + i.")
-@click.option("--log", "log_path", default=None, help="Append every run log to this store.")
+@click.option("--log", "log_path", default=None,
+              help="Keep every run in this store (.sqlite) as it ends; run again with the same "
+                   "store to walk only the runs it does not hold yet.")
 @_chooser_options
+@executor_options
 @json_option
 def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: int,
                   log_path: str | None, expert: bool, search_radius: float | None,
+                  processes: int | None, executor_name: str, ray_address: str | None,
                   as_json: bool) -> None:
-    """N runs in parallel processes: success rate (Wilson 95 % CI), slip, speed."""
+    """N runs in parallel: success rate (Wilson 95 % CI), slip, speed."""
     from footfall.experiments.batch import walk_batch
 
-    with progress_bar(runs, "runs", "run", quiet=False,  # also with --json
-                      failed=lambda record: not record.result["success"],
-                      log_lines=True) as step:
+    todo = {"runs": runs}
+
+    def reused(count: int) -> None:
+        todo["runs"] = runs - count
+        if count:
+            click.echo(f"runs: {count} of {runs} already in {log_path}", err=True)
+
+    with (opened_executor(executor_name, processes, ray_address) as executor,
+          progress_bar(lambda: todo["runs"], "runs", "run", quiet=False,  # also with --json
+                       failed=lambda record: not record.result["success"],
+                       log_lines=True) as step):
         batch = walk_batch(terrain_path, runs, seed, model_path=model_path, expert=expert,
-                           search_radius=search_radius, log_path=log_path, progress=step)
+                           search_radius=search_radius, log_path=log_path, progress=step,
+                           executor=executor, reused=reused)
     s = batch.summary
     slip = ("no successful run" if s.slip_mean_mm is None else
             f"slip {s.slip_mean_mm:.1f} +- {s.slip_std_mm:.1f} mm over "

@@ -47,18 +47,20 @@ class BatchProgress:
     ``stream`` a terminal (and not ``quiet``): a tqdm bar. Otherwise, unless
     ``quiet`` or not ``lines``: a :func:`progress_line` after every ``every`` items (default
     about a twentieth of ``total``), whenever ``interval`` [s] has passed
-    since the last line, and after the last item. ``clock`` [s] is for tests.
+    since the last line, and after the last item. ``clock`` [s] is for tests;
+    ``started`` [s, on ``clock``]: when the batch began, if before this progress opened.
     """
 
     def __init__(self, total: int, desc: str, unit: str = "run", quiet: bool = False,
                  lines: bool = True, stream: TextIO | None = None, every: int | None = None,
-                 interval: float = INTERVAL, clock: Callable[[], float] = time.monotonic):
+                 interval: float = INTERVAL, clock: Callable[[], float] = time.monotonic,
+                 started: float | None = None):
         self.total, self.desc, self.unit = int(total), desc, unit
         self.stream = sys.stderr if stream is None else stream
         self.every = max(1, every if every is not None else -(-self.total // LINES_PER_BATCH))
         self.interval, self.clock = float(interval), clock
         self.done, self.failed, self._counts_failures = 0, 0, False
-        self._start = self._last = clock()
+        self._start = self._last = clock() if started is None else started
         self._printed_at = 0  # items done at the last line
         tty = bool(getattr(self.stream, "isatty", lambda: False)())
         self._lines = lines and not quiet and not tty

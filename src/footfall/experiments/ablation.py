@@ -44,12 +44,12 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
-from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
 from footfall.core.files import write_text_atomic
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, at_least, param, within
 from footfall.data.store import DemoStore
+from footfall.experiments.executors import Executor, LocalPool
 from footfall.experiments.reproduce import reproduction_walk
 from footfall.experiments.runs import RunJob, Runner, board_files, claim_folder
 from footfall.expert.synthetic import walking_expert
@@ -317,8 +317,12 @@ def ablation_markdown(config: AblationConfig, summary: dict) -> str:
 
 # ------------------------------------------------------------------ the job
 def run_ablation(out: str | os.PathLike, config: AblationConfig = AblationConfig(),
-                 processes: int | None = None, log: Callable[[str], None] = print) -> dict:
-    """Walk (or resume) the ablation into ``out``; return the summary (also ablation.json/.md)."""
+                 processes: int | None = None, log: Callable[[str], None] = print,
+                 executor: Executor | None = None) -> dict:
+    """Walk (or resume) the ablation into ``out``; return the summary (also ablation.json/.md).
+
+    The runs are walked on ``executor`` [default: a local pool of ``processes`` workers].
+    """
     out = Path(out)
     claim_folder(out, config.to_dict(), "an ablation", free=("variants", "who"))
     paths = board_files(out, {name: (spec, seed, True)
@@ -327,7 +331,8 @@ def run_ablation(out: str | os.PathLike, config: AblationConfig = AblationConfig
     by_hash = {m.content_hash(): m for m in maps.values()}
     jobs = ablation_jobs(config, paths)
     with DemoStore(out / STORE_NAME, create=True) as store:
-        Runner(store, by_hash, processes or usable_cores(), None, log).run(jobs, "ablation runs")
+        Runner(store, by_hash, executor or LocalPool(processes), None, log).run(
+            jobs, "ablation runs")
         results = _outcomes(store)
     missing = [j.key for j in jobs if j.key not in results]
     if missing:  # cannot happen unless the store was edited by hand

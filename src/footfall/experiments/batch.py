@@ -8,10 +8,11 @@ the successful runs only.
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
-from multiprocessing import get_context
 from pathlib import Path
 from typing import Callable
 
@@ -19,14 +20,15 @@ import numpy as np
 
 from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
-from footfall.core.files import writable_path
+from footfall.core.files import plain_json, writable_path
 from footfall.core.heightmap import HeightMap, module_records
 from footfall.core.robot import LITTLEDOG
 from footfall.core.stats import wilson_interval
 from footfall.data.runlog import RunRecord
 from footfall.data.schema import SUFFIXES as STORE_SUFFIXES
 from footfall.data.store import DemoStore
-from footfall.experiments.runs import RunJob, execute
+from footfall.experiments.executors import Executor, LocalPool
+from footfall.experiments.runs import RunJob
 from footfall.expert.synthetic import walking_expert
 from footfall.sim.episode import Frames, Walk, WalkConfig
 
@@ -61,12 +63,30 @@ def expert_judge(config: WalkConfig):
 def walk_many(terrain_path: str | os.PathLike, model_path: str | os.PathLike | None, runs: int,
               seed: int, config: WalkConfig = WalkConfig(), processes: int | None = None,
               progress: Callable[[RunRecord], None] | None = None,
-              expert: bool = False) -> list[RunRecord]:
+              expert: bool = False, executor: Executor | None = None) -> list[RunRecord]:
     """``runs`` runs with seeds ``seed .. seed + runs - 1``, in parallel; returned in seed order.
 
-    Each process loads the terrain and the model itself (nothing is
-    pickled but paths, seeds and the frozen config). ``expert``: the walking
-    expert chooses the footholds (:func:`expert_judge`), not a reward.
+    Each worker loads the terrain and the model itself (nothing is shipped
+    but paths or file bytes, seeds and the frozen config). ``expert``: the
+    walking expert chooses the footholds (:func:`expert_judge`), not a reward.
+    The runs are walked on ``executor`` [default: a local pool of
+    ``processes`` workers, one per run at most].
+    """
+    jobs = batch_jobs(terrain_path, model_path, runs, seed, config, expert)
+    executor = executor or LocalPool(min(processes or usable_cores(), runs))
+    out = {job.seed: record for job, record in _walked(executor, jobs, progress)}
+    return [out[job.seed] for job in jobs]
+
+
+def batch_jobs(terrain_path: str | os.PathLike, model_path: str | os.PathLike | None, runs: int,
+               seed: int, config: WalkConfig = WalkConfig(), expert: bool = False,
+               keys: dict[int, str] | None = None) -> list[RunJob]:
+    """The jobs of :func:`walk_many`, in seed order, each keyed by ``keys[seed]`` if given.
+
+    Raises
+    ------
+    FootfallError
+        For the expert with a model, a bad run count, or a model the board cannot use.
     """
     if expert and model_path is not None:
         raise FootfallError("the expert chooses the footholds itself: give no model with it")
@@ -74,27 +94,42 @@ def walk_many(terrain_path: str | os.PathLike, model_path: str | os.PathLike | N
         raise FootfallError(f"runs must be an integer >= 1, got {runs!r}")
     hmap = HeightMap.load(terrain_path)
     reward_source(model_path, hmap)  # fail early, in this process, on a bad model
-    n = min(processes or usable_cores(), runs)
-    seeds = [seed + i for i in range(runs)]
     model = None if model_path is None else str(model_path)
     judge = walking_expert(config.footstep.lead)  # what expert_judge(config) judges with
-    jobs = {s: RunJob(None, str(terrain_path), model, s, config, expert=judge, judge=expert)
-            for s in seeds}
-    out: dict[int, RunRecord] = {}
-    if n == 1:
-        for s in seeds:
-            out[s] = execute(jobs[s])[0]
+    return [RunJob(None if keys is None else keys[s], str(terrain_path), model, s, config,
+                   expert=judge, judge=expert) for s in range(seed, seed + runs)]
+
+
+def _walked(executor: Executor, jobs: list[RunJob],
+            progress: Callable[[RunRecord], None] | None) -> Iterator[tuple[RunJob, RunRecord]]:
+    """Each job with its record as it finishes; an interrupted batch cancels the rest."""
+    runs = executor.map(jobs)
+    try:
+        for job, (record, _) in runs:
+            yield job, record
             if progress:
-                progress(out[s])
+                progress(record)
+    finally:
+        runs.close()
+
+
+def batch_run_keys(hmap: HeightMap, model_path: str | os.PathLike | None, expert: bool,
+                   config: WalkConfig, seeds: list[int]) -> dict[int, str]:
+    """Each seed's run key in a log store: board, chooser, settings and seed decide a run.
+
+    ``walk-many/<board hash>/<hand | expert | model-<file hash>>/<settings hash>/s<seed>``:
+    the same run walked again has the same key, so a batch logged to a store and
+    interrupted walks only what is missing when run again.
+    """
+    if expert:
+        chooser = "expert"
+    elif model_path is None:
+        chooser = "hand"
     else:
-        # spawn: a fresh interpreter per worker (no forked BLAS or renderer state)
-        with ProcessPoolExecutor(max_workers=n, mp_context=get_context("spawn")) as pool:
-            futures = {pool.submit(execute, jobs[s]): s for s in seeds}
-            for f in as_completed(futures):
-                out[futures[f]] = f.result()[0]
-                if progress:
-                    progress(out[futures[f]])
-    return [out[s] for s in seeds]
+        chooser = "model-" + hashlib.sha256(Path(model_path).read_bytes()).hexdigest()[:16]
+    settings = json.dumps(plain_json(config.to_dict(), nonfinite="null"), sort_keys=True)
+    digest = hashlib.sha256(settings.encode()).hexdigest()[:16]
+    return {s: f"walk-many/{hmap.content_hash()[:16]}/{chooser}/{digest}/s{s}" for s in seeds}
 
 
 @dataclass(frozen=True)
@@ -323,11 +358,17 @@ class BatchOutcome:
 def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
                model_path: str | os.PathLike | None = None, expert: bool = False,
                search_radius: float | None = None, log_path: str | os.PathLike | None = None,
-               progress: Callable[[RunRecord], None] | None = None) -> BatchOutcome:
+               progress: Callable[[RunRecord], None] | None = None,
+               executor: Executor | None = None,
+               reused: Callable[[int], None] | None = None) -> BatchOutcome:
     """``runs`` runs in parallel (:func:`walk_many`), each logged to ``log_path`` as it ends.
 
     Settings as for :func:`walk_once`; ``progress`` is called with each
-    finished run (in the order they finish).
+    walked run (in the order they finish). With a log store, each run is
+    keyed (:func:`batch_run_keys`) and a run the store holds already is read
+    from it, not walked again (``reused(count)`` is told how many, before any
+    run): an interrupted batch run again walks only what is missing. The runs
+    are walked on ``executor`` [default: a local pool].
 
     Raises
     ------
@@ -337,18 +378,27 @@ def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
     config = walk_config(model_path, expert, search_radius)
     hmap = load_board(terrain_path)
     store = _open_log(log_path)
-
-    def finished(record: RunRecord) -> None:
-        if store is not None:  # each finished run is kept at once
-            store.add_run(record, terrains=[hmap])
-        if progress is not None:
-            progress(record)
-
     try:
-        records = walk_many(terrain_path, model_path, runs, seed, config, progress=finished,
-                            expert=expert)
+        seeds = list(range(seed, seed + runs)) if isinstance(runs, int) else []
+        keys = None if store is None else batch_run_keys(hmap, model_path, expert, config, seeds)
+        jobs = batch_jobs(terrain_path, model_path, runs, seed, config, expert, keys)
+        records: dict[int, RunRecord] = {}
+        if store is not None:
+            held = {r["key"]: r["id"] for r in store.runs(key_prefix="walk-many/")}
+            records = {j.seed: store.run(held[j.key]) for j in jobs if j.key in held}
+        if reused is not None:
+            reused(len(records))
+        todo = [j for j in jobs if j.seed not in records]
+        executor = executor or LocalPool(min(usable_cores(), max(1, len(todo))))
+        for job, record in _walked(executor, todo, None):
+            if store is not None:  # each finished run is kept at once
+                store.add_run(record, terrains=[hmap])
+            records[job.seed] = record
+            if progress is not None:
+                progress(record)
     finally:
         if store is not None:
             store.close()
+    ordered = [records[s] for s in seeds]
     return BatchOutcome(str(terrain_path), _path_or_none(model_path), expert, seed,
-                        summarise(records), tuple(records))
+                        summarise(ordered), tuple(ordered))

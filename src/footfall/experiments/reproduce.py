@@ -51,7 +51,6 @@ from typing import Callable
 
 import numpy as np
 
-from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, above, at_least, param
@@ -59,6 +58,7 @@ from footfall.core.robot import LITTLEDOG
 from footfall.core.seeds import SeedStreams
 from footfall.data.store import DemoStore
 from footfall.experiments.batch import summarise
+from footfall.experiments.executors import Executor, LocalPool
 from footfall.experiments.runs import RunJob, Runner, board_files, claim_folder
 from footfall.expert.synthetic import ExpertConfig, walking_expert
 from footfall.features.family import PAPER_FEATURE_SETS
@@ -455,11 +455,13 @@ def sweep_difficulties(ws: Workspace, runner: Runner, evaluation: Evaluation) ->
 # ------------------------------------------------------------------ the job
 def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = ReproduceConfig(),
                      processes: int | None = None, log: Callable[[str], None] = print,
-                     on_run: Callable[[str], None] | None = None) -> dict:
+                     on_run: Callable[[str], None] | None = None,
+                     executor: Executor | None = None) -> dict:
     """Run (or resume) the whole experiment into ``out``; return the results (also results.json).
 
     The stages of the module's docstring, one function each. ``on_run(key)``
-    is called after each run is stored (e.g. to show progress).
+    is called after each run is stored (e.g. to show progress). The runs are
+    walked on ``executor`` [default: a local pool of ``processes`` workers].
     """
     from footfall.experiments.report import write_report
 
@@ -469,7 +471,7 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = Reproduce
                      "boards": {name: {"modules": [list(m) for m in spec], "seed": seed}
                                 for name, (spec, seed) in boards(config).items()}}
     with DemoStore(ws.out / STORE_NAME, create=True) as store:
-        runner = Runner(store, ws.by_hash, processes or usable_cores(), on_run, log)
+        runner = Runner(store, ws.by_hash, executor or LocalPool(processes), on_run, log)
         corrections = correction_rounds(ws, runner)
         results["rounds"] = corrections.rounds
         results["demonstrations"] = _demo_summary(corrections.demos, ws.by_hash)

@@ -9,23 +9,28 @@ holds, walks the rest in parallel worker processes (one core each) and
 stores every run, with the expert's corrections of it if asked for, in one
 transaction as it arrives: an experiment stopped at any point and started
 again walks only what is missing, and the result does not depend on the
-order in which the workers finish.
+order in which the workers finish. Where the runs are walked -- a local
+process pool or a Ray cluster -- is the runner's executor
+(:mod:`footfall.experiments.executors`); only the runner writes the store.
 """
 
 from __future__ import annotations
 
 import json
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field, replace
-from multiprocessing import get_context
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 from footfall.core.heightmap import HeightMap
 from footfall.data.runlog import RunRecord
 from footfall.data.store import DemoStore
 from footfall.expert.synthetic import ExpertConfig
 from footfall.sim.episode import WalkConfig
+
+if TYPE_CHECKING:
+    from footfall.experiments.executors import Executor
+
+RunOutput = tuple[RunRecord, list]  # a walked run and the expert's corrections of it (demos)
 
 
 @dataclass(frozen=True)
@@ -45,7 +50,7 @@ class RunJob:
     inspect_seed: int = 0  # the expert's randomness while it inspects the run
 
 
-def execute(job: RunJob) -> tuple[RunRecord, list]:
+def execute(job: RunJob) -> RunOutput:
     """One run (in a worker process): walk, and the expert's corrections if asked for."""
     from threadpoolctl import threadpool_limits
 
@@ -76,11 +81,11 @@ def execute(job: RunJob) -> tuple[RunRecord, list]:
 
 @dataclass
 class Runner:
-    """Runs jobs not yet in the store, in parallel; each run is stored with its demos on arrival."""
+    """Runs jobs not yet in the store on an executor; each run is stored with its demos on arrival."""
 
     store: DemoStore
     terrains: dict[str, HeightMap]  # content hash -> board (stored with the first run on it)
-    processes: int
+    executor: Executor  # where the runs are walked (footfall.experiments.executors)
     on_run: Callable[[str], None] | None  # called with each stored run's key
     log: Callable[[str], None]
 
@@ -96,22 +101,12 @@ class Runner:
         if not todo:
             return
         bar = BatchProgress(len(todo), desc, "run")
+        runs = self.executor.map(todo)
         try:
-            if self.processes <= 1 or len(todo) == 1:
-                for job in todo:
-                    self._keep(*execute(job), bar)
-                return
-            with ProcessPoolExecutor(max_workers=min(self.processes, len(todo)),
-                                     mp_context=get_context("spawn")) as pool:
-                futures = [pool.submit(execute, job) for job in todo]
-                try:
-                    for f in as_completed(futures):
-                        self._keep(*f.result(), bar)
-                except BaseException:
-                    for f in futures:
-                        f.cancel()
-                    raise
+            for _, (record, demos) in runs:
+                self._keep(record, demos, bar)
         finally:
+            runs.close()  # an interrupted batch cancels the runs not yet finished
             bar.close()
 
     def _keep(self, record: RunRecord, demos: list, bar) -> None:

@@ -88,7 +88,8 @@ COMMANDS = (
             heavy=True),
     Command(("walk-many",), (Slot("--terrain", "input", "{map}"), Slot("--runs", "count", "2"),
                              Slot("--seed", "seed", "0"),
-                             Slot("--search-radius", "positive", "0.03")), heavy=True),
+                             Slot("--search-radius", "positive", "0.03"),
+                             Slot("--processes", "count", "1")), heavy=True),
 )
 
 cli_cases = st.tuples(st.integers(0, len(COMMANDS) - 1),

@@ -347,3 +347,64 @@ def test_walking_expert_wants_the_foot_at_the_gait_nominal_position_on_flat_grou
     assert np.linalg.norm(best[:2] - target) < 0.011  # within two lattice steps of the target
     # The default expert (w_stance 0) is unchanged by the term: it still reaches forward.
     assert np.all(EXPERT.contributions(FLAT, STATE, cand)["stance_offset"] == 0.0)
+
+
+def _window_surface(hmap, lo, hi, radius):
+    """The sphere surface dilated on the window alone: the computation before per-map caching."""
+    from scipy import ndimage
+
+    res = hmap.resolution
+    reach = int(math.ceil(radius / res))
+    lo_idx = np.floor((np.asarray(lo) - hmap.origin) / res).astype(int) - reach - 1
+    hi_idx = np.ceil((np.asarray(hi) - hmap.origin) / res).astype(int) + reach + 2
+    i0, j0 = max(lo_idx[0], 0), max(lo_idx[1], 0)
+    i1, j1 = min(hi_idx[0], hmap.shape[0]), min(hi_idx[1], hmap.shape[1])
+    window = hmap.heights[i0:i1, j0:j1]
+    off = np.arange(-reach, reach + 1) * res
+    d2 = off[:, None] ** 2 + off[None, :] ** 2
+    footprint = d2 <= radius * radius * (1 + 1e-9)
+    cap = np.sqrt(np.clip(radius * radius - d2, 0.0, None))
+    return ndimage.grey_dilation(np.where(np.isnan(window), -np.inf, window),
+                                 footprint=footprint, structure=np.where(footprint, cap, 0.0),
+                                 mode="constant", cval=-np.inf), (i0, j0)
+
+
+def test_the_per_map_sphere_surface_equals_the_window_dilation_where_it_is_sampled():
+    from footfall.expert.synthetic import _sphere_surface
+
+    board = make_board([("rocky", 0.7)], seed=3)
+    rng = np.random.default_rng(1)
+    h = np.array(board.heights)
+    h[rng.random(h.shape) < 0.03] = np.nan  # scattered holes
+    h[700:760, 200:260] = np.nan  # a large one
+    holes = HeightMap(h, board.resolution, board.origin)
+    r = LITTLEDOG.foot_radius
+    for lo, hi in (((0.70, -0.20), (0.80, -0.10)), ((0.60, 0.20), (0.90, 0.31)),
+                   ((0.0, -0.31), (0.05, -0.25))):  # ... and at the map's border
+        lo, hi = np.array(lo), np.array(hi)
+        cached = _sphere_surface(holes, lo, hi, r)
+        direct, (i0, j0) = _window_surface(holes, lo, hi, r)
+        # every cell a sample inside [lo, hi] reads (with its bilinear neighbours)
+        a = np.floor((lo - holes.origin) / holes.resolution).astype(int) - (i0, j0)
+        b = np.ceil((hi - holes.origin) / holes.resolution).astype(int) + 2 - (i0, j0)
+        a = np.maximum(a, 0)
+        inner = direct[a[0]:b[0], a[1]:b[1]]
+        known = np.isfinite(inner)
+        assert np.array_equal(cached.known[a[0]:b[0], a[1]:b[1]] > 0, known)
+        assert np.array_equal(cached.filled[a[0]:b[0], a[1]:b[1]][known], inner[known])
+
+
+def test_the_expert_judges_a_candidate_set_again_exactly_as_the_first_time():
+    from footfall.expert.synthetic import walking_expert
+
+    board = make_board([("rocky", 0.7), ("steps", 0.7)], seed=500)
+    expert = SyntheticExpert(walking_expert(0.02))
+    state = nominal_state(board, (0.9, 0.0), 0.1, "LF")
+    cand = reachable_footholds(board, state)
+    first = expert.values(board, state, cand)
+    first[:] = 0.0  # a caller changing its result changes nothing kept
+    again = expert.values(board, state, cand)
+    fresh = SyntheticExpert(walking_expert(0.02)).values(board, state, cand)
+    assert np.array_equal(again, fresh)
+    other = nominal_state(board, (0.9, 0.0), 0.3, "LF")  # another heading: judged anew
+    assert not np.array_equal(expert.values(board, other, cand), fresh)

@@ -17,6 +17,7 @@ mirror) pair by :func:`terrain_grids` and shared with the footstep planner.
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -83,7 +84,9 @@ def terrain_grids(hmap: HeightMap, reward_for: RewardFor, robot: RobotDescriptio
     """Dense terrain-reward grids of every leg, one :func:`score_grid` per distinct (reward, mirror).
 
     Legs whose rewards have the same terrain part and the same mirroring
-    (e.g. both left legs under one reward) share one grid object.
+    (e.g. both left legs under one reward) share one grid object, and a map's
+    grids are scored once per process: the next run on the same map object
+    (see :func:`footfall.experiments.runs.execute`) reuses them.
 
     Parameters
     ----------
@@ -99,7 +102,7 @@ def terrain_grids(hmap: HeightMap, reward_for: RewardFor, robot: RobotDescriptio
     dict
         Leg name -> :class:`~footfall.features.scoring.ScoreGrid` (reward -inf where invalid).
     """
-    cache: dict[tuple[str, bool], ScoreGrid] = {}
+    cache = _GRIDS.setdefault(hmap, {})
     out = {}
     for name in LEG_NAMES:
         reward = reward_for(name)
@@ -107,11 +110,19 @@ def terrain_grids(hmap: HeightMap, reward_for: RewardFor, robot: RobotDescriptio
             raise FootfallError(f"reward_for({name!r}) must return a LinearReward, "
                                 f"got {type(reward).__name__}")
         mirror = robot.leg(name).mirrored
-        key = (reward.key(state=False), mirror)
+        key = (reward.key(state=False), mirror, float(spacing), float(yaw))
         if key not in cache:
-            cache[key] = score_grid(hmap, reward, spacing=spacing, yaw=yaw, mirror=mirror)
+            grid = score_grid(hmap, reward, spacing=spacing, yaw=yaw, mirror=mirror)
+            for array in (grid.x, grid.y, grid.reward, grid.valid):
+                array.setflags(write=False)  # shared by every run on the map
+            cache[key] = grid
         out[name] = cache[key]
     return out
+
+
+_GRIDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+# map -> {(reward's terrain key, mirror, spacing, yaw): ScoreGrid}: a board's grids, scored once
+# per process (a map's heights are read-only; every run of a batch on one board shares them)
 
 
 def grid_spacing(grid: ScoreGrid) -> float:

@@ -266,35 +266,61 @@ def format_learning(r: dict) -> str:
     ])
 
 
-def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0) -> dict:
+def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0,
+              probes: int = 400) -> dict:
     """Real-time factor of the whole walking stack against bare MuJoCo stepping (the ceiling).
 
     One seeded run of the hand-tuned reward over a flat | rocky | flat board
     (planning, control and physics, on this process's one core: CPU time),
-    then bare stepping of the same model on the same terrain with the robot
-    standing on the rocky module, and on the flat start module. Also a run
-    on a flat board, for the walking speed on flat ground.
+    with where its time goes (set-up, planning, physics split by MuJoCo's own
+    timers, and the control periods around it), then bare stepping of the same
+    model on the same terrain with the robot standing on the rocky module, and
+    on the flat start module. Also a run on a flat board, for the walking
+    speed on flat ground, and the physics' fidelity
+    (:mod:`footfall.sim.fidelity`): ``probes`` ball feet lowered onto the rocky
+    module, and the robot standing on a 0.3 slope.
     """
+    import mujoco
+
     from footfall.core.state import nominal_state
     from footfall.features.reward import default_reward
-    from footfall.sim.episode import walk
+    from footfall.sim.episode import Walk
+    from footfall.sim.fidelity import ball_rest_errors, slope_creep
     from footfall.sim.simulation import Simulation, bench_stepping
 
     reward = default_reward()
-    out: dict = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version()}}
+    out: dict = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
+                             "mujoco": mujoco.__version__}}
     boards = {"rocky": make_board([("rocky", difficulty)], seed=seed),
               "flat": make_board([("flat", 0.0)] * 3, seed=seed)}
     for name, board in boards.items():
         cpu, wall = time.process_time(), time.perf_counter()
-        record = walk(board, lambda leg: reward, seed)
+        run = Walk(board, lambda leg: reward, seed)
+        setup = time.process_time() - cpu
+        record = run.run()
         cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
         r = record.result
+        timer = run.sim.data.timer
+        physics = float(timer[mujoco.mjtTimer.mjTIMER_STEP].duration)
+        planning = 1e-3 * r["planning_ms_per_step"] * len(record.steps)
+        warm = time.process_time()
+        Walk(board, lambda leg: reward, seed).sim.close()  # the same board again: cached grids
+        warm = time.process_time() - warm
         out[f"walk_{name}"] = {
             "success": r["success"], "reason": r["reason"], "simulated_s": r["time"],
             "cpu_s": cpu, "wall_s": wall, "real_time_factor": r["time"] / cpu,
             "wall_real_time_factor": r["time"] / wall,
             "planning_ms_per_step": r["planning_ms_per_step"], "steps": r["steps"],
-            "speed_cm_s": r["speed_cm_s"], "speed_body_lengths_s": r["speed_body_lengths_s"]}
+            "speed_cm_s": r["speed_cm_s"], "speed_body_lengths_s": r["speed_body_lengths_s"],
+            "parts_s": {
+                "setup": setup, "setup_again": warm, "planning": planning,
+                "physics": physics,
+                "physics_collision": float(timer[mujoco.mjtTimer.mjTIMER_POS_COLLISION].duration),
+                "physics_solver": float(timer[mujoco.mjtTimer.mjTIMER_CONSTRAINT].duration),
+                "control": cpu - setup - planning - physics},
+            "physics_steps": int(timer[mujoco.mjtTimer.mjTIMER_STEP].number),
+            # a later run of a batch on the same board: its reward grids already scored
+            "batch_real_time_factor": r["time"] / (cpu - setup + warm)}
     board = boards["rocky"]
     for where, x in (("rocky", 0.915), ("flat", 0.3)):
         sim = Simulation(hmap=board)
@@ -305,6 +331,16 @@ def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0)
         sim.close()
     out["stack_over_bare_rocky"] = (out["walk_rocky"]["real_time_factor"]
                                     / out["bare_rocky"]["real_time_factor"])
+    rng = np.random.default_rng(seed)
+    module = [m for m in board.metadata["modules"] if m["kind"] == "rocky"][0]
+    xy = np.column_stack([rng.uniform(module["x_start"] + 0.02, module["x_end"] - 0.02, probes),
+                          rng.uniform(-0.25, 0.25, probes)])
+    rest = np.abs(ball_rest_errors(board, xy))
+    creep = slope_creep()
+    out["fidelity"] = {"rest_error_mean_mm": 1e3 * float(rest.mean()),
+                       "rest_error_p99_mm": 1e3 * float(np.percentile(rest, 99)),
+                       "rest_points": int(probes),
+                       "slope_creep_max_mm": 1e3 * float(creep.max())}
     return out
 
 
@@ -318,11 +354,24 @@ def format_sim(r: dict) -> str:
                      f"({'success' if w['success'] else w['reason']}), {w['steps']} steps, "
                      f"planning {w['planning_ms_per_step']:.1f} ms/step, "
                      f"{w['speed_cm_s']:.1f} cm/s ({w['speed_body_lengths_s']:.2f} body lengths/s)")
+        lines.append(f"  a later run of a batch on the same board (grids scored once): "
+                     f"{w['batch_real_time_factor']:.1f}x real time")
+        p = w["parts_s"]
+        lines.append(f"  CPU {w['cpu_s']:.2f} s: set-up {p['setup']:.2f} (again on the same "
+                     f"board {p['setup_again']:.2f}), planning {p['planning']:.2f}, physics "
+                     f"{p['physics']:.2f} (collision {p['physics_collision']:.2f}, solver "
+                     f"{p['physics_solver']:.2f}; {1e6 * p['physics'] / w['physics_steps']:.0f} "
+                     f"us per step), control periods {p['control']:.2f}")
     for where in ("rocky", "flat"):
         b = r[f"bare_{where}"]
         lines.append(f"bare MuJoCo stepping, robot on the {where} module: "
                      f"{b['real_time_factor']:.1f}x real time ({b['steps_per_second']:.0f} steps/s)")
     lines.append(f"whole stack / bare stepping on the rocky board: {r['stack_over_bare_rocky']:.2f}")
+    f = r["fidelity"]
+    lines.append(f"fidelity: a loaded ball foot rests {f['rest_error_mean_mm']:.2f} mm from the "
+                 f"map's rest height on average, {f['rest_error_p99_mm']:.2f} mm at the 99th "
+                 f"percentile ({f['rest_points']} points on rock); standing on a 0.3 slope, "
+                 f"a foot creeps {f['slope_creep_max_mm']:.2f} mm in 4 s")
     return "\n".join(lines)
 
 

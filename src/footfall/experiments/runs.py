@@ -17,6 +17,8 @@ process pool or a Ray cluster -- is the runner's executor
 from __future__ import annotations
 
 import json
+import os
+from collections import OrderedDict
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
@@ -63,7 +65,7 @@ def execute(job: RunJob) -> RunOutput:
     from footfall.expert.synthetic import SyntheticExpert
     from footfall.sim.episode import walk
 
-    hmap = HeightMap.load(job.terrain)
+    hmap = _board(job.terrain)
     # One core per run: the stack's small matrix products only lose to BLAS threads
     # fighting over the cores the other runs use.
     with threadpool_limits(limits=1):
@@ -77,6 +79,29 @@ def execute(job: RunJob) -> RunOutput:
             found = worst_corrections(found, job.margin, job.cap)
             demos = corrections_to_demonstrations(record, job.key, found, expert)
     return record, demos
+
+
+BOARDS_KEPT = 4  # [-] boards a worker process keeps loaded between runs
+_BOARDS: OrderedDict = OrderedDict()  # (path, size, mtime) -> HeightMap, most recent last
+
+
+def _board(path: str) -> HeightMap:
+    """The board at ``path``, loaded once per worker process while the file is unchanged.
+
+    Runs of a batch on one board then share one map object, and with it what
+    is computed once per map: the reward grids
+    (:func:`footfall.control.body_path.terrain_grids`) and the expert's sphere
+    surface (:mod:`footfall.expert.synthetic`).
+    """
+    st = os.stat(path)
+    key = (os.path.realpath(path), st.st_size, st.st_mtime_ns)
+    if key in _BOARDS:
+        _BOARDS.move_to_end(key)
+    else:
+        _BOARDS[key] = HeightMap.load(path)
+        if len(_BOARDS) > BOARDS_KEPT:
+            _BOARDS.popitem(last=False)
+    return _BOARDS[key]
 
 
 @dataclass

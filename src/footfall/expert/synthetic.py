@@ -27,6 +27,8 @@ See docs/expert.md for the reasoning behind every term, unit and weight.
 from __future__ import annotations
 
 import math
+import weakref
+from collections import OrderedDict
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -242,6 +244,33 @@ class _Surface:
         return out
 
 
+_BOARD_SURFACES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+# map -> {radius [m]: (filled, known)}: each map's sphere surface, dilated once over the whole map
+
+
+def _board_surface(hmap: HeightMap, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """The sphere's centre-height surface over the whole map: (heights [m], 0 where unknown;
+    1.0 where known), computed once per map and radius (a map's heights are read-only)."""
+    per_map = _BOARD_SURFACES.setdefault(hmap, {})
+    if radius not in per_map:
+        res = hmap.resolution
+        reach = int(math.ceil(radius / res))
+        off = np.arange(-reach, reach + 1) * res
+        d2 = off[:, None] ** 2 + off[None, :] ** 2
+        footprint = d2 <= radius * radius * (1 + 1e-9)
+        cap = np.sqrt(np.clip(radius * radius - d2, 0.0, None))
+        h = hmap.heights
+        surface = ndimage.grey_dilation(np.where(np.isnan(h), -np.inf, h),
+                                        footprint=footprint,
+                                        structure=np.where(footprint, cap, 0.0),
+                                        mode="constant", cval=-np.inf)
+        known = np.isfinite(surface)
+        filled = np.where(known, surface, 0.0)
+        filled.setflags(write=False)
+        per_map[radius] = (filled, known)
+    return per_map[radius]
+
+
 def _sphere_surface(hmap: HeightMap, lo: np.ndarray, hi: np.ndarray, radius: float
                     ) -> _Surface | None:
     """Centre height [m] of a sphere of ``radius`` [m] lowered onto the map, on a window of cells.
@@ -249,10 +278,12 @@ def _sphere_surface(hmap: HeightMap, lo: np.ndarray, hi: np.ndarray, radius: flo
     ``B(c) = max over cells c' within radius of h(c') + sqrt(radius^2 - |c - c'|^2)``, a
     grey-scale dilation of the heights by the sphere. Covers at least the positions
     in [lo, hi] (x, y) [m] that lie on the map; the window is padded by the
-    sphere's reach so no value is truncated except by the map's own border
-    (beyond it there is nothing to touch). Cells are points at their centres;
-    cells without data give no support; where no cell with data lies within
-    ``radius``, the height is unknown. ``None`` if nothing in the window is known.
+    sphere's reach, so every value sampled inside [lo, hi] is the whole map's
+    (:func:`_board_surface`, dilated once per map: the maximum over the same cells,
+    bit for bit), and only the map's own border truncates (beyond it there is nothing
+    to touch). Cells are points at their centres; cells without data give no
+    support; where no cell with data lies within ``radius``, the height is
+    unknown. ``None`` if nothing in the window is known.
     """
     res = hmap.resolution
     reach = int(math.ceil(radius / res))
@@ -263,18 +294,11 @@ def _sphere_surface(hmap: HeightMap, lo: np.ndarray, hi: np.ndarray, radius: flo
     i1, j1 = min(hi_idx[0], nx), min(hi_idx[1], ny)
     if i1 - i0 < 2 or j1 - j0 < 2:
         return None
-    window = hmap.heights[i0:i1, j0:j1]
-    off = np.arange(-reach, reach + 1) * res
-    d2 = off[:, None] ** 2 + off[None, :] ** 2
-    footprint = d2 <= radius * radius * (1 + 1e-9)
-    cap = np.sqrt(np.clip(radius * radius - d2, 0.0, None))
-    surface = ndimage.grey_dilation(np.where(np.isnan(window), -np.inf, window),
-                                    footprint=footprint, structure=np.where(footprint, cap, 0.0),
-                                    mode="constant", cval=-np.inf)
-    known = np.isfinite(surface)
+    filled, known = _board_surface(hmap, radius)
+    known = known[i0:i1, j0:j1]
     if not known.any():
         return None
-    return _Surface(np.where(known, surface, 0.0), known.astype(np.float64),
+    return _Surface(filled[i0:i1, j0:j1], known.astype(np.float64),
                     np.array([hmap.origin[0] + i0 * res, hmap.origin[1] + j0 * res]), res,
                     bool(known.all()))
 
@@ -513,6 +537,9 @@ def walking_expert(lead: float, placement_error: float = WALKER_PLACEMENT_ERROR)
                    placement_error=float(placement_error))
 
 
+RECENT_CANDIDATE_SETS = 64  # [-] candidate sets whose terrain terms an expert keeps
+
+
 class SyntheticExpert:
     """A hand-made foothold judge whose choices serve as expert demonstrations.
 
@@ -527,6 +554,24 @@ class SyntheticExpert:
     def __init__(self, config: ExpertConfig = ExpertConfig(), robot: RobotDescription = LITTLEDOG):
         self.config = config
         self.robot = robot
+        # The terrain terms of recent candidate sets: a walk's look-ahead judges the same
+        # footholds again from the next steps (about 45 % of the calls on rocks).
+        self._recent: OrderedDict = OrderedDict()
+
+    def _terrain(self, hmap: HeightMap, f: np.ndarray, yaw: float
+                 ) -> tuple[dict[str, np.ndarray], np.ndarray]:
+        """:func:`_worst_placement` of candidates ``f`` at heading ``yaw``, remembered."""
+        key = (id(hmap), float(yaw), f.tobytes())
+        hit = self._recent.get(key)
+        if hit is not None and hit[0] is hmap:
+            self._recent.move_to_end(key)
+        else:
+            hit = (hmap, _worst_placement(hmap, f, yaw, self.config, self.robot))
+            self._recent[key] = hit
+            if len(self._recent) > RECENT_CANDIDATE_SETS:
+                self._recent.popitem(last=False)
+        terms, seat = hit[1]
+        return {name: v.copy() for name, v in terms.items()}, seat.copy()
 
     def _check(self, candidates: np.ndarray) -> np.ndarray:
         f = np.asarray(candidates, dtype=np.float64)
@@ -560,7 +605,7 @@ class SyntheticExpert:
         cfg, robot = self.config, self.robot
         if f.shape[0] == 0:
             return {name: np.zeros(0) for name in EXPERT_TERM_NAMES}
-        terrain, seat = _worst_placement(hmap, f, state.yaw, cfg, robot)
+        terrain, seat = self._terrain(hmap, f, state.yaw)
         out = {**terrain, **_leg_terms(hmap, state, f, seat, cfg, robot),
                **_pose_terms(state, f, cfg, robot)}
         return {name: out[name] for name in EXPERT_TERM_NAMES}

@@ -430,9 +430,42 @@ def compile_model(robot: RobotDescription, hmap: HeightMap | None, *,
     """
     tiles = _checked_layout(robot, hmap, terrain_offset, terrain_yaw, max_spacing)
     model = mujoco.MjModel.from_xml_string(_mjcf(robot, tiles, terrain_offset, friction, fixed_base))
+    return _filled(model, tiles)
+
+
+def _filled(model: mujoco.MjModel, tiles: list | None) -> mujoco.MjModel:
+    """``model`` with its height fields' data filled in from the terrain tiles."""
     for n, tile in enumerate(tiles or ()):
         if tile["kind"] == "hfield":
             h = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_HFIELD, f"terrain{n}")
             adr = model.hfield_adr[h]
             model.hfield_data[adr:adr + tile["data"].size] = tile["data"]
     return model
+
+
+def compile_probe_model(robot: RobotDescription, hmap: HeightMap, xy: np.ndarray,
+                        load: float, max_spacing: float | None = MAX_HFIELD_SPACING
+                        ) -> mujoco.MjModel:
+    """The robot's physics with ball feet on vertical sliders: where does a loaded foot rest?
+
+    The model of :func:`compile_model` (same options, contact parameters and
+    terrain; the robot on its test rig, far above) plus one ball of the foot's
+    radius, friction and contact settings per point of ``xy`` (n, 2) [m],
+    free only to slide vertically, each of mass ``load`` [kg] (the weight a
+    stance foot carries), starting just clear of the terrain's highest point.
+    Bodies ``probe0``, ``probe1``, ...; their joints' positions are the balls'
+    drops [m].
+    """
+    xy = np.atleast_2d(np.asarray(xy, dtype=np.float64))
+    tiles = _checked_layout(robot, hmap, (0.0, 0.0, 0.0), 0.0, max_spacing)
+    xml = _mjcf(robot, tiles, (0.0, 0.0, 0.0), None, fixed_base=True)
+    top = float(np.nanmax(hmap.heights)) + 2 * robot.foot_radius
+    probes = "".join(
+        f'\n    <body name="probe{k}" pos="{_f(x, y, top)}">'
+        f'<joint name="probe{k}" type="slide" axis="0 0 1" damping="{_f(2.0 * load)}"/>'
+        f'<geom type="sphere" size="{_f(robot.foot_radius)}" mass="{_f(load)}" '
+        f'contype="{_ROBOT_GROUP}" conaffinity="0" condim="3" '
+        f'friction="{_f(robot.foot_friction)} 0 0"/></body>'
+        for k, (x, y) in enumerate(xy))
+    return _filled(mujoco.MjModel.from_xml_string(
+        xml.replace("\n  </worldbody>", probes + "\n  </worldbody>")), tiles)

@@ -74,3 +74,30 @@ def test_a_worker_loads_a_board_file_once_while_it_is_unchanged(tmp_path):
     os.utime(path, ns=(1, 1))  # a changed file (size and time) is read again
     assert _board(str(path)) is not held
     assert _board(str(path)).metadata["modules"][1]["kind"] == "rocky"
+
+
+def test_a_physics_variant_changes_the_models_compiled_inside_it_only():
+    from footfall.core.errors import FootfallError
+    from footfall.sim.mjcf import compile_model, physics_variant
+
+    flat = make_board([("flat", 0.0)], seed=0)
+    with physics_variant({"cone": "pyramidal", "impratio": "10"}, max_spacing=0.004):
+        model = compile_model(LITTLEDOG, flat)
+        assert model.opt.cone == 0 and model.opt.impratio == 10.0  # mjCONE_PYRAMIDAL
+    documented = compile_model(LITTLEDOG, flat)
+    assert documented.opt.cone == 1 and documented.opt.impratio == 100.0
+    with pytest.raises(FootfallError, match="unknown physics option"):
+        with physics_variant({"gravity": "0 0 0"}):
+            pass
+    with pytest.raises(FootfallError, match="invalid keyword"):
+        with physics_variant({"cone": "banana"}):
+            pass
+
+
+def test_bench_sim_refuses_a_bad_physics_option_in_one_line(capsys):
+    from cli_helpers import assert_user_error, run
+
+    code, _, err = run(capsys, "bench", "sim", "--physics", "cone")
+    assert_user_error(code, err, "--physics takes OPTION=VALUE")
+    code, _, err = run(capsys, "bench", "sim", "--physics", "cone=banana")
+    assert_user_error(code, err, "invalid keyword")

@@ -8,6 +8,7 @@ every store.
 import json
 import os
 import secrets
+import shutil
 import signal
 import socket
 import subprocess
@@ -78,6 +79,7 @@ def cluster():
                 os.environ.pop(k, None)
             else:
                 os.environ[k] = v
+        shutil.rmtree(temp, ignore_errors=True)  # the cluster's logs and sockets
 
 
 def _stripped(record) -> tuple:

@@ -41,12 +41,29 @@ def bench_learning_cmd(n_demos: int, library_size: int, as_json: bool) -> None:
 
 @bench.command("sim")
 @click.option("--seed", type=SEED, default=0, show_default=True)
+@click.option("--runs", type=click.IntRange(1, 100), default=1, show_default=True,
+              help="Rocky runs (seeds SEED, SEED+1, ...).")
+@click.option("--physics", "physics", multiple=True, metavar="OPTION=VALUE",
+              help="Walk and measure with a MuJoCo <option> changed (repeatable), e.g. "
+                   "cone=pyramidal, impratio=10, tolerance=1e-5: what another physics costs "
+                   "in fidelity and gives in speed.")
+@click.option("--hfield-spacing", type=click.FloatRange(0.0005, 0.02), default=None,
+              help="Coarsest height-field vertex spacing [m] to measure (default 0.002).")
 @json_option
-def bench_sim_cmd(seed: int, as_json: bool) -> None:
-    """Real-time factor of the walking stack against bare MuJoCo stepping."""
+def bench_sim_cmd(seed: int, runs: int, physics: tuple[str, ...], hfield_spacing: float | None,
+                  as_json: bool) -> None:
+    """Real-time factor of the walking stack against bare MuJoCo stepping, with the physics'
+    fidelity."""
+    from footfall.core.errors import FootfallError
     from footfall.experiments.bench import bench_sim, format_sim
 
-    result = bench_sim(seed=seed)
+    options = {}
+    for item in physics:
+        key, sep, value = item.partition("=")
+        if not sep or not key or not value:
+            raise FootfallError(f"--physics takes OPTION=VALUE, got {item!r}")
+        options[key] = value
+    result = bench_sim(seed=seed, runs=runs, physics=options, hfield_spacing=hfield_spacing)
     emit(as_json, result, format_sim(result))
 
 

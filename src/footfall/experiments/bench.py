@@ -267,18 +267,24 @@ def format_learning(r: dict) -> str:
 
 
 def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0,
-              probes: int = 400) -> dict:
+              probes: int = 400, runs: int = 1, physics: dict | None = None,
+              hfield_spacing: float | None = None) -> dict:
     """Real-time factor of the whole walking stack against bare MuJoCo stepping (the ceiling).
 
-    One seeded run of the hand-tuned reward over a flat | rocky | flat board
-    (planning, control and physics, on this process's one core: CPU time),
-    with where its time goes (set-up, planning, physics split by MuJoCo's own
-    timers, and the control periods around it), then bare stepping of the same
-    model on the same terrain with the robot standing on the rocky module, and
-    on the flat start module. Also a run on a flat board, for the walking
-    speed on flat ground, and the physics' fidelity
-    (:mod:`footfall.sim.fidelity`): ``probes`` ball feet lowered onto the rocky
-    module, and the robot standing on a 0.3 slope.
+    ``runs`` seeded runs (seeds ``seed``, ``seed + 1``, ...) of the
+    hand-tuned reward over a flat | rocky | flat board (planning, control and
+    physics, on this process's one core: CPU time), the first with where its
+    time goes (set-up, planning, physics split by MuJoCo's own timers, and the
+    control periods around it); bare stepping of the documented model on the
+    same terrain with the robot standing on the rocky module, and on the flat
+    start module; a run on a flat board, for the walking speed on flat ground;
+    and the physics' fidelity (:mod:`footfall.sim.fidelity`): ``probes`` ball
+    feet lowered onto the rocky module, and the robot standing on a 0.3 slope.
+
+    ``physics`` (MuJoCo ``<option>`` attributes as text) and ``hfield_spacing``
+    [m] walk and measure another physics
+    (:func:`footfall.sim.mjcf.physics_variant`); the bare stepping stays the
+    documented model's, the reference.
     """
     import mujoco
 
@@ -286,43 +292,59 @@ def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0,
     from footfall.features.reward import default_reward
     from footfall.sim.episode import Walk
     from footfall.sim.fidelity import ball_rest_errors, slope_creep
+    from footfall.sim.mjcf import physics_variant
     from footfall.sim.simulation import Simulation, bench_stepping
 
     reward = default_reward()
     out: dict = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
-                             "mujoco": mujoco.__version__}}
+                             "mujoco": mujoco.__version__},
+                 "physics": dict(physics or {}), "hfield_spacing": hfield_spacing}
     boards = {"rocky": make_board([("rocky", difficulty)], seed=seed),
               "flat": make_board([("flat", 0.0)] * 3, seed=seed)}
-    for name, board in boards.items():
-        cpu, wall = time.process_time(), time.perf_counter()
-        run = Walk(board, lambda leg: reward, seed)
-        setup = time.process_time() - cpu
-        record = run.run()
-        cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
-        r = record.result
-        timer = run.sim.data.timer
-        physics = float(timer[mujoco.mjtTimer.mjTIMER_STEP].duration)
-        planning = 1e-3 * r["planning_ms_per_step"] * len(record.steps)
-        warm = time.process_time()
-        Walk(board, lambda leg: reward, seed).sim.close()  # the same board again: cached grids
-        warm = time.process_time() - warm
-        out[f"walk_{name}"] = {
-            "success": r["success"], "reason": r["reason"], "simulated_s": r["time"],
-            "cpu_s": cpu, "wall_s": wall, "real_time_factor": r["time"] / cpu,
-            "wall_real_time_factor": r["time"] / wall,
-            "planning_ms_per_step": r["planning_ms_per_step"], "steps": r["steps"],
-            "speed_cm_s": r["speed_cm_s"], "speed_body_lengths_s": r["speed_body_lengths_s"],
-            "parts_s": {
-                "setup": setup, "setup_again": warm, "planning": planning,
-                "physics": physics,
-                "physics_collision": float(timer[mujoco.mjtTimer.mjTIMER_POS_COLLISION].duration),
-                "physics_solver": float(timer[mujoco.mjtTimer.mjTIMER_CONSTRAINT].duration),
-                "control": cpu - setup - planning - physics},
-            "physics_steps": int(timer[mujoco.mjtTimer.mjTIMER_STEP].number),
-            # a later run of a batch on the same board: its reward grids already scored
-            "batch_real_time_factor": r["time"] / (cpu - setup + warm)}
+    variant = bool(physics) or hfield_spacing is not None
     board = boards["rocky"]
-    for where, x in (("rocky", 0.915), ("flat", 0.3)):
+    rng = np.random.default_rng(seed)
+    module = [m for m in board.metadata["modules"] if m["kind"] == "rocky"][0]
+    xy = np.column_stack([rng.uniform(module["x_start"] + 0.02, module["x_end"] - 0.02,
+                                      probes), rng.uniform(-0.25, 0.25, probes)])
+    keys = ("success", "real_time_factor", "batch_real_time_factor", "physics_us_per_step")
+    documented = []
+    for name, board in boards.items():
+        done = []
+        for i, s in enumerate(range(seed, seed + (runs if name == "rocky" else 1))):
+            if not (variant and name == "rocky"):
+                with physics_variant(physics, hfield_spacing):
+                    done.append(_timed_walk(Walk, board, reward, s, mujoco))
+                continue
+            # the documented model walked with the same seed, the baseline: first and second
+            # in turn (the first run on a board also scores its reward grids)
+            for which in ((0, 1) if i % 2 == 0 else (1, 0)):
+                if which == 0:
+                    documented.append({k: v for k, v in _timed_walk(
+                        Walk, board, reward, s, mujoco).items() if k in keys})
+                else:
+                    with physics_variant(physics, hfield_spacing):
+                        done.append(_timed_walk(Walk, board, reward, s, mujoco))
+        out[f"walk_{name}"] = done[0]
+        if name == "rocky":
+            out["walk_rocky_runs"] = [{k: w[k] for k in keys} for w in done]
+    board = boards["rocky"]
+    with physics_variant(physics, hfield_spacing):
+        rest = np.abs(ball_rest_errors(board, xy))
+        creep = slope_creep()
+    if variant:
+        base_rest, base_creep = np.abs(ball_rest_errors(board, xy)), slope_creep()
+        ratio = lambda key: float(np.median([v[key] / d[key] for v, d in  # noqa: E731
+                                             zip(out["walk_rocky_runs"], documented)]))
+        out["documented"] = {
+            "walk_rocky_runs": documented,
+            "rest_error_mean_mm": 1e3 * float(base_rest.mean()),
+            "rest_error_p99_mm": 1e3 * float(np.percentile(base_rest, 99)),
+            "slope_creep_max_mm": 1e3 * float(base_creep.max()),
+            # (a run of a batch: the board's grids scored once, whichever model walked first)
+            "variant_over_documented": {"real_time_factor": ratio("batch_real_time_factor"),
+                                        "physics_us_per_step": ratio("physics_us_per_step")}}
+    for where, x in (("rocky", 0.915), ("flat", 0.3)):  # the documented model: the reference
         sim = Simulation(hmap=board)
         st = nominal_state(board, (x, 0.0), 0.0, "LF")
         sim.stand(st.body_position, st.body_rpy, st.feet)
@@ -331,17 +353,44 @@ def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0,
         sim.close()
     out["stack_over_bare_rocky"] = (out["walk_rocky"]["real_time_factor"]
                                     / out["bare_rocky"]["real_time_factor"])
-    rng = np.random.default_rng(seed)
-    module = [m for m in board.metadata["modules"] if m["kind"] == "rocky"][0]
-    xy = np.column_stack([rng.uniform(module["x_start"] + 0.02, module["x_end"] - 0.02, probes),
-                          rng.uniform(-0.25, 0.25, probes)])
-    rest = np.abs(ball_rest_errors(board, xy))
-    creep = slope_creep()
     out["fidelity"] = {"rest_error_mean_mm": 1e3 * float(rest.mean()),
                        "rest_error_p99_mm": 1e3 * float(np.percentile(rest, 99)),
                        "rest_points": int(probes),
                        "slope_creep_max_mm": 1e3 * float(creep.max())}
     return out
+
+
+def _timed_walk(walk_class, board, reward, seed: int, mujoco) -> dict:
+    """One run's real-time factor and where its CPU time went (see :func:`bench_sim`)."""
+    cpu, wall = time.process_time(), time.perf_counter()
+    run = walk_class(board, lambda leg: reward, seed)
+    setup = time.process_time() - cpu
+    record = run.run()
+    cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
+    r = record.result
+    timer = run.sim.data.timer  # MuJoCo's own timers (wall clock): the split of physics
+    step = timer[mujoco.mjtTimer.mjTIMER_STEP]
+    physics = run.sim.physics_cpu  # [s] CPU
+    share = physics / max(float(step.duration), 1e-12)  # wall -> CPU
+    planning = 1e-3 * r["planning_ms_per_step"] * len(record.steps)
+    warm = time.process_time()
+    walk_class(board, lambda leg: reward, seed).sim.close()  # the same board again: cached grids
+    warm = time.process_time() - warm
+    return {
+        "success": r["success"], "reason": r["reason"], "simulated_s": r["time"],
+        "cpu_s": cpu, "wall_s": wall, "real_time_factor": r["time"] / cpu,
+        "wall_real_time_factor": r["time"] / wall,
+        "planning_ms_per_step": r["planning_ms_per_step"], "steps": r["steps"],
+        "speed_cm_s": r["speed_cm_s"], "speed_body_lengths_s": r["speed_body_lengths_s"],
+        "parts_s": {
+            "setup": setup, "setup_again": warm, "planning": planning, "physics": physics,
+            "physics_collision": share * timer[mujoco.mjtTimer.mjTIMER_POS_COLLISION].duration,
+            "physics_solver": share * timer[mujoco.mjtTimer.mjTIMER_CONSTRAINT].duration,
+            "control": cpu - setup - planning - physics},
+        "physics_steps": int(step.number),
+        "physics_us_per_step": 1e6 * physics / max(int(step.number), 1),
+        # a later run of a batch on the same board: its reward grids already scored
+        "batch_real_time_factor": r["time"] / (cpu - setup + warm)}
 
 
 def format_sim(r: dict) -> str:
@@ -367,6 +416,19 @@ def format_sim(r: dict) -> str:
         lines.append(f"bare MuJoCo stepping, robot on the {where} module: "
                      f"{b['real_time_factor']:.1f}x real time ({b['steps_per_second']:.0f} steps/s)")
     lines.append(f"whole stack / bare stepping on the rocky board: {r['stack_over_bare_rocky']:.2f}")
+    if len(r["walk_rocky_runs"]) > 1:
+        lines.append("rocky runs: " + "; ".join(
+            f"{'success' if w['success'] else 'failure'} {w['real_time_factor']:.1f}x "
+            f"({w['physics_us_per_step']:.0f} us/step)" for w in r["walk_rocky_runs"]))
+    if "documented" in r:
+        d = r["documented"]
+        lines.append(f"physics variant: {r['physics']}, height field {r['hfield_spacing']} m; "
+                     f"against the documented model walked alternately with it (the same "
+                     f"seeds): physics per step x{d['variant_over_documented']['physics_us_per_step']:.2f}"
+                     f", whole stack x{d['variant_over_documented']['real_time_factor']:.2f} (medians"
+                     f" of the runs); the documented model's ball rests "
+                     f"{d['rest_error_mean_mm']:.2f} / {d['rest_error_p99_mm']:.2f} mm, creeps "
+                     f"{d['slope_creep_max_mm']:.2f} mm (bare stepping: the documented model)")
     f = r["fidelity"]
     lines.append(f"fidelity: a loaded ball foot rests {f['rest_error_mean_mm']:.2f} mm from the "
                  f"map's rest height on average, {f['rest_error_p99_mm']:.2f} mm at the 99th "

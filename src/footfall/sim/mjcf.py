@@ -40,7 +40,9 @@ elliptic cones, see JACOBIAN).
 
 from __future__ import annotations
 
+import contextlib
 import math
+from collections.abc import Iterator, Mapping
 from itertools import pairwise
 
 import mujoco
@@ -317,6 +319,53 @@ def build_mjcf(robot: RobotDescription, hmap: HeightMap | None, *,
     return _mjcf(robot, tiles, terrain_offset, friction, fixed_base)
 
 
+# ------------------------------------------------------------- physics variants
+PHYSICS_OPTIONS = ("cone", "impratio", "tolerance", "iterations", "ls_iterations", "jacobian",
+                   "solver", "noslip_iterations", "timestep")  # <option> attributes a variant may set
+_VARIANT: dict = {}  # the physics variant in force (physics_variant); empty: the documented model
+
+
+@contextlib.contextmanager
+def physics_variant(options: Mapping[str, str] | None = None,
+                    max_spacing: float | None = None) -> Iterator[None]:
+    """Compile models with other physics while the context lasts: to measure what it costs.
+
+    ``options``: MuJoCo ``<option>`` attributes (of :data:`PHYSICS_OPTIONS`) as
+    MJCF text, e.g. ``{"cone": "pyramidal", "impratio": "10"}``;
+    ``max_spacing`` [m]: the height field's coarsest vertex spacing in place of
+    :data:`MAX_HFIELD_SPACING`. For ``footfall bench sim --physics``: the
+    walking runs of every experiment use the documented model.
+
+    Raises
+    ------
+    FootfallError
+        For an option not in :data:`PHYSICS_OPTIONS`, or a bad spacing.
+    """
+    options = dict(options or {})
+    unknown = sorted(set(options) - set(PHYSICS_OPTIONS))
+    if unknown:
+        raise FootfallError(f"unknown physics option(s) {', '.join(unknown)}; known: "
+                            f"{', '.join(PHYSICS_OPTIONS)}")
+    if max_spacing is not None and not (isinstance(max_spacing, (int, float))
+                                        and math.isfinite(max_spacing) and max_spacing > 0):
+        raise FootfallError(f"max_spacing must be a number > 0 [m], got {max_spacing!r}")
+    attributes = " ".join(f'{k}="{v}"' for k, v in options.items())
+    try:  # a value MuJoCo refuses is refused here, in one line
+        mujoco.MjModel.from_xml_string(f"<mujoco><option {attributes}/></mujoco>")
+    except ValueError as exc:
+        raise FootfallError(f"physics options {attributes}: "
+                            f"{str(exc).strip().splitlines()[0]}") from None
+    saved = dict(_VARIANT)
+    _VARIANT.clear()
+    _VARIANT.update({"options": {k: str(v) for k, v in options.items()},
+                     "max_spacing": max_spacing})
+    try:
+        yield
+    finally:
+        _VARIANT.clear()
+        _VARIANT.update(saved)
+
+
 def _checked_layout(robot, hmap, terrain_offset, terrain_yaw, max_spacing) -> list | None:
     if not isinstance(robot, RobotDescription):
         raise FootfallError(f"robot must be a RobotDescription, got {type(robot).__name__}")
@@ -327,6 +376,8 @@ def _checked_layout(robot, hmap, terrain_offset, terrain_yaw, max_spacing) -> li
         return None
     if not isinstance(hmap, HeightMap):
         raise FootfallError(f"hmap must be a HeightMap or None, got {type(hmap).__name__}")
+    if _VARIANT.get("max_spacing") is not None:
+        max_spacing = _VARIANT["max_spacing"]
     return terrain_layout(hmap, terrain_offset, terrain_yaw, max_spacing)
 
 
@@ -357,6 +408,9 @@ def _mjcf(robot: RobotDescription, tiles: list[dict] | None, terrain_offset,
     if not (isinstance(mu, (int, float)) and math.isfinite(mu) and mu > 0):
         raise FootfallError(f"friction must be a finite number > 0, got {friction!r}")
     timestep = 1.0 / robot.servo_rate
+    option = {"timestep": _f(timestep), "integrator": "implicitfast", "cone": "elliptic",
+              "impratio": _f(IMPRATIO), "jacobian": JACOBIAN, **_VARIANT.get("options", {})}
+    option_xml = " ".join(f'{k}="{v}"' for k, v in option.items())
 
     if tiles is None:  # a plane is invariant under xy shifts and yaw: only the height offset counts
         terrain_top = float(terrain_offset[2])
@@ -381,8 +435,7 @@ def _mjcf(robot: RobotDescription, tiles: list[dict] | None, terrain_offset,
                            for leg in LEG_NAMES)
     return f"""<mujoco model="{robot.name}">
   <compiler angle="radian" autolimits="true" inertiafromgeom="true"/>
-  <option timestep="{_f(timestep)}" integrator="implicitfast" cone="elliptic"
-          impratio="{_f(IMPRATIO)}" jacobian="{JACOBIAN}"/>
+  <option {option_xml}/>
   <visual><global offwidth="1920" offheight="1080"/><quality shadowsize="1024"/></visual>
   <default>
     <joint armature="{_f(robot.joint_armature)}" damping="{_f(robot.joint_damping)}"/>

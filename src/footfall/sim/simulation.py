@@ -169,6 +169,8 @@ class Simulation:
     data : mujoco.MjData
     timestep : float
         Physics step = PD servo period [s].
+    physics_cpu : float
+        CPU time [s] this process has spent in MuJoCo's steps so far.
     sensors : Sensors
         The foot force sensors, the IMU and the contacts (also read through the
         methods of the same names here).
@@ -203,6 +205,7 @@ class Simulation:
         self._feet = model_ids(m, obj.mjOBJ_BODY, [f"{leg}_foot" for leg in LEG_NAMES])
         self._qd_gain = robot.joint_kd / robot.joint_kp  # [s] see set_targets
         self._jac = np.zeros((3, m.nv))  # foot_jacobians' work array
+        self.physics_cpu = 0.0  # [s] CPU time spent in MuJoCo's steps (for benchmarks)
         mujoco.mj_forward(self.model, self.data)
 
     @classmethod
@@ -311,7 +314,9 @@ class Simulation:
         self._step(n)
 
     def _step(self, n: int) -> None:
+        cpu = time.process_time()
         mujoco.mj_step(self.model, self.data, nstep=n)
+        self.physics_cpu += time.process_time() - cpu
         # mj_step leaves body and site poses at the start of its last step; bring them (and the
         # centre of mass) up to the new joint state, so that poses, foot positions and joint
         # angles agree.

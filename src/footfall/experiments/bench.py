@@ -283,67 +283,34 @@ def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0,
 
     ``physics`` (MuJoCo ``<option>`` attributes as text) and ``hfield_spacing``
     [m] walk and measure another physics
-    (:func:`footfall.sim.mjcf.physics_variant`); the bare stepping stays the
-    documented model's, the reference.
+    (:func:`footfall.sim.mjcf.physics_variant`), each rocky seed also walked
+    with the documented model in turn (``documented``: the baseline); the
+    bare stepping stays the documented model's, the reference.
     """
     import mujoco
 
     from footfall.core.state import nominal_state
-    from footfall.features.reward import default_reward
-    from footfall.sim.episode import Walk
-    from footfall.sim.fidelity import ball_rest_errors, slope_creep
-    from footfall.sim.mjcf import physics_variant
     from footfall.sim.simulation import Simulation, bench_stepping
 
-    reward = default_reward()
     out: dict = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
                              "mujoco": mujoco.__version__},
                  "physics": dict(physics or {}), "hfield_spacing": hfield_spacing}
-    boards = {"rocky": make_board([("rocky", difficulty)], seed=seed),
-              "flat": make_board([("flat", 0.0)] * 3, seed=seed)}
-    variant = bool(physics) or hfield_spacing is not None
-    board = boards["rocky"]
-    rng = np.random.default_rng(seed)
-    module = [m for m in board.metadata["modules"] if m["kind"] == "rocky"][0]
-    xy = np.column_stack([rng.uniform(module["x_start"] + 0.02, module["x_end"] - 0.02,
-                                      probes), rng.uniform(-0.25, 0.25, probes)])
-    keys = ("success", "real_time_factor", "batch_real_time_factor", "physics_us_per_step")
-    documented = []
-    for name, board in boards.items():
-        done = []
-        for i, s in enumerate(range(seed, seed + (runs if name == "rocky" else 1))):
-            if not (variant and name == "rocky"):
-                with physics_variant(physics, hfield_spacing):
-                    done.append(_timed_walk(Walk, board, reward, s, mujoco))
-                continue
-            # the documented model walked with the same seed, the baseline: first and second
-            # in turn (the first run on a board also scores its reward grids)
-            for which in ((0, 1) if i % 2 == 0 else (1, 0)):
-                if which == 0:
-                    documented.append({k: v for k, v in _timed_walk(
-                        Walk, board, reward, s, mujoco).items() if k in keys})
-                else:
-                    with physics_variant(physics, hfield_spacing):
-                        done.append(_timed_walk(Walk, board, reward, s, mujoco))
-        out[f"walk_{name}"] = done[0]
-        if name == "rocky":
-            out["walk_rocky_runs"] = [{k: w[k] for k in keys} for w in done]
-    board = boards["rocky"]
-    with physics_variant(physics, hfield_spacing):
-        rest = np.abs(ball_rest_errors(board, xy))
-        creep = slope_creep()
-    if variant:
-        base_rest, base_creep = np.abs(ball_rest_errors(board, xy)), slope_creep()
-        ratio = lambda key: float(np.median([v[key] / d[key] for v, d in  # noqa: E731
-                                             zip(out["walk_rocky_runs"], documented)]))
+    board = make_board([("rocky", difficulty)], seed=seed)
+    variant = (dict(physics or {}), hfield_spacing)
+    rocky, documented = _rocky_runs(board, range(seed, seed + runs), variant)
+    out["walk_rocky"] = rocky[0]
+    out["walk_rocky_runs"] = [{k: w[k] for k in _RUN_KEYS} for w in rocky]
+    out["walk_flat"] = _rocky_runs(make_board([("flat", 0.0)] * 3, seed=seed), [seed],
+                                   (variant[0], variant[1]), baseline=False)[0][0]
+    out["fidelity"] = _fidelity(board, seed, probes, variant)
+    if documented:
         out["documented"] = {
-            "walk_rocky_runs": documented,
-            "rest_error_mean_mm": 1e3 * float(base_rest.mean()),
-            "rest_error_p99_mm": 1e3 * float(np.percentile(base_rest, 99)),
-            "slope_creep_max_mm": 1e3 * float(base_creep.max()),
+            "walk_rocky_runs": documented, **_fidelity(board, seed, probes, ({}, None)),
             # (a run of a batch: the board's grids scored once, whichever model walked first)
-            "variant_over_documented": {"real_time_factor": ratio("batch_real_time_factor"),
-                                        "physics_us_per_step": ratio("physics_us_per_step")}}
+            "variant_over_documented": {
+                key: float(np.median([v[key] / d[key] for v, d in
+                                      zip(out["walk_rocky_runs"], documented)]))
+                for key in ("batch_real_time_factor", "physics_us_per_step")}}
     for where, x in (("rocky", 0.915), ("flat", 0.3)):  # the documented model: the reference
         sim = Simulation(hmap=board)
         st = nominal_state(board, (x, 0.0), 0.0, "LF")
@@ -353,11 +320,55 @@ def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0,
         sim.close()
     out["stack_over_bare_rocky"] = (out["walk_rocky"]["real_time_factor"]
                                     / out["bare_rocky"]["real_time_factor"])
-    out["fidelity"] = {"rest_error_mean_mm": 1e3 * float(rest.mean()),
-                       "rest_error_p99_mm": 1e3 * float(np.percentile(rest, 99)),
-                       "rest_points": int(probes),
-                       "slope_creep_max_mm": 1e3 * float(creep.max())}
     return out
+
+
+_RUN_KEYS = ("success", "real_time_factor", "batch_real_time_factor", "physics_us_per_step")
+
+
+def _rocky_runs(board, seeds, variant: tuple[dict, float | None], baseline: bool = True
+                ) -> tuple[list[dict], list[dict]]:
+    """Timed runs of ``seeds`` with the physics ``variant`` (options, height-field spacing);
+    with ``baseline`` and a variant, each seed also with the documented model, first and
+    second in turn (the first run on a board also scores its reward grids)."""
+    import mujoco
+
+    from footfall.features.reward import default_reward
+    from footfall.sim.episode import Walk
+    from footfall.sim.mjcf import physics_variant
+
+    reward = default_reward()
+    physics, spacing = variant
+    compare = baseline and (bool(physics) or spacing is not None)
+    done, documented = [], []
+    for i, s in enumerate(seeds):
+        for which in (("variant",) if not compare else
+                      ("documented", "variant") if i % 2 == 0 else ("variant", "documented")):
+            if which == "documented":
+                documented.append({k: v for k, v in _timed_walk(
+                    Walk, board, reward, s, mujoco).items() if k in _RUN_KEYS})
+            else:
+                with physics_variant(physics, spacing):
+                    done.append(_timed_walk(Walk, board, reward, s, mujoco))
+    return done, documented
+
+
+def _fidelity(board, seed: int, probes: int, variant: tuple[dict, float | None]) -> dict:
+    """:mod:`footfall.sim.fidelity`'s measures with the physics ``variant``: ``probes`` loaded
+    balls on the board's rocky module (points drawn from ``seed``), and the slope."""
+    from footfall.sim.fidelity import ball_rest_errors, slope_creep
+    from footfall.sim.mjcf import physics_variant
+
+    rng = np.random.default_rng(seed)
+    module = [m for m in board.metadata["modules"] if m["kind"] == "rocky"][0]
+    xy = np.column_stack([rng.uniform(module["x_start"] + 0.02, module["x_end"] - 0.02,
+                                      probes), rng.uniform(-0.25, 0.25, probes)])
+    with physics_variant(*variant):
+        rest = np.abs(ball_rest_errors(board, xy))
+        creep = slope_creep()
+    return {"rest_error_mean_mm": 1e3 * float(rest.mean()),
+            "rest_error_p99_mm": 1e3 * float(np.percentile(rest, 99)),
+            "rest_points": int(probes), "slope_creep_max_mm": 1e3 * float(creep.max())}
 
 
 def _timed_walk(walk_class, board, reward, seed: int, mujoco) -> dict:
@@ -425,8 +436,9 @@ def format_sim(r: dict) -> str:
         lines.append(f"physics variant: {r['physics']}, height field {r['hfield_spacing']} m; "
                      f"against the documented model walked alternately with it (the same "
                      f"seeds): physics per step x{d['variant_over_documented']['physics_us_per_step']:.2f}"
-                     f", whole stack x{d['variant_over_documented']['real_time_factor']:.2f} (medians"
-                     f" of the runs); the documented model's ball rests "
+                     f", whole stack x{d['variant_over_documented']['batch_real_time_factor']:.2f} "
+                     f"(medians, runs of a batch)"
+                     f"; the documented model's ball rests "
                      f"{d['rest_error_mean_mm']:.2f} / {d['rest_error_p99_mm']:.2f} mm, creeps "
                      f"{d['slope_creep_max_mm']:.2f} mm (bare stepping: the documented model)")
     f = r["fidelity"]

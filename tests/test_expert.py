@@ -351,7 +351,7 @@ def test_walking_expert_wants_the_foot_at_the_gait_nominal_position_on_flat_grou
 
 def _window_surface(hmap, lo, hi, radius):
     """The sphere surface dilated on the window alone: the computation before per-map caching."""
-    from scipy import ndimage
+    from footfall.core.ball import ball_centre_surface
 
     res = hmap.resolution
     reach = int(math.ceil(radius / res))
@@ -359,14 +359,7 @@ def _window_surface(hmap, lo, hi, radius):
     hi_idx = np.ceil((np.asarray(hi) - hmap.origin) / res).astype(int) + reach + 2
     i0, j0 = max(lo_idx[0], 0), max(lo_idx[1], 0)
     i1, j1 = min(hi_idx[0], hmap.shape[0]), min(hi_idx[1], hmap.shape[1])
-    window = hmap.heights[i0:i1, j0:j1]
-    off = np.arange(-reach, reach + 1) * res
-    d2 = off[:, None] ** 2 + off[None, :] ** 2
-    footprint = d2 <= radius * radius * (1 + 1e-9)
-    cap = np.sqrt(np.clip(radius * radius - d2, 0.0, None))
-    return ndimage.grey_dilation(np.where(np.isnan(window), -np.inf, window),
-                                 footprint=footprint, structure=np.where(footprint, cap, 0.0),
-                                 mode="constant", cval=-np.inf), (i0, j0)
+    return ball_centre_surface(hmap.heights[i0:i1, j0:j1], res, radius), (i0, j0)
 
 
 def test_the_per_map_sphere_surface_equals_the_window_dilation_where_it_is_sampled():

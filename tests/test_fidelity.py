@@ -101,3 +101,55 @@ def test_bench_sim_refuses_a_bad_physics_option_in_one_line(capsys):
     assert_user_error(code, err, "--physics takes OPTION=VALUE")
     code, _, err = run(capsys, "bench", "sim", "--physics", "cone=banana")
     assert_user_error(code, err, "invalid keyword")
+
+
+def test_foot_pads_touch_where_a_ball_rests_on_the_registered_terrain():
+    from footfall.sim.foot_pads import BallSurface
+    from footfall.sim.mjcf import registration_centre, terrain_surface
+
+    res, grade = 0.001, 0.3
+    x = np.arange(600) * res
+    slope = HeightMap(np.repeat((grade * x)[:, None], 400, axis=1), res, (0.0, -0.2))
+    centre = registration_centre(slope)
+    plain = BallSurface(terrain_surface(slope), slope, R, centre, 0.0, np.zeros(3))
+    contact, normal = plain.contact(np.array([[0.3, 0.0, 0.2]]))
+    expected = np.array([-grade, 0.0, 1.0]) / np.hypot(grade, 1.0)
+    np.testing.assert_allclose(normal[0], expected, atol=1e-9)
+    assert contact[0, 2] == pytest.approx(grade * contact[0, 0], abs=3e-5)  # on the slope
+    # registered: the terrain turned 0.1 rad about its centre and lifted 2 mm
+    yaw, offset = 0.1, np.array([0.003, -0.002, 0.002])
+    moved = BallSurface(terrain_surface(slope), slope, R, centre, yaw, offset)
+    world = np.array([[0.31, 0.02, 0.3]])
+    contact, normal = moved.contact(world)
+    c, s = np.cos(yaw), np.sin(yaw)
+    back = np.array([[c, s], [-s, c]]) @ (contact[0, :2] - centre - offset[:2]) + centre
+    assert contact[0, 2] - offset[2] == pytest.approx(grade * back[0], abs=3e-5)
+    np.testing.assert_allclose(normal[0, :2], [-grade * c, -grade * s] / np.hypot(grade, 1.0),
+                               atol=1e-9)
+
+
+def test_the_pads_variant_gives_each_foot_one_contact_and_leaves_the_documented_model():
+    import mujoco
+
+    from footfall.core.state import nominal_state
+    from footfall.sim.mjcf import physics_variant
+    from footfall.sim.simulation import Simulation
+
+    board = make_board([("rocky", 0.5)], seed=0)
+    with physics_variant(foot_contact="pads"):
+        sim = Simulation(hmap=board)
+    st = nominal_state(board, (0.9, 0.0), 0.0, "LF")
+    sim.stand(st.body_position, st.body_rpy, st.feet)
+    sim.advance(0.5)
+    foot_geoms = {mujoco.mj_name2id(sim.model, mujoco.mjtObj.mjOBJ_GEOM, f"{leg}_foot")
+                  for leg in ("LF", "RF", "LH", "RH")}
+    touching = [g for pair in sim.data.contact.geom[:sim.data.ncon] for g in pair
+                if g in foot_geoms]
+    assert sorted(touching) == sorted(foot_geoms)  # four feet down, one contact each
+    sim.close()
+    plain = Simulation(hmap=board)
+    assert mujoco.mj_name2id(plain.model, mujoco.mjtObj.mjOBJ_BODY, "LF_pad") < 0
+    plain.close()
+    with physics_variant(foot_contact="pads"):
+        errors = ball_rest_errors(board, np.array([[0.8, 0.0], [0.9, 0.1], [1.0, -0.1]]))
+    assert np.all(np.abs(errors) < 0.5e-3)  # each probe on its own pad: where the map says

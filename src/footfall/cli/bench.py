@@ -49,9 +49,13 @@ def bench_learning_cmd(n_demos: int, library_size: int, as_json: bool) -> None:
                    "in fidelity and gives in speed.")
 @click.option("--hfield-spacing", type=click.FloatRange(0.0005, 0.02), default=None,
               help="Coarsest height-field vertex spacing [m] to measure (default 0.002).")
+@click.option("--foot-contact", type=click.Choice(["terrain", "pads"]), default="terrain",
+              show_default=True,
+              help="pads: each ball foot meets only its own pad on the tangent plane under it "
+                   "(one contact per foot; footfall.sim.foot_pads), to measure.")
 @json_option
 def bench_sim_cmd(seed: int, runs: int, physics: tuple[str, ...], hfield_spacing: float | None,
-                  as_json: bool) -> None:
+                  foot_contact: str, as_json: bool) -> None:
     """Real-time factor of the walking stack against bare MuJoCo stepping, with the physics'
     fidelity."""
     from footfall.core.errors import FootfallError
@@ -63,7 +67,8 @@ def bench_sim_cmd(seed: int, runs: int, physics: tuple[str, ...], hfield_spacing
         if not sep or not key or not value:
             raise FootfallError(f"--physics takes OPTION=VALUE, got {item!r}")
         options[key] = value
-    result = bench_sim(seed=seed, runs=runs, physics=options, hfield_spacing=hfield_spacing)
+    result = bench_sim(seed=seed, runs=runs, physics=options, hfield_spacing=hfield_spacing,
+                       foot_contact=foot_contact)
     emit(as_json, result, format_sim(result))
 
 

@@ -268,7 +268,7 @@ def format_learning(r: dict) -> str:
 
 def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0,
               probes: int = 400, runs: int = 1, physics: dict | None = None,
-              hfield_spacing: float | None = None) -> dict:
+              hfield_spacing: float | None = None, foot_contact: str = "terrain") -> dict:
     """Real-time factor of the whole walking stack against bare MuJoCo stepping (the ceiling).
 
     ``runs`` seeded runs (seeds ``seed``, ``seed + 1``, ...) of the
@@ -281,8 +281,9 @@ def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0,
     and the physics' fidelity (:mod:`footfall.sim.fidelity`): ``probes`` ball
     feet lowered onto the rocky module, and the robot standing on a 0.3 slope.
 
-    ``physics`` (MuJoCo ``<option>`` attributes as text) and ``hfield_spacing``
-    [m] walk and measure another physics
+    ``physics`` (MuJoCo ``<option>`` attributes as text), ``hfield_spacing``
+    [m] and ``foot_contact`` ("pads": :mod:`footfall.sim.foot_pads`) walk and
+    measure another physics
     (:func:`footfall.sim.mjcf.physics_variant`), each rocky seed also walked
     with the documented model in turn (``documented``: the baseline); the
     bare stepping stays the documented model's, the reference.
@@ -294,18 +295,20 @@ def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0,
 
     out: dict = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
                              "mujoco": mujoco.__version__},
-                 "physics": dict(physics or {}), "hfield_spacing": hfield_spacing}
+                 "physics": dict(physics or {}), "hfield_spacing": hfield_spacing,
+                 "foot_contact": foot_contact}
     board = make_board([("rocky", difficulty)], seed=seed)
-    variant = (dict(physics or {}), hfield_spacing)
+    variant = (dict(physics or {}), hfield_spacing, foot_contact)
     rocky, documented = _rocky_runs(board, range(seed, seed + runs), variant)
     out["walk_rocky"] = rocky[0]
     out["walk_rocky_runs"] = [{k: w[k] for k in _RUN_KEYS} for w in rocky]
     out["walk_flat"] = _rocky_runs(make_board([("flat", 0.0)] * 3, seed=seed), [seed],
-                                   (variant[0], variant[1]), baseline=False)[0][0]
+                                   variant, baseline=False)[0][0]
     out["fidelity"] = _fidelity(board, seed, probes, variant)
     if documented:
         out["documented"] = {
-            "walk_rocky_runs": documented, **_fidelity(board, seed, probes, ({}, None)),
+            "walk_rocky_runs": documented,
+            **_fidelity(board, seed, probes, ({}, None, "terrain")),
             # (a run of a batch: the board's grids scored once, whichever model walked first)
             "variant_over_documented": {
                 key: float(np.median([v[key] / d[key] for v, d in
@@ -326,7 +329,7 @@ def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0,
 _RUN_KEYS = ("success", "real_time_factor", "batch_real_time_factor", "physics_us_per_step")
 
 
-def _rocky_runs(board, seeds, variant: tuple[dict, float | None], baseline: bool = True
+def _rocky_runs(board, seeds, variant: tuple[dict, float | None, str], baseline: bool = True
                 ) -> tuple[list[dict], list[dict]]:
     """Timed runs of ``seeds`` with the physics ``variant`` (options, height-field spacing);
     with ``baseline`` and a variant, each seed also with the documented model, first and
@@ -338,8 +341,7 @@ def _rocky_runs(board, seeds, variant: tuple[dict, float | None], baseline: bool
     from footfall.sim.mjcf import physics_variant
 
     reward = default_reward()
-    physics, spacing = variant
-    compare = baseline and (bool(physics) or spacing is not None)
+    compare = baseline and variant != ({}, None, "terrain")
     done, documented = [], []
     for i, s in enumerate(seeds):
         for which in (("variant",) if not compare else
@@ -348,12 +350,12 @@ def _rocky_runs(board, seeds, variant: tuple[dict, float | None], baseline: bool
                 documented.append({k: v for k, v in _timed_walk(
                     Walk, board, reward, s, mujoco).items() if k in _RUN_KEYS})
             else:
-                with physics_variant(physics, spacing):
+                with physics_variant(*variant):
                     done.append(_timed_walk(Walk, board, reward, s, mujoco))
     return done, documented
 
 
-def _fidelity(board, seed: int, probes: int, variant: tuple[dict, float | None]) -> dict:
+def _fidelity(board, seed: int, probes: int, variant: tuple[dict, float | None, str]) -> dict:
     """:mod:`footfall.sim.fidelity`'s measures with the physics ``variant``: ``probes`` loaded
     balls on the board's rocky module (points drawn from ``seed``), and the slope."""
     from footfall.sim.fidelity import ball_rest_errors, slope_creep
@@ -433,7 +435,8 @@ def format_sim(r: dict) -> str:
             f"({w['physics_us_per_step']:.0f} us/step)" for w in r["walk_rocky_runs"]))
     if "documented" in r:
         d = r["documented"]
-        lines.append(f"physics variant: {r['physics']}, height field {r['hfield_spacing']} m; "
+        lines.append(f"physics variant: {r['physics']}, height field {r['hfield_spacing']} m, "
+                     f"foot contact {r['foot_contact']}; "
                      f"against the documented model walked alternately with it (the same "
                      f"seeds): physics per step x{d['variant_over_documented']['physics_us_per_step']:.2f}"
                      f", whole stack x{d['variant_over_documented']['batch_real_time_factor']:.2f} "

@@ -32,8 +32,8 @@ from collections import OrderedDict
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy import ndimage
 
+from footfall.core.ball import ball_centre_surface
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import (
@@ -253,17 +253,7 @@ def _board_surface(hmap: HeightMap, radius: float) -> tuple[np.ndarray, np.ndarr
     1.0 where known), computed once per map and radius (a map's heights are read-only)."""
     per_map = _BOARD_SURFACES.setdefault(hmap, {})
     if radius not in per_map:
-        res = hmap.resolution
-        reach = int(math.ceil(radius / res))
-        off = np.arange(-reach, reach + 1) * res
-        d2 = off[:, None] ** 2 + off[None, :] ** 2
-        footprint = d2 <= radius * radius * (1 + 1e-9)
-        cap = np.sqrt(np.clip(radius * radius - d2, 0.0, None))
-        h = hmap.heights
-        surface = ndimage.grey_dilation(np.where(np.isnan(h), -np.inf, h),
-                                        footprint=footprint,
-                                        structure=np.where(footprint, cap, 0.0),
-                                        mode="constant", cval=-np.inf)
+        surface = ball_centre_surface(hmap.heights, hmap.resolution, radius)
         known = np.isfinite(surface)
         filled = np.where(known, surface, 0.0)
         filled.setflags(write=False)

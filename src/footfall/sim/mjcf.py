@@ -126,6 +126,17 @@ def _finite(value, name: str, unit: str) -> float:
     return v
 
 
+def registration_centre(hmap: HeightMap, max_spacing: float | None = MAX_HFIELD_SPACING
+                        ) -> np.ndarray:
+    """The point (2,) [m] the terrain's registration turns about: the vertex grid's centre."""
+    if _VARIANT.get("max_spacing") is not None:
+        max_spacing = _VARIANT["max_spacing"]
+    k = hfield_decimation(hmap, max_spacing)
+    n = (np.array(hmap.shape) - 1) // k + 1  # vertices along x and y
+    step = k * hmap.resolution
+    return np.asarray(hmap.origin) + 0.5 * (n - 1) * step
+
+
 def terrain_layout(hmap: HeightMap, terrain_offset=(0.0, 0.0, 0.0), terrain_yaw: float = 0.0,
                    max_spacing: float | None = MAX_HFIELD_SPACING) -> list[dict]:
     """The simulated terrain as MuJoCo geoms: height-field tiles, and boxes where a tile is flat.
@@ -168,7 +179,7 @@ def terrain_layout(hmap: HeightMap, terrain_offset=(0.0, 0.0, 0.0), terrain_yaw:
     nx, ny = h.shape
     step = k * hmap.resolution
     origin = np.asarray(hmap.origin)
-    centre = origin + 0.5 * np.array([nx - 1, ny - 1]) * step
+    centre = registration_centre(hmap, max_spacing)
     rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
     quat = np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
     edges_i = np.append(np.arange(0, nx - 1, TILE_CELLS), nx - 1)  # tile corner vertices
@@ -235,7 +246,8 @@ def _camera_axes(offset) -> tuple[np.ndarray, np.ndarray]:
     return x, np.cross(back, x)
 
 
-def _leg_xml(robot: RobotDescription, name: str, friction: float) -> str:
+def _leg_xml(robot: RobotDescription, name: str, friction: float,
+             foot_group: int = _ROBOT_GROUP) -> str:
     leg = robot.leg(name)
     (rlo, rhi), (plo, phi), (klo, khi) = leg.limits
     r_hip, r_up = robot.hip_link_radius, robot.upper_leg_radius
@@ -268,7 +280,8 @@ def _leg_xml(robot: RobotDescription, name: str, friction: float) -> str:
                 rgba="{_VISUAL_RGBA}"/>{shin}
           <body name="{name}_foot" pos="0 0 {_f(-robot.lower_leg)}">
             <geom name="{name}_foot" type="sphere" size="{_f(robot.foot_radius)}"
-                  {collide.replace('density="0"', f'mass="{_f(robot.foot_mass)}"')}
+                  {collide.replace('density="0"', f'mass="{_f(robot.foot_mass)}"').replace(
+                      f'contype="{_ROBOT_GROUP}"', f'contype="{foot_group}"')}
                   rgba="{_FOOT_RGBA}"/>
             <site name="{name}_foot" size="{_f(0.5 * robot.foot_radius)}"/>
           </body>
@@ -325,16 +338,22 @@ PHYSICS_OPTIONS = ("cone", "impratio", "tolerance", "iterations", "ls_iterations
 _VARIANT: dict = {}  # the physics variant in force (physics_variant); empty: the documented model
 
 
+FOOT_CONTACTS = ("terrain", "pads")  # the ball feet meet the height field, or their pads
+_PAD_GROUP = 2  # collision bit of the feet and their pads in the "pads" foot contact
+
+
 @contextlib.contextmanager
 def physics_variant(options: Mapping[str, str] | None = None,
-                    max_spacing: float | None = None) -> Iterator[None]:
+                    max_spacing: float | None = None,
+                    foot_contact: str = "terrain") -> Iterator[None]:
     """Compile models with other physics while the context lasts: to measure what it costs.
 
     ``options``: MuJoCo ``<option>`` attributes (of :data:`PHYSICS_OPTIONS`) as
     MJCF text, e.g. ``{"cone": "pyramidal", "impratio": "10"}``;
     ``max_spacing`` [m]: the height field's coarsest vertex spacing in place of
-    :data:`MAX_HFIELD_SPACING`. For ``footfall bench sim --physics``: the
-    walking runs of every experiment use the documented model.
+    :data:`MAX_HFIELD_SPACING`; ``foot_contact`` "pads": each ball foot meets
+    only its own pad (:mod:`footfall.sim.foot_pads`). For ``footfall bench sim
+    --physics``: the walking runs of every experiment use the documented model.
 
     Raises
     ------
@@ -346,6 +365,9 @@ def physics_variant(options: Mapping[str, str] | None = None,
     if unknown:
         raise FootfallError(f"unknown physics option(s) {', '.join(unknown)}; known: "
                             f"{', '.join(PHYSICS_OPTIONS)}")
+    if foot_contact not in FOOT_CONTACTS:
+        raise FootfallError(f"unknown foot contact {foot_contact!r}; known: "
+                            f"{', '.join(FOOT_CONTACTS)}")
     if max_spacing is not None and not (isinstance(max_spacing, (int, float))
                                         and math.isfinite(max_spacing) and max_spacing > 0):
         raise FootfallError(f"max_spacing must be a number > 0 [m], got {max_spacing!r}")
@@ -358,7 +380,7 @@ def physics_variant(options: Mapping[str, str] | None = None,
     saved = dict(_VARIANT)
     _VARIANT.clear()
     _VARIANT.update({"options": {k: str(v) for k, v in options.items()},
-                     "max_spacing": max_spacing})
+                     "max_spacing": max_spacing, "foot_contact": foot_contact})
     try:
         yield
     finally:
@@ -425,7 +447,11 @@ def _mjcf(robot: RobotDescription, tiles: list[dict] | None, terrain_offset,
     base_joint = "" if fixed_base else '<freejoint name="root"/>'
     cam_x, cam_y = _camera_axes(CAMERA_OFFSET)
     half = np.asarray(robot.trunk_size) / 2
-    legs = "".join(_leg_xml(robot, name, mu) for name in LEG_NAMES)
+    # with pads, each ball foot meets only its own pad (footfall.sim.foot_pads)
+    legs = "".join(_leg_xml(robot, name, mu, _PAD_GROUP if pads_on() else _ROBOT_GROUP)
+                   for name in LEG_NAMES)
+    pads = "".join(f'\n    <body name="{name}_pad" mocap="true" pos="0 0 -1">{_pad_geom()}</body>'
+                   for name in LEG_NAMES) if pads_on() else ""
     actuators = "\n    ".join(
         f'<position name="{leg}_{j}" joint="{leg}_{j}" kp="{_f(robot.joint_kp)}" '
         f'kv="{_f(robot.joint_kd)}" forcelimited="true" '
@@ -458,7 +484,7 @@ def _mjcf(robot: RobotDescription, tiles: list[dict] | None, terrain_offset,
       <site name="imu" size="0.005"/>
       <camera name="track" mode="trackcom" pos="{_f(*CAMERA_OFFSET)}"
               xyaxes="{_f(*cam_x, *cam_y)}"/>{legs}
-    </body>
+    </body>{pads}
   </worldbody>
   <actuator>
     {actuators}
@@ -496,6 +522,21 @@ def _filled(model: mujoco.MjModel, tiles: list | None) -> mujoco.MjModel:
     return model
 
 
+def pads_on() -> bool:
+    """Whether the physics variant in force gives each ball foot its own pad."""
+    return _VARIANT.get("foot_contact") == "pads"
+
+
+def _pad_geom(name: str | None = None) -> str:
+    from footfall.sim.foot_pads import PAD_HALF_SIZE, PAD_HALF_THICKNESS
+
+    named = "" if name is None else f'name="{name}" '
+    return (f'<geom {named}type="box" '
+            f'size="{_f(PAD_HALF_SIZE, PAD_HALF_SIZE, PAD_HALF_THICKNESS)}" '
+            f'contype="0" conaffinity="{0 if name else _PAD_GROUP}" friction="0 0 0" '
+            f'group="{TERRAIN_GEOM_GROUP}" rgba="0 0 0 0"/>')
+
+
 def compile_probe_model(robot: RobotDescription, hmap: HeightMap, xy: np.ndarray,
                         load: float, max_spacing: float | None = MAX_HFIELD_SPACING
                         ) -> mujoco.MjModel:
@@ -513,12 +554,28 @@ def compile_probe_model(robot: RobotDescription, hmap: HeightMap, xy: np.ndarray
     tiles = _checked_layout(robot, hmap, (0.0, 0.0, 0.0), 0.0, max_spacing)
     xml = _mjcf(robot, tiles, (0.0, 0.0, 0.0), None, fixed_base=True)
     top = float(np.nanmax(hmap.heights)) + 2 * robot.foot_radius
+    group = 0 if pads_on() else _ROBOT_GROUP  # with pads: only the explicit pairs below
     probes = "".join(
         f'\n    <body name="probe{k}" pos="{_f(x, y, top)}">'
         f'<joint name="probe{k}" type="slide" axis="0 0 1" damping="{_f(2.0 * load)}"/>'
-        f'<geom type="sphere" size="{_f(robot.foot_radius)}" mass="{_f(load)}" '
-        f'contype="{_ROBOT_GROUP}" conaffinity="0" condim="3" '
+        f'<geom name="probe{k}" type="sphere" size="{_f(robot.foot_radius)}" mass="{_f(load)}" '
+        f'contype="{group}" conaffinity="0" condim="3" '
         f'friction="{_f(robot.foot_friction)} 0 0"/></body>'
         for k, (x, y) in enumerate(xy))
+    pairs = ""
+    if pads_on():  # each probe over its own fixed pad, as a foot over its pad
+        from footfall.sim.foot_pads import BallSurface, pad_pose
+
+        surface = BallSurface(terrain_surface(hmap), hmap, robot.foot_radius,
+                              registration_centre(hmap, max_spacing), 0.0, np.zeros(3))
+        pos, quat = pad_pose(*surface.contact(xy))
+        probes += "".join(f'\n    <body pos="{_f(*p)}" quat="{_f(*q)}">'
+                          f'{_pad_geom(f"probe_pad{k}")}</body>'
+                          for k, (p, q) in enumerate(zip(pos, quat)))
+        solref = _f(CONTACT_TIMECONST_STEPS / robot.servo_rate, 1.0)
+        pairs = "\n  <contact>" + "".join(
+            f'<pair geom1="probe{k}" geom2="probe_pad{k}" condim="3" solref="{solref}" '
+            f'friction="{_f(robot.foot_friction, robot.foot_friction, 0.005, 0.0001, 0.0001)}"/>'
+            for k in range(len(xy))) + "</contact>"
     return _filled(mujoco.MjModel.from_xml_string(
-        xml.replace("\n  </worldbody>", probes + "\n  </worldbody>")), tiles)
+        xml.replace("\n  </worldbody>", probes + "\n  </worldbody>" + pairs)), tiles)

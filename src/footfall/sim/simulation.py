@@ -206,7 +206,22 @@ class Simulation:
         self._qd_gain = robot.joint_kd / robot.joint_kp  # [s] see set_targets
         self._jac = np.zeros((3, m.nv))  # foot_jacobians' work array
         self.physics_cpu = 0.0  # [s] CPU time spent in MuJoCo's steps (for benchmarks)
+        self._pads = self._foot_pads(hmap, max_spacing)  # None: the feet meet the terrain
         mujoco.mj_forward(self.model, self.data)
+
+    def _foot_pads(self, hmap: HeightMap | None, max_spacing: float | None):
+        """The feet's pads if the model has them (the "pads" physics variant), else None."""
+        if hmap is None or mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY,
+                                             f"{LEG_NAMES[0]}_pad") < 0:
+            return None
+        from footfall.sim.foot_pads import BallSurface, FootPads
+        from footfall.sim.mjcf import registration_centre, terrain_surface
+
+        p = self.perturbation
+        surface = BallSurface(terrain_surface(hmap), hmap, self.robot.foot_radius,
+                              registration_centre(hmap, max_spacing), p.terrain_yaw,
+                              np.asarray(p.terrain_offset, dtype=np.float64))
+        return FootPads(self.model, surface, [f"{leg}_pad" for leg in LEG_NAMES])
 
     @classmethod
     def from_seed(cls, robot: RobotDescription, hmap: HeightMap | None, seed: int,
@@ -246,6 +261,9 @@ class Simulation:
         d.qpos[self._qadr] = q
         d.ctrl[self._act] = q
         mujoco.mj_forward(m, d)
+        if self._pads is not None:
+            self._pads.update(d, self.foot_positions())
+            mujoco.mj_forward(m, d)
 
     def stand(self, body_position, body_rpy, feet) -> np.ndarray:
         """Reset standing on footholds: the joint angles that put each ball foot on its contact point.
@@ -314,6 +332,8 @@ class Simulation:
         self._step(n)
 
     def _step(self, n: int) -> None:
+        if self._pads is not None:  # the pads under the feet as they stand now
+            self._pads.update(self.data, self.foot_positions())
         cpu = time.process_time()
         mujoco.mj_step(self.model, self.data, nstep=n)
         self.physics_cpu += time.process_time() - cpu

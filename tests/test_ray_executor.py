@@ -30,8 +30,6 @@ from footfall.experiments.runs import RunJob, Runner
 from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig
 from maps import short_flat_board
 
-STARTUP = 60.0  # [s] longest wait for the cluster to answer
-
 
 def _free_port() -> int:
     with socket.socket() as s:
@@ -39,10 +37,7 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def _answers(port: int) -> bool:
-    with socket.socket() as s:
-        s.settimeout(0.2)
-        return s.connect_ex(("127.0.0.1", port)) == 0
+READY = "Ray runtime started"  # what `ray start` prints once the head node serves
 
 
 @pytest.fixture(scope="module")
@@ -58,13 +53,17 @@ def cluster():
         [str(Path(sys.executable).parent / "ray"), "start", "--head", "--block",
          f"--port={port}", "--num-cpus=2", "--include-dashboard=false",
          "--object-store-memory=100000000", f"--temp-dir={temp}", "--disable-usage-stats"],
-        env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+        env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        start_new_session=True)
+    drain = threading.Thread(target=lambda: [None for _ in head.stdout], daemon=True)
     try:
-        deadline = time.monotonic() + STARTUP
-        while not _answers(port):
-            assert head.poll() is None, "ray start exited"
-            assert time.monotonic() < deadline, "the Ray cluster did not answer"
-            time.sleep(0.2)
+        said = []
+        for line in head.stdout:  # however long the start takes; ends if `ray start` exits
+            said.append(line)
+            if READY in line:
+                break
+        assert any(READY in line for line in said), "ray start exited:\n" + "".join(said)
+        drain.start()  # keep reading what the head prints: it never blocks on a full pipe
         os.environ.update(settings)  # this driver, too, speaks to it on loopback
         yield f"127.0.0.1:{port}"
     finally:
@@ -74,6 +73,9 @@ def cluster():
         except subprocess.TimeoutExpired:
             os.killpg(head.pid, signal.SIGKILL)
             head.wait()
+        if drain.is_alive():
+            drain.join()  # the head has exited: its output ends
+        head.stdout.close()
         for k, v in old.items():
             if v is None:
                 os.environ.pop(k, None)

@@ -80,8 +80,11 @@ def walk_many(terrain_path: str | os.PathLike, model_path: str | os.PathLike | N
 
 def batch_jobs(terrain_path: str | os.PathLike, model_path: str | os.PathLike | None, runs: int,
                seed: int, config: WalkConfig = WalkConfig(), expert: bool = False,
-               keys: dict[int, str] | None = None) -> list[RunJob]:
-    """The jobs of :func:`walk_many`, in seed order, each keyed by ``keys[seed]`` if given.
+               hmap: HeightMap | None = None) -> list[RunJob]:
+    """The jobs of :func:`walk_many`, in seed order, without run keys.
+
+    ``hmap``: the board at ``terrain_path`` if already loaded (it is read otherwise, to
+    check the model against it).
 
     Raises
     ------
@@ -92,12 +95,12 @@ def batch_jobs(terrain_path: str | os.PathLike, model_path: str | os.PathLike | 
         raise FootfallError("the expert chooses the footholds itself: give no model with it")
     if isinstance(runs, bool) or not isinstance(runs, int) or runs < 1:
         raise FootfallError(f"runs must be an integer >= 1, got {runs!r}")
-    hmap = HeightMap.load(terrain_path)
+    hmap = HeightMap.load(terrain_path) if hmap is None else hmap
     reward_source(model_path, hmap)  # fail early, in this process, on a bad model
     model = None if model_path is None else str(model_path)
     judge = walking_expert(config.footstep.lead)  # what expert_judge(config) judges with
-    return [RunJob(None if keys is None else keys[s], str(terrain_path), model, s, config,
-                   expert=judge, judge=expert) for s in range(seed, seed + runs)]
+    return [RunJob(None, str(terrain_path), model, s, config, expert=judge, judge=expert)
+            for s in range(seed, seed + runs)]
 
 
 def _walked(executor: Executor, jobs: list[RunJob],
@@ -379,11 +382,11 @@ def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
     hmap = load_board(terrain_path)
     store = _open_log(log_path)
     try:
-        seeds = list(range(seed, seed + runs)) if isinstance(runs, int) else []
-        keys = None if store is None else batch_run_keys(hmap, model_path, expert, config, seeds)
-        jobs = batch_jobs(terrain_path, model_path, runs, seed, config, expert, keys)
+        jobs = batch_jobs(terrain_path, model_path, runs, seed, config, expert, hmap)
         records: dict[int, RunRecord] = {}
         if store is not None:
+            keys = batch_run_keys(hmap, model_path, expert, config, [j.seed for j in jobs])
+            jobs = [replace(j, key=keys[j.seed]) for j in jobs]
             held = {r["key"]: r["id"] for r in store.runs(key_prefix="walk-many/")}
             records = {j.seed: store.run(held[j.key]) for j in jobs if j.key in held}
         if reused is not None:
@@ -399,6 +402,6 @@ def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
     finally:
         if store is not None:
             store.close()
-    ordered = [records[s] for s in seeds]
+    ordered = [records[j.seed] for j in jobs]
     return BatchOutcome(str(terrain_path), _path_or_none(model_path), expert, seed,
                         summarise(ordered), tuple(ordered))

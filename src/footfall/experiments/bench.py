@@ -299,10 +299,10 @@ def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0,
                  "foot_contact": foot_contact}
     board = make_board([("rocky", difficulty)], seed=seed)
     variant = (dict(physics or {}), hfield_spacing, foot_contact)
-    rocky, documented = _rocky_runs(board, range(seed, seed + runs), variant)
+    rocky, documented = _timed_runs(board, range(seed, seed + runs), variant)
     out["walk_rocky"] = rocky[0]
     out["walk_rocky_runs"] = [{k: w[k] for k in _RUN_KEYS} for w in rocky]
-    out["walk_flat"] = _rocky_runs(make_board([("flat", 0.0)] * 3, seed=seed), [seed],
+    out["walk_flat"] = _timed_runs(make_board([("flat", 0.0)] * 3, seed=seed), [seed],
                                    variant, baseline=False)[0][0]
     out["fidelity"] = _fidelity(board, seed, probes, variant)
     if documented:
@@ -329,7 +329,7 @@ def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0,
 _RUN_KEYS = ("success", "real_time_factor", "batch_real_time_factor", "physics_us_per_step")
 
 
-def _rocky_runs(board, seeds, variant: tuple[dict, float | None, str], baseline: bool = True
+def _timed_runs(board, seeds, variant: tuple[dict, float | None, str], baseline: bool = True
                 ) -> tuple[list[dict], list[dict]]:
     """Timed runs of ``seeds`` with the physics ``variant`` (options, height-field spacing);
     with ``baseline`` and a variant, each seed also with the documented model, first and

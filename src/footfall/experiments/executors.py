@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import tempfile
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field, replace
@@ -155,19 +156,13 @@ def shipped_file(data: bytes, suffix: str, folder: str | os.PathLike | None = No
     """
     from footfall.core.files import atomic_path
 
-    base = Path(folder) if folder is not None else Path(_temp_dir()) / "footfall-ray"
+    base = Path(folder) if folder is not None else Path(tempfile.gettempdir()) / "footfall-ray"
     base.mkdir(parents=True, exist_ok=True)
     path = base / f"{hashlib.sha256(data).hexdigest()}{suffix}"
     if not path.exists():
         with atomic_path(path) as tmp:
             tmp.write_bytes(data)
     return path
-
-
-def _temp_dir() -> str:
-    import tempfile
-
-    return tempfile.gettempdir()
 
 
 def walk_shipped(job: RunJob, terrain: bytes, model: bytes | None) -> RunOutput:

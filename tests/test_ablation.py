@@ -7,6 +7,7 @@ import pytest
 
 from cli_helpers import assert_user_error, run
 from footfall.core.errors import FootfallError
+from footfall.core.stats import mcnemar_exact
 from footfall.data.store import DemoStore
 from footfall.experiments.ablation import (
     VARIANTS,
@@ -14,7 +15,6 @@ from footfall.experiments.ablation import (
     ablation_markdown,
     register_variant,
     run_ablation,
-    sign_test,
     summarise_ablation,
 )
 from footfall.sim.episode import WalkConfig
@@ -78,13 +78,6 @@ def test_a_variant_name_is_new_and_has_no_slash():
         AblationConfig(variants=("no-such-thing",))
 
 
-def test_sign_test_is_the_exact_binomial():
-    assert sign_test(0, 0) == 1.0
-    assert sign_test(5, 0) == pytest.approx(2 * 0.5 ** 5)
-    assert sign_test(3, 3) == 1.0
-    assert sign_test(1, 6) == pytest.approx(sign_test(6, 1))
-
-
 def _result(ok, cause="stance foot slipped"):
     return ({"success": True, "speed_cm_s": 5.0} if ok else
             {"success": False, "reason": "fall: trunk tilted", "explanation": {"cause": cause}})
@@ -110,12 +103,12 @@ def test_the_summary_pairs_runs_by_board_and_seed():
     assert row["test"] == {"successes": 2, "runs": 3}
     assert row["calibration"] == {"successes": 0, "runs": 2}
     assert (row["won"], row["lost"]) == (1, 2)  # seed 5002 won; 5000 and cal seed 0 lost
-    assert row["p_value"] == pytest.approx(sign_test(1, 2))
+    assert row["p_value"] == pytest.approx(mcnemar_exact(1, 2))
     assert row["causes"] == {"stance foot slipped": 3}
     # the hard boards are counted and paired apart (seeds 0 and 1 won there, none lost)
     assert row["hard"] == {"successes": 3, "runs": 3}
     assert (row["hard_won"], row["hard_lost"]) == (2, 0)
-    assert row["hard_p_value"] == pytest.approx(sign_test(2, 0))
+    assert row["hard_p_value"] == pytest.approx(mcnemar_exact(2, 0))
     assert summary["defaults"]["expert"]["won"] == summary["defaults"]["expert"]["lost"] == 0
     table = ablation_markdown(config, summary)
     assert ("| no-tilt-reflex: without the tilt reflex | 2 / 3 | 0 / 2 | +1 / -2 (1) | 3 / 3 "

@@ -11,8 +11,8 @@ from footfall.expert.synthetic import ExpertConfig
 from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig
 
 TINY = ReproduceConfig(
-    train_boards=((("rocky", 0.5),),), test_board=(("rocky", 0.6),), sweep_difficulties=(),
-    rounds=2, target_demos=1000, corrections_per_run=None, margin=2.0, library_size=30,
+    train_boards=((("rocky", 0.5),),), test_kinds=("rocky",), difficulties=(0.6,),
+    calibration_boards=1, calibration_runs=1, test_boards=2, sweep_runs=1, rounds=2, target_demos=1000, corrections_per_run=None, margin=2.0, library_size=30,
     training_candidates=20, cv=2, final_bandwidth_rms=0.004, eval_runs=2, offline_demos=4,
     walk=WalkConfig(max_steps=8),  # eight steps a run: small, but every stage runs
     expert=ExpertConfig())  # the expert who values progress corrects most of eight steps (the
@@ -66,29 +66,34 @@ def test_resuming_after_an_interruption_repeats_nothing_and_loses_nothing(uninte
         'src="data:', "")  # self-contained: every picture embedded
 
 
+METHODS = {"terrain", "templates", "both", "expert", "default"}
+
+
 def test_the_reproduction_has_every_table(uninterrupted):
     r = _results(uninterrupted)
-    assert set(r["table2"]) == {"terrain", "templates", "both", "flat", "expert", "default"}
+    assert set(r["table2"]) == METHODS | {"flat"}  # the paper's one-board table: test0
     assert all(t["runs"] == TINY.eval_runs for t in r["table2"].values())
     with DemoStore(uninterrupted / "reproduce.sqlite") as store:  # the expert chose its own
-        judged = [store.run(x["id"]) for x in store.runs(key_prefix="eval/expert/")]
-        plain = [store.run(x["id"]) for x in store.runs(key_prefix="eval/default/")]
+        judged = [store.run(x["id"]) for x in store.runs(key_prefix="eval/test0/expert/")]
+        plain = [store.run(x["id"]) for x in store.runs(key_prefix="eval/test0/default/")]
     assert judged and all(run.settings["judge"] == "SyntheticExpert.values" for run in judged)
     planned = planned_seeds(TINY)  # every run drew its seed from the stream of its purpose
     with DemoStore(uninterrupted / "reproduce.sqlite") as store:
-        for prefix, purpose in (("correct/", "correction runs"), ("eval/", "evaluation runs")):
+        for prefix, purpose in (("correct/", "correction runs"), ("eval/", "evaluation runs"),
+                                ("calibrate/", "calibration runs"), ("sweep/", "sweep runs")):
             seeds = {store.run(x["id"]).seed for x in store.runs(key_prefix=prefix)}
             assert seeds and seeds <= set(planned[purpose])
-    assert r["boards"]["test"]["seed"] in planned["boards"]
+    assert {r["boards"][f"test{b}"]["seed"] for b in range(2)} <= set(planned["boards"])
     assert plain and all("judge" not in run.settings for run in plain)
     assert set(r["table1"]) == {"templates", "both"}
     assert r["demonstrations"]["n"] > 0
     assert set(r["ranking"]) == {"terrain", "templates", "both"}
-    # The expert's verdict on every logged step of each test-board row.
-    assert set(r["choices"]) == {"terrain", "templates", "both", "expert", "default"}
+    # The expert's verdict on every logged step of each method's test-board runs.
+    assert set(r["choices"]) == METHODS
     with DemoStore(uninterrupted / "reproduce.sqlite") as store:
         for k, v in r["choices"].items():
-            logged = sum(len(store.run(x["id"]).steps) for x in store.runs(key_prefix=f"eval/{k}/"))
+            logged = sum(len(store.run(x["id"]).steps) for b in ("test0", "test1")
+                         for x in store.runs(key_prefix=f"eval/{b}/{k}/"))
             assert v["steps"] == logged > 0
             assert 0 <= v["median"] <= v["p90"] and v["mean"] >= 0
             assert 0 <= v["severe"] <= v["above_margin"] <= 1
@@ -96,6 +101,44 @@ def test_the_reproduction_has_every_table(uninterrupted):
     assert "Table I" in md and "Table II" in md and "Wilson" in md
     assert "Expert choosing (reference)" in md and "Hand-tuned reward (reference)" in md
     assert "The expert's verdict on the robot's choices" in md
+
+
+def test_the_unseen_terrain_stage_is_calibrated_pooled_paired_and_swept(uninterrupted):
+    r = _results(uninterrupted)
+    cal = r["calibration"]  # one level, one board, one expert run: the rule's record
+    assert list(cal["levels"]) == ["0.6"] and cal["levels"]["0.6"]["runs"] == 1
+    assert r["test_difficulty"] == 0.6 and "90%" in cal["rule"]
+    assert r["boards"]["test0"]["modules"] == [["rocky", 0.6]]
+    assert set(r["table2_boards"]) == {"test0", "test1"}
+    for k in METHODS:  # pooled = the two boards' runs together
+        per = [r["table2_boards"][b][k] for b in ("test0", "test1")]
+        pooled = r["table2_pooled"][k]
+        assert pooled["runs"] == sum(t["runs"] for t in per) == 2 * TINY.eval_runs
+        assert pooled["successes"] == sum(t["successes"] for t in per)
+        assert pooled["distance_mean_m"] > 0
+    assert r["table2"]["both"] == r["table2_boards"]["test0"]["both"]
+    pairs = {(c["a"], c["b"]): c for c in r["pairs"]}
+    assert len(pairs) == 10 and ("both", "templates") in pairs and ("templates", "terrain") in pairs
+    outcome = {}
+    with DemoStore(uninterrupted / "reproduce.sqlite") as store:
+        for x in store.runs(key_prefix="eval/test"):
+            _, board, method, seed = x["key"].split("/")
+            outcome[method, board, seed] = x["result"]["success"]
+    for (a, b), c in pairs.items():  # the discordant pairs, counted from the store
+        units = {(board, seed) for m, board, seed in outcome if m == a}
+        assert c["pairs"] == len(units) == 2 * TINY.eval_runs
+        assert c["a_only"] == sum(outcome[a, u[0], u[1]] and not outcome[b, u[0], u[1]]
+                                  for u in units)
+        assert c["b_only"] == sum(outcome[b, u[0], u[1]] and not outcome[a, u[0], u[1]]
+                                  for u in units)
+        assert 0 < c["p_value"] <= 1
+        assert c["success_verdict"] in ("held", "reversed", "not separated")
+    assert set(r["sweep"]) == {"0.6"} and set(r["sweep"]["0.6"]) == METHODS  # always walked
+    md = (uninterrupted / "report.md").read_text()
+    for heading in ("The test difficulty, by a rule", "the paper's one-board table",
+                    "Table II pooled over the 2 test boards", "Paired comparisons",
+                    "Success against difficulty"):
+        assert heading in md
 
 
 def test_another_configuration_in_the_same_folder_is_refused(uninterrupted):

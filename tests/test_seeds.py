@@ -46,14 +46,16 @@ def test_two_reproduction_seeds_share_no_board_seed_and_no_run_seed(make):
     for seed, by_purpose in planned.items():
         every = [s for seeds in by_purpose.values() for s in seeds]
         assert len(every) == len(set(every)), f"seed {seed}: two purposes share a seed"
-        assert len(by_purpose["boards"]) == len(make(seed=seed).train_boards) + 2 + \
-            len(make(seed=seed).sweep_difficulties)
+        c = make(seed=seed)  # training, flat, test, and per grid level sweep and calibration
+        assert len(by_purpose["boards"]) == len(c.train_boards) + 1 + c.test_boards + \
+            len(c.difficulties) * (1 + c.calibration_boards)
     for (a, pa), (b, pb) in combinations(planned.items(), 2):
         for purpose in pa:
             assert not set(pa[purpose]) & set(pb[purpose]), \
                 f"reproduction seeds {a} and {b} share {purpose} seeds"
-        runs_a = {s for p in ("correction runs", "evaluation runs", "sweep runs") for s in pa[p]}
-        runs_b = {s for p in ("correction runs", "evaluation runs", "sweep runs") for s in pb[p]}
+        run_purposes = ("correction runs", "calibration runs", "evaluation runs", "sweep runs")
+        runs_a = {s for p in run_purposes for s in pa[p]}
+        runs_b = {s for p in run_purposes for s in pb[p]}
         assert not runs_a & runs_b  # not even across purposes (seed 5's corrections, 0's eval)
 
 

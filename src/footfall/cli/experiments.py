@@ -50,7 +50,12 @@ def reproduce(out: str, seed: int, quick: bool, processes: int | None, executor_
     with opened_executor(executor_name, processes, ray_address) as executor:
         results = run_reproduction(Path(out), config, log=progress_log(as_json),
                                    executor=executor)
-    lines = [_table2_line(k, v) for k, v in results["table2"].items()]
+    boards = len(results["table2_boards"])
+    lines = [f"test difficulty {results['test_difficulty']:g} ({results['calibration']['rule']})",
+             "the first test board (the paper's one-board table):"]
+    lines += ["  " + _table2_line(k, v) for k, v in results["table2"].items()]
+    lines += [f"pooled over {boards} test boards:"]
+    lines += ["  " + _table2_line(k, v) for k, v in results["table2_pooled"].items()]
     emit(as_json, results, "\n".join(lines + [f"wrote {Path(out) / 'report.md'} and report.html"]))
 
 

@@ -29,6 +29,7 @@ PURPOSES = (
     "sweep runs",       # runs on the difficulty sweep's boards
     "demonstrations",   # the synthetic expert's demonstrations (walker)
     "learning",         # the learner: template library sample, training pairs
+    "calibration runs",  # the expert's runs on the calibration boards (the test difficulty)
 )
 SEED_BITS = 63  # seeds are non-negative 63-bit integers: any store or file keeps them exactly
 

@@ -50,3 +50,64 @@ def wilson_interval(successes: int, trials: int, level: float = 0.95) -> tuple[f
     centre = (p + z * z / (2 * trials)) / denom
     half = z * np.sqrt(p * (1 - p) / trials + z * z / (4 * trials * trials)) / denom
     return float(max(0.0, centre - half)), float(min(1.0, centre + half))
+
+
+def mcnemar_exact(a_only: int, b_only: int) -> float:
+    """Two-sided exact McNemar p-value [-] of two methods walked on the same (paired) runs.
+
+    ``a_only``: the pairs the first method succeeded in and the second did
+    not; ``b_only``: the reverse. Only these discordant pairs carry evidence;
+    under the null hypothesis each is either way with probability 1/2, so the
+    p-value is the two-sided exact binomial test of ``a_only`` of
+    ``a_only + b_only`` at 1/2 (1 without discordant pairs).
+    """
+    from scipy.stats import binomtest
+
+    for v, what in ((a_only, "a_only"), (b_only, "b_only")):
+        if isinstance(v, bool) or not isinstance(v, numbers.Integral) or v < 0:
+            raise FootfallError(f"{what} must be a non-negative integer, got {v!r}")
+    n = int(a_only) + int(b_only)
+    return 1.0 if n == 0 else float(binomtest(int(a_only), n, 0.5).pvalue)
+
+
+def paired_ratio_difference_ci(a: tuple[np.ndarray, np.ndarray], b: tuple[np.ndarray, np.ndarray],
+                               strata: np.ndarray | None = None, level: float = 0.95,
+                               n: int = BOOTSTRAP, seed: int = 0) -> tuple[float, float]:
+    """Percentile bootstrap interval of ``sum(num_a) / sum(den_a) - sum(num_b) / sum(den_b)``.
+
+    ``a`` and ``b`` are (numerator (k,), denominator (k,)) per paired unit
+    (a run seed on a board, walked by both methods): success rate is
+    (success, 1) per run; mean slip over the successful runs' footholds is
+    (sum of slips [mm], footholds) per run, (0, 0) for a failed run. The
+    units are resampled *as pairs* (the same draw for both methods), within
+    each stratum of ``strata`` (k,) (e.g. the board) when given, so the
+    interval reflects the pairing and keeps each board's share. Resamples in
+    which a ratio's denominator is 0 (no successful run drawn) are left
+    out; NaN if fewer than half remain. Seeded: the same input gives the
+    same interval.
+    """
+    num_a, den_a, num_b, den_b = (np.asarray(x, dtype=np.float64).ravel() for x in (*a, *b))
+    k = num_a.size
+    if not all(x.size == k for x in (den_a, num_b, den_b)):
+        raise FootfallError("paired values must all have one entry per paired unit")
+    if not 0 < level < 1:
+        raise FootfallError(f"confidence level must be in (0, 1), got {level}")
+    if k == 0:
+        return float("nan"), float("nan")
+    groups = np.zeros(k, dtype=np.int64) if strata is None else np.unique(
+        np.asarray(strata).ravel(), return_inverse=True)[1]
+    if groups.size != k:
+        raise FootfallError("strata must have one entry per paired unit")
+    rng = np.random.default_rng(seed)
+    counts = np.zeros((n, k))  # how often each unit is drawn in each resample
+    for g in np.unique(groups):  # a few strata (boards): resample within each
+        members = np.flatnonzero(groups == g)
+        draws = members[rng.integers(0, members.size, size=(n, members.size))]
+        np.add.at(counts, (np.arange(n)[:, None], draws), 1.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        diff = counts @ num_a / (counts @ den_a) - counts @ num_b / (counts @ den_b)
+    diff = diff[np.isfinite(diff)]
+    if diff.size < n / 2:
+        return float("nan"), float("nan")
+    lo, hi = np.quantile(diff, [(1.0 - level) / 2.0, (1.0 + level) / 2.0])
+    return float(lo), float(hi)

@@ -48,6 +48,7 @@ from footfall.core.errors import FootfallError
 from footfall.core.files import write_text_atomic
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, at_least, param, within
+from footfall.core.stats import mcnemar_exact
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor, LocalPool
 from footfall.experiments.reproduce import reproduction_walk
@@ -224,14 +225,6 @@ def ablation_jobs(config: AblationConfig, paths: dict[str, Path]) -> list[RunJob
 
 
 # ------------------------------------------------------------------ results
-def sign_test(won: int, lost: int) -> float:
-    """Two-sided exact sign test p-value [-] of ``won`` against ``lost`` discordant pairs."""
-    from scipy.stats import binomtest
-
-    n = won + lost
-    return 1.0 if n == 0 else float(binomtest(won, n, 0.5).pvalue)
-
-
 def _outcomes(store: DemoStore) -> dict[str, dict]:
     """Run key -> result of every stored run."""
     return {r["key"]: r["result"] for r in store.runs()}
@@ -263,8 +256,8 @@ def _row(config: AblationConfig, results: dict[str, dict], v: str, who: str) -> 
         row[group] = ({"successes": sum(b["successes"] for b in boards),
                        "runs": sum(b["runs"] for b in boards)} if boards else None)
     row["speed_cm_s"] = sum(speeds) / len(speeds) if speeds else None
-    row["p_value"] = sign_test(row["won"], row["lost"])
-    row["hard_p_value"] = sign_test(row["hard_won"], row["hard_lost"])
+    row["p_value"] = mcnemar_exact(row["won"], row["lost"])
+    row["hard_p_value"] = mcnemar_exact(row["hard_won"], row["hard_lost"])
     return row
 
 

@@ -18,6 +18,7 @@ from footfall.core.files import atomic_path, plain_json, write_text_atomic
 PAPER_TABLE2 = {"terrain": (47.6, 24.8, 5.9), "templates": (76.2, 20.2, 5.1),
                 "both": (100.0, 17.3, 3.3), "flat": (100.0, 13.4, 0.4)}
 TABLE2_ROWS = ("terrain", "templates", "both", "flat", "expert", "default")
+METHODS = ("terrain", "templates", "both", "expert", "default")  # every test and sweep board's
 # the paper's Table II: success [%], slip mean and std [mm]
 PAPER_TABLE1 = {"both": (1, 19, 23), "templates": (10, 24, 28)}  # templates kept of 946
 NAMES = {"terrain": "Features only", "templates": "Templates only",
@@ -37,9 +38,10 @@ def _figures(out: Path, results: dict, maps: dict, models: dict, config, log) ->
     from footfall.plots.relief import save_relief
 
     figs = []
-    save_relief(maps["test"], out / "test-board.png", title="the test board (never trained on)")
-    figs.append(("test-board.png", "The test board: modules the robot never trained on."))
-    grids = [score_grid(maps["test"], models[fs].reward_for("LF")) for fs in models]
+    save_relief(maps["test0"], out / "test-board.png",
+                title="the first test board (never trained on)")
+    figs.append(("test-board.png", "The first test board: modules the robot never trained on."))
+    grids = [score_grid(maps["test0"], models[fs].reward_for("LF")) for fs in models]
     save_score_maps(grids, [f"{NAMES[fs]}: learned reward, front legs (terrain part)"
                             for fs in models], ["reward"] * len(grids), out / "reward-maps.png")
     figs.append(("reward-maps.png", "Learned rewards over the test board (front legs; the "
@@ -62,30 +64,42 @@ def _figures(out: Path, results: dict, maps: dict, models: dict, config, log) ->
         fig.savefig(tmp, format="png", dpi=110)
     figs.append(("slip.png", "Slip per foothold over the successful runs (touch-down to the "
                              "next lift-off, as the paper)."))
-    # Success against difficulty.
-    fig = Figure(figsize=(6, 3.2), layout="constrained")
-    ax = fig.subplots()
-    for fs in ("terrain", "templates", "both"):
-        xs = [results["test_difficulty"]] + [float(d) for d in results["sweep"]]
-        ys = [results["table2"][fs]["success_rate"]] + [v[fs]["success_rate"]
-                                                        for v in results["sweep"].values()]
-        ax.plot(xs, [100 * y for y in ys], "o-", label=NAMES[fs])
-    ax.set_xlabel("test board difficulty")
-    ax.set_ylabel("success [%]")
-    ax.set_ylim(-5, 105)
-    ax.legend(fontsize=8)
-    with atomic_path(out / "success-difficulty.png") as tmp:
-        fig.savefig(tmp, format="png", dpi=110)
-    figs.append(("success-difficulty.png", "Success rate against the test board's difficulty "
-                                           "(the sweep runs only if all three reach 100 %)."))
+    figs.append(_success_curves(out, results))
     strip = out / "crossing.png"
     if not strip.exists():
         log("snapshot strip of a crossing (offscreen rendering)")
-        _strip(maps["test"], out / "models" / "both.npz", config, strip, results["strip_seed"])
+        _strip(maps["test0"], out / "models" / "both.npz", config, strip, results["strip_seed"])
     figs.append(("crossing.png", "Templates + features on the test board: its first evaluation "
                                  "run that crossed, if any (as the paper's Fig. 4; the title "
                                  "says how it ended)."))
     return figs
+
+
+def _success_curves(out: Path, results: dict) -> tuple[str, str]:
+    """Every method's success against the sweep boards' difficulty, with Wilson intervals."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.5, 3.4), layout="constrained")
+    ax = fig.subplots()
+    levels = sorted(results["sweep"], key=float)
+    for i, k in enumerate(METHODS):
+        xs = [float(d) + 0.006 * (i - 2) for d in levels]  # side by side, not on top
+        rows = [results["sweep"][d][k] for d in levels]
+        ys = [100 * r["success_rate"] for r in rows]
+        err = [[100 * (r["success_rate"] - r["success_ci"][0]) for r in rows],
+               [100 * (r["success_ci"][1] - r["success_rate"]) for r in rows]]
+        ax.errorbar(xs, ys, yerr=err, fmt="o-" if k in PAPER_TABLE1 or k == "terrain" else "s--",
+                    capsize=2, label=NAMES[k], lw=1)
+    ax.axvline(results["test_difficulty"], color="grey", lw=0.8, ls=":")
+    ax.set_xlabel("board difficulty (dotted: the test difficulty)")
+    ax.set_ylabel("success [%]")
+    ax.set_ylim(-5, 105)
+    ax.legend(fontsize=7)
+    with atomic_path(out / "success-difficulty.png") as tmp:
+        fig.savefig(tmp, format="png", dpi=110)
+    runs = results["config"]["sweep_runs"]
+    return ("success-difficulty.png", f"Success against difficulty, every method on one sweep "
+            f"board per level ({runs} runs each, the same seeds), with 95 % Wilson intervals.")
 
 
 def _strip(board, model_path: Path, config, path: Path, seed: int) -> None:
@@ -107,7 +121,8 @@ def _pct(x: float) -> str:
 def _markdown(results: dict, figs: list[tuple[str, str]]) -> str:
     """The report in Markdown: one section after another, each ending with a blank line."""
     sections = (_intro(results), _demonstration_rounds(results), _table1(results),
-                _table2(results), _sweep(results), _ranking(results), _verdict(results),
+                _calibration(results), _table2(results), _pooled(results), _per_board(results),
+                _pairs(results), _sweep(results), _ranking(results), _verdict(results),
                 _pictures(figs))
     return "\n".join(line for section in sections for line in section)
 
@@ -159,47 +174,119 @@ def _table1(results: dict) -> list[str]:
     return lines + [""]
 
 
+def _calibration(results: dict) -> list[str]:
+    c = results["calibration"]
+    lines = ["## The test difficulty, by a rule", "",
+             f"Rule: {c['rule']}. Test difficulty: **{c['difficulty']:g}**"
+             + ("" if c["met"] else " (not met: the expert missed the threshold even at the "
+                                    "easiest level, which is used)") + ".", ""]
+    if not c["levels"]:
+        return lines
+    cfg = results["config"]
+    lines += [f"The expert on {cfg['calibration_boards']} calibration board(s) per level "
+              f"(boards of the test kinds with their own seeds, never trained or tested on), "
+              f"{cfg['calibration_runs']} runs each:", "",
+              "| difficulty | expert crossed | 95 % CI (Wilson) | at least "
+              f"{c['threshold']:.0%} |", "| --- | --- | --- | --- |"]
+    for d, v in c["levels"].items():
+        lines.append(f"| {d} | {v['successes']} / {v['runs']} | {_pct(v['success_ci'][0])} - "
+                     f"{_pct(v['success_ci'][1])} | {'yes' if v['passes'] else 'no'} |")
+    return lines + [""]
+
+
+def _row_cells(t: dict) -> str:
+    slip = ("-" if t["slip_mean_mm"] is None
+            else f"{t['slip_mean_mm']:.1f} +- {t['slip_std_mm']:.1f}")
+    speed = "-" if t["speed_cm_s"] is None else f"{t['speed_cm_s']:.1f}"
+    dist = "-" if t.get("distance_mean_m") is None else f"{t['distance_mean_m']:.2f}"
+    return (f"{t['successes']} / {t['runs']} ({_pct(t['success_rate'])}) | "
+            f"{_pct(t['success_ci'][0])} - {_pct(t['success_ci'][1])} | {slip} | "
+            f"{t['slip_count']} | {speed} | {dist}")
+
+
 def _table2(results: dict) -> list[str]:
-    lines = ["## Table II: walking on the unseen test board "
-             f"(difficulty {results['test_difficulty']:g})", "",
+    lines = ["## Table II: walking on the unseen test board test0 "
+             f"(difficulty {results['test_difficulty']:g}): the paper's one-board table", "",
              "| method | success | 95 % CI (Wilson) | slip on successful runs [mm] | footholds | "
-             "speed [cm/s] | paper: success, slip |",
-             "| --- | --- | --- | --- | --- | --- | --- |"]
+             "speed [cm/s] | distance walked [m] | paper: success, slip |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
     for k in (k for k in TABLE2_ROWS if k in results["table2"]):
-        t = results["table2"][k]
-        slip = ("-" if t["slip_mean_mm"] is None
-                else f"{t['slip_mean_mm']:.1f} +- {t['slip_std_mm']:.1f}")
-        speed = "-" if t["speed_cm_s"] is None else f"{t['speed_cm_s']:.1f}"
         p = PAPER_TABLE2.get(k)
         paper = "-" if p is None else f"{p[0]:.1f} %, {p[1]:.1f} +- {p[2]:.1f}"
-        lines.append(f"| {NAMES[k]} | {t['successes']} / {t['runs']} ({_pct(t['success_rate'])}) | "
-                     f"{_pct(t['success_ci'][0])} - {_pct(t['success_ci'][1])} | {slip} | "
-                     f"{t['slip_count']} | {speed} | {paper} |")
+        lines.append(f"| {NAMES[k]} | {_row_cells(results['table2'][k])} | {paper} |")
     return lines + [
-        "", "The references walk the same test board with the same seeds: the synthetic "
+        "", "The references walk the same test boards with the same seeds: the synthetic "
         "expert choosing every foothold itself bounds what a function learned from its "
-        "corrections can do; the hand-tuned reward is the robot before any learning.", "",
-        "How runs ended: " + "; ".join(
+        "corrections can do; the hand-tuned reward is the robot before any learning. The "
+        "baseline is the templates + features function on the flat board. Distance walked: "
+        "the mean over all runs of how far the robot got (a crossing walks the whole course).",
+        "", "How runs ended: " + "; ".join(
             f"{NAMES[k]}: " + ", ".join(f"{r} {n}" for r, n in
                                         sorted(results["table2"][k]["reasons"].items()))
             for k in TABLE2_ROWS if k in results["table2"]) + ".", ""]
 
 
+def _pooled(results: dict) -> list[str]:
+    boards = list(results["table2_boards"])
+    pooled = results["table2_pooled"]
+    lines = [f"## Table II pooled over the {len(boards)} test boards ({', '.join(boards)})", "",
+             "| method | success | 95 % CI (Wilson) | slip on successful runs [mm] | footholds | "
+             "speed [cm/s] | distance walked [m] | distance of the failed runs [m] |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for k in (k for k in TABLE2_ROWS if k in pooled):
+        t = pooled[k]
+        failed = "-" if t["distance_failed_mean_m"] is None else f"{t['distance_failed_mean_m']:.2f}"
+        lines.append(f"| {NAMES[k]} | {_row_cells(t)} | {failed} |")
+    return lines + [""]
+
+
+def _per_board(results: dict) -> list[str]:
+    boards = results["table2_boards"]
+    lines = ["### Success per test board", "",
+             "| method | " + " | ".join(boards) + " |", "| --- |" + " --- |" * len(boards)]
+    for k in METHODS:
+        lines.append(f"| {NAMES[k]} | " + " | ".join(
+            f"{b[k]['successes']} / {b[k]['runs']}" for b in boards.values()) + " |")
+    return lines + [""]
+
+
+def _pairs(results: dict) -> list[str]:
+    lines = ["### Paired comparisons over every test board", "",
+             "Each pair walked the same boards with the same run seeds. *A only* / *B only*: "
+             "runs only A (only B) crossed; p: exact McNemar test (two-sided) on those; "
+             "differences A - B with 95 % paired bootstrap intervals (runs resampled as pairs "
+             "within each board); verdict on \"A above B\" at p < 0.05 (success) or an "
+             "interval excluding 0 (slip: A slips less).", "",
+             "| A | B | pairs | A only | B only | p (McNemar) | success A - B | 95 % CI | "
+             "slip A - B [mm] | 95 % CI | success: A above B | slip: A below B |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for c in results["pairs"]:
+        lo, hi = c["success_difference_ci"]
+        slo, shi = c["slip_difference_ci_mm"]
+        slip = "-" if c["slip_difference_mm"] is None else f"{c['slip_difference_mm']:+.1f}"
+        lines.append(f"| {NAMES[c['a']]} | {NAMES[c['b']]} | {c['pairs']} | {c['a_only']} | "
+                     f"{c['b_only']} | {c['p_value']:.3g} | {100 * c['success_difference']:+.1f} "
+                     f"% | {100 * lo:+.1f} to {100 * hi:+.1f} % | {slip} | {slo:+.1f} to "
+                     f"{shi:+.1f} | {c['success_verdict']} | {c['slip_verdict']} |")
+    return lines + [""]
+
+
 def _sweep(results: dict) -> list[str]:
-    if not results["sweep"]:
+    levels = sorted(results["sweep"], key=float)
+    if not levels:
         return []
-    lines = ["### Success against difficulty", "",
-             "| difficulty | " + " | ".join(NAMES[k] for k in ("terrain", "templates", "both"))
-             + " |", "| --- | --- | --- | --- |"]
-    for dd, v in results["sweep"].items():
-        lines.append(f"| {dd} | " + " | ".join(
-            f"{v[k]['successes']} / {v[k]['runs']}" for k in ("terrain", "templates", "both"))
-            + " |")
+    lines = ["### Success against difficulty (one sweep board per level)", "",
+             "| difficulty | " + " | ".join(NAMES[k] for k in METHODS) + " |",
+             "| --- |" + " --- |" * len(METHODS)]
+    for d in levels:
+        v = results["sweep"][d]
+        lines.append(f"| {d} | " + " | ".join(f"{v[k]['successes']} / {v[k]['runs']}"
+                                              for k in METHODS) + " |")
     return lines + [""]
 
 
 def _ranking(results: dict) -> list[str]:
-    lines = ["## Offline ranking on expert demonstrations over the test board", "",
+    lines = ["## Offline ranking on expert demonstrations over the first test board", "",
              "Loss: the expert's value of its best candidate minus its value of the function's "
              "pick (1 unit = 1 cm off the gait-nominal foothold for the walking expert), 95 % "
              "bootstrap interval.", "",
@@ -220,8 +307,9 @@ def _verdict(results: dict) -> list[str]:
     severe = next(iter(judged.values()))["severe_above"]
     lines = ["## The expert's verdict on the robot's choices in the test-board runs", "",
              "Shortfall: the expert's value of its best foothold in a step's candidate set "
-             "minus its value of the robot's choice [value units], over every step of the "
-             f"{c['eval_runs']} runs of each Table II row; corrected above {c['margin']:g} (the "
+             "minus its value of the robot's choice [value units], over every step of each "
+             f"method's {c['eval_runs']} runs on each test board; corrected above "
+             f"{c['margin']:g} (the "
              f"reproduction's margin), severe above {severe:g}.", "",
              "| method | steps | mean | median | 90th percentile | above the margin | severe |",
              "| --- | --- | --- | --- | --- | --- | --- |"]

@@ -1,8 +1,8 @@
 """The paper's walking experiment end to end (§II-B, §V, Tables I and II): ``footfall reproduce``.
 
-1. Terrain: training boards of several kinds and difficulties, a test board
-   of modules never trained on (fresh seeds, a rocky one among them), a flat
-   board, and harder test boards for a difficulty sweep.
+1. Terrain: training boards of several kinds and difficulties, a flat board,
+   and boards of the test kinds (a rocky module among them; fresh seeds
+   each) on a difficulty grid: calibration boards and sweep boards.
 2. Corrections (§II-B): the robot crosses every training board with its
    current reward function (the hand-tuned default first); the synthetic
    expert inspects each run log and labels a better foothold wherever the
@@ -15,12 +15,17 @@
    templates, templates + features, each with the pose features -- from the
    same corrections, L1-regularised with lambda at the smallest
    cross-validation error (the paper's rule); Table I.
-4. Evaluation (Table II): 21 seeded runs of each function on the test
-   board, 21 on the flat board (the slip baseline); success with a 95 %
-   Wilson interval, slip over the successful runs. If every function
-   succeeds every time, the sweep walks harder test boards so the
-   comparison separates. The offline ranking of the three functions on
-   expert demonstrations over the test board is reported beside it.
+4. Unseen terrain (Table II; :mod:`footfall.experiments.unseen`): the test
+   difficulty chosen by a rule on the calibration boards (the hardest grid
+   level up to which the expert choosing every foothold crosses 90 % of its
+   runs); the three functions, the expert and the hand-tuned reward on
+   several fresh test boards at that difficulty with the same 21 run seeds
+   (paired runs), the templates + features function on the flat board (the
+   slip baseline): Table II per board and pooled, with Wilson intervals,
+   the distance walked, exact McNemar tests and paired bootstrap intervals
+   between every two methods; every method's success against difficulty on
+   the sweep boards. The offline ranking of the three functions on expert
+   demonstrations over the first test board is reported beside it.
 5. A report, Markdown and a self-contained HTML page (:mod:`footfall.experiments.report`).
 
 Everything lives in one store (``reproduce.sqlite``): every finished run is
@@ -35,7 +40,8 @@ two reproduction seeds share no randomness.
 
 Each stage is a function with a typed result: :func:`open_workspace` (1),
 :func:`correction_rounds` (2), :func:`learn_functions` (3),
-:func:`evaluate` and :func:`sweep_difficulties` (4); :func:`run_reproduction`
+:mod:`footfall.experiments.unseen`'s ``calibrate``, ``evaluate`` and ``sweep``
+(4); :func:`run_reproduction`
 runs them in order and writes the report (5).
 """
 
@@ -53,11 +59,10 @@ import numpy as np
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.core.params import Params, above, at_least, param
+from footfall.core.params import Params, above, at_least, param, within
 from footfall.core.robot import LITTLEDOG
 from footfall.core.seeds import SeedStreams
 from footfall.data.store import DemoStore
-from footfall.experiments.batch import summarise
 from footfall.experiments.executors import Executor, LocalPool
 from footfall.experiments.runs import RunJob, Runner, board_files, claim_folder
 from footfall.expert.synthetic import ExpertConfig, walking_expert
@@ -68,9 +73,6 @@ from footfall.sim.episode import WalkConfig
 
 STORE_NAME = "reproduce.sqlite"
 ROBOT_FEATURE_SET = "both"  # the function the robot walks with between correction rounds
-TABLE2_REFERENCES = ("flat", "expert", "default")  # Table II rows beside the three functions:
-# the "both" function on flat ground (the paper's slip baseline), and on the test board the
-# synthetic expert choosing every foothold itself and the hand-tuned default reward
 Spec = tuple[tuple[str, float], ...]  # a board: (kind, difficulty) of each module
 
 
@@ -84,8 +86,15 @@ def _is_spec(value: object) -> bool:
         for m in value)
 
 
+def _test_kinds(value: object) -> bool:
+    from footfall.terrain import KINDS
+
+    return (isinstance(value, tuple) and "rocky" in value
+            and all(isinstance(k, str) and k in KINDS and k != "flat" for k in value))
+
+
 def _difficulties(value: object) -> bool:
-    return isinstance(value, tuple) and all(
+    return isinstance(value, tuple) and len(value) > 0 and all(
         isinstance(d, (int, float)) and not isinstance(d, bool) and 0 <= d <= 1 for d in value)
 
 
@@ -101,14 +110,27 @@ class ReproduceConfig(Params):
         check=lambda v: isinstance(v, tuple) and len(v) > 0 and all(map(_is_spec, v)),
         must="a non-empty tuple of boards, each a tuple of (kind, difficulty in [0, 1])",
         doc="the training boards the robot is corrected on")
-    test_board: Spec = param(
-        (("rocky", 0.7), ("steps", 0.7)),
-        check=lambda v: _is_spec(v) and any(kind == "rocky" for kind, _ in v),
-        must="a board with a rocky module (a tuple of (kind, difficulty in [0, 1]))",
-        doc="the unseen test board of Table II (modules with fresh seeds)")
-    sweep_difficulties: tuple[float, ...] = param(
-        (0.8, 0.9, 1.0), unit="-", check=_difficulties, must="a tuple of numbers in [0, 1]",
-        doc="harder test boards, walked only if every function succeeds in every test run")
+    test_kinds: tuple[str, ...] = param(
+        ("rocky", "steps"), check=_test_kinds, must="a tuple of terrain kinds with 'rocky' among them",
+        doc="the modules of every calibration, test and sweep board (fresh seeds each)")
+    difficulties: tuple[float, ...] = param(
+        (0.5, 0.6, 0.7, 0.8, 0.9, 1.0), unit="-", check=_difficulties,
+        must="a non-empty tuple of numbers in [0, 1]",
+        doc="the difficulty grid: calibrated on, and every method's success against difficulty")
+    test_difficulty: float | None = param(
+        None, unit="-", range=within(0.0, 1.0),
+        doc="the test boards' difficulty; None: by the rule (experiments.difficulty) on the "
+            "calibration boards")
+    calibration_boards: int = param(2, range=at_least(1),
+                                    doc="calibration boards per grid difficulty")
+    calibration_runs: int = param(5, range=at_least(1),
+                                  doc="the expert's runs on each calibration board")
+    calibration_success: float = param(
+        0.9, unit="-", range=within(0.0, 1.0, low_open=True),
+        doc="the expert's success rate the rule requires at the test difficulty")
+    test_boards: int = param(3, range=at_least(1),
+                             doc="unseen test boards at the test difficulty (Table II per "
+                                 "board and pooled; the first is the paper's one-board table)")
     rounds: int = param(5, range=at_least(1), doc="most correction rounds (walk, correct, learn)")
     target_demos: int = param(100, range=at_least(1),
                               doc="rounds stop once this many corrections are collected")
@@ -136,9 +158,10 @@ class ReproduceConfig(Params):
         None, unit="m", range=above(0),
         doc="fixed bandwidth of the final functions; None: chosen by cross-validation")
     eval_runs: int = param(21, range=at_least(1),
-                           doc="runs per function on the test board (the paper's 21)")
-    sweep_runs: int = param(10, range=at_least(1),
-                            doc="runs per function and difficulty in the sweep")
+                           doc="runs per method on each test board, the same seeds on every "
+                               "board (the paper's 21)")
+    sweep_runs: int = param(5, range=at_least(1),
+                            doc="runs per method at each difficulty of the grid (one board each)")
     offline_demos: int = param(40, range=at_least(1), doc="expert demonstrations on the test "
                                                           "board for the ranking table")
     walk: WalkConfig = param(factory=lambda: reproduction_walk(),
@@ -156,10 +179,10 @@ class ReproduceConfig(Params):
     def quick(cls, seed: int = 0) -> ReproduceConfig:
         """A small version (a few minutes on two cores): fewer boards, runs and templates."""
         return cls(seed=seed, train_boards=((("rocky", 0.5),), (("steps", 0.5),)),
-                   test_board=(("rocky", 0.7),), sweep_difficulties=(0.9,), rounds=2,
-                   target_demos=24, corrections_per_run=6, library_size=200,
-                   training_candidates=40, cv=3, final_bandwidth_rms=0.004, eval_runs=4,
-                   sweep_runs=2, offline_demos=12)
+                   test_kinds=("rocky",), difficulties=(0.5, 0.9), calibration_boards=1,
+                   calibration_runs=2, test_boards=2, rounds=2, target_demos=24,
+                   corrections_per_run=6, library_size=200, training_candidates=40, cv=3,
+                   final_bandwidth_rms=0.004, eval_runs=3, sweep_runs=1, offline_demos=12)
 
 
 REPRODUCTION_SEARCH_RADIUS = 0.03  # [m] the candidate set F of a step in the reproduction: the
@@ -180,16 +203,32 @@ def seed_streams(config: ReproduceConfig) -> SeedStreams:
 
 
 def boards(config: ReproduceConfig) -> dict[str, tuple[Spec, int]]:
-    """Every board of the experiment: name -> (spec, board seed), seeds from the "boards" stream."""
+    """The boards known before any run: name -> (spec, board seed), from the "boards" stream.
+
+    Training boards, the flat board, one sweep board per grid difficulty and
+    ``calibration_boards`` per grid difficulty; the test boards' difficulty is
+    known only after the calibration (:func:`test_boards`).
+    """
     streams = seed_streams(config)
     out = {f"train{i:02d}": (spec, streams.seed_for("boards", 0, i))
            for i, spec in enumerate(config.train_boards)}
-    out["test"] = (config.test_board, streams.seed_for("boards", 1))
     out["flat"] = ((("flat", 0.0),) * 3, streams.seed_for("boards", 2))
-    for j, d in enumerate(config.sweep_difficulties):
-        out[f"sweep{d:g}"] = (tuple((k, d) for k, _ in config.test_board),
-                              streams.seed_for("boards", 3, j))
+    for j, d in enumerate(config.difficulties):
+        out[f"sweep{d:g}"] = (_kinds_at(config, d), streams.seed_for("boards", 3, j))
+        for i in range(config.calibration_boards):
+            out[f"cal{d:g}-{i}"] = (_kinds_at(config, d), streams.seed_for("boards", 4, j, i))
     return out
+
+
+def test_boards(config: ReproduceConfig, difficulty: float) -> dict[str, tuple[Spec, int]]:
+    """The unseen test boards at ``difficulty``: test0, test1, ... (fresh seeds)."""
+    streams = seed_streams(config)
+    return {f"test{b}": (_kinds_at(config, difficulty), streams.seed_for("boards", 1, b))
+            for b in range(config.test_boards)}
+
+
+def _kinds_at(config: ReproduceConfig, difficulty: float) -> Spec:
+    return tuple((kind, float(difficulty)) for kind in config.test_kinds)
 
 
 def correction_seeds(config: ReproduceConfig, r: int) -> list[tuple[int, int]]:
@@ -199,8 +238,13 @@ def correction_seeds(config: ReproduceConfig, r: int) -> list[tuple[int, int]]:
             for i in range(len(config.train_boards))]
 
 
+def calibration_seeds(config: ReproduceConfig) -> list[int]:
+    """The expert's run seeds on every calibration board."""
+    return seed_streams(config).seeds("calibration runs", config.calibration_runs)
+
+
 def evaluation_seeds(config: ReproduceConfig) -> list[int]:
-    """The run seeds of Table II: every function and reference walks these (paired runs)."""
+    """The run seeds of Table II: every method walks these on every test board (paired runs)."""
     return seed_streams(config).seeds("evaluation runs", config.eval_runs)
 
 
@@ -213,9 +257,11 @@ def planned_seeds(config: ReproduceConfig) -> dict[str, list[int]]:
     """Every seed the reproduction may use, by purpose (what the stages draw, listed up front)."""
     streams = seed_streams(config)
     rounds = range(config.rounds + config.extra_rounds)
-    return {"boards": [seed for _, seed in boards(config).values()],
+    return {"boards": [seed for _, seed in boards(config).values()]
+            + [seed for _, seed in test_boards(config, 0.0).values()],
             "correction runs": [a for r in rounds for a, _ in correction_seeds(config, r)],
             "inspection": [b for r in rounds for _, b in correction_seeds(config, r)],
+            "calibration runs": calibration_seeds(config),
             "evaluation runs": evaluation_seeds(config), "sweep runs": sweep_seeds(config),
             "demonstrations": [streams.seed_for("demonstrations", 0)],
             "learning": [streams.seed_for("learning")]}
@@ -236,6 +282,15 @@ class Workspace:
     def model_path(self, name: str) -> Path:
         """Where the model ``name`` (a round's or a final function's) is kept."""
         return self.out / "models" / f"{name}.npz"
+
+    def add_boards(self, specs: dict[str, tuple[Spec, int]]) -> None:
+        """Boards made once a stage knows them (the test boards, after the calibration)."""
+        paths = board_files(self.out, {name: (spec, seed, True)
+                                       for name, (spec, seed) in specs.items()})
+        for name, path in paths.items():
+            self.paths[name] = path
+            self.maps[name] = HeightMap.load(path)
+            self.by_hash[self.maps[name].content_hash()] = self.maps[name]
 
 
 def open_workspace(out: str | os.PathLike, config: ReproduceConfig) -> Workspace:
@@ -393,65 +448,6 @@ def learn_functions(ws: Workspace, demos: list, log: Callable[[str], None]) -> F
     return Functions(models)
 
 
-# ---------------------------------------------------------------- stage 4
-@dataclass(frozen=True)
-class Evaluation:
-    """Table II: every function and reference walked with the same run seeds (paired runs)."""
-
-    seeds: list[int]  # the run seeds, from the "evaluation runs" stream
-    table2: dict  # row -> success, Wilson interval, slip, speed (batch.summarise)
-    slips_mm: dict  # row -> slip [mm] of every foothold of its successful runs
-    strip_seed: int  # the report's Fig. 4: the first templates + features run that crossed
-
-    @property
-    def all_succeed(self) -> bool:
-        """Whether every learned function crossed in every run (then the sweep separates them)."""
-        return all(self.table2[fs]["successes"] == self.table2[fs]["runs"]
-                   for fs in PAPER_FEATURE_SETS)
-
-
-def evaluate(ws: Workspace, runner: Runner) -> Evaluation:
-    """The three functions, the flat baseline and the two references on the test board."""
-    config, walk_cfg = ws.config, ws.config.walk
-    seeds = evaluation_seeds(config)
-    model = {fs: str(ws.model_path(fs)) for fs in PAPER_FEATURE_SETS}
-    test = str(ws.paths["test"])
-    jobs = [RunJob(f"eval/{fs}/s{s}", test, model[fs], s, walk_cfg)
-            for fs in PAPER_FEATURE_SETS for s in seeds]
-    jobs += [RunJob(f"eval/flat/s{s}", str(ws.paths["flat"]), model[ROBOT_FEATURE_SET], s,
-                  walk_cfg) for s in seeds]
-    # References on the same board and seeds: the expert choosing every foothold itself
-    # (the best a function learned from it can hope for) and the hand-tuned default.
-    jobs += [RunJob(f"eval/expert/s{s}", test, None, s, walk_cfg, expert=config.expert,
-                  judge=True) for s in seeds]
-    jobs += [RunJob(f"eval/default/s{s}", test, None, s, walk_cfg) for s in seeds]
-    runner.run(jobs, "evaluation runs")
-    store = runner.store
-    rows = (*PAPER_FEATURE_SETS, *TABLE2_REFERENCES)
-    table2 = {fs: _summary(store, f"eval/{fs}/") for fs in rows}
-    crossed = {int(r["key"].rsplit("/s", 1)[1])
-               for r in store.runs(key_prefix=f"eval/{ROBOT_FEATURE_SET}/")
-               if r["result"]["success"]}
-    strip = next((s for s in seeds if s in crossed), seeds[0])  # a crossing, if any
-    return Evaluation(seeds, table2, {fs: _slips(store, f"eval/{fs}/") for fs in rows}, strip)
-
-
-def sweep_difficulties(ws: Workspace, runner: Runner, evaluation: Evaluation) -> dict:
-    """Harder test boards, walked only if every function crossed every time on the test board."""
-    if not evaluation.all_succeed:
-        return {}
-    seeds = sweep_seeds(ws.config)  # paired over difficulties too
-    sweep = {}
-    for d in ws.config.sweep_difficulties:
-        board = str(ws.paths[f"sweep{d:g}"])
-        jobs = [RunJob(f"sweep/{d:g}/{fs}/s{s}", board, str(ws.model_path(fs)), s, ws.config.walk)
-                for fs in PAPER_FEATURE_SETS for s in seeds]
-        runner.run(jobs, f"sweep {d:g} runs")
-        sweep[f"{d:g}"] = {fs: _summary(runner.store, f"sweep/{d:g}/{fs}/")
-                           for fs in PAPER_FEATURE_SETS}
-    return sweep
-
-
 # ------------------------------------------------------------------ the job
 def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = ReproduceConfig(),
                      processes: int | None = None, log: Callable[[str], None] = print,
@@ -464,6 +460,7 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = Reproduce
     walked on ``executor`` [default: a local pool of ``processes`` workers].
     """
     from footfall.experiments.report import write_report
+    from footfall.experiments.unseen import FLAT, calibrate, evaluate, sweep
 
     started = time.perf_counter()
     ws = open_workspace(out, config)
@@ -478,16 +475,25 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = Reproduce
         functions = learn_functions(ws, corrections.demos, log)
         results["table1"] = functions.table1()
         results["models"] = functions.summary()
-        evaluation = evaluate(ws, runner)
-        results["table2"] = evaluation.table2
+        difficulty = calibrate(ws, runner)
+        results["calibration"] = difficulty.as_dict()
+        results["test_difficulty"] = difficulty.difficulty
+        evaluation = evaluate(ws, runner, difficulty)
+        results["boards"].update({name: {"modules": [list(m) for m in spec], "seed": seed}
+                                  for name, (spec, seed) in
+                                  test_boards(config, difficulty.difficulty).items()})
+        results["table2"] = {**evaluation.per_board[evaluation.boards[0]],
+                             FLAT: evaluation.pooled[FLAT]}  # the paper's one-board table
+        results["table2_pooled"] = evaluation.pooled
+        results["table2_boards"] = evaluation.per_board
+        results["pairs"] = evaluation.pairs
         results["slips_mm"] = evaluation.slips_mm
-        results["sweep"] = sweep_difficulties(ws, runner, evaluation)
+        results["sweep"] = sweep(ws, runner)
         results["strip_seed"] = evaluation.strip_seed
-        results["test_difficulty"] = max(d for _, d in config.test_board)
         # The offline ranking of the three functions on the expert's demonstrations, and the
         # expert's verdict on every choice the robot made in the test-board runs.
         results["ranking"] = _ranking(ws, store, functions.models, log)
-        results["choices"] = _choice_quality(store, ws.by_hash, config, log)
+        results["choices"] = _choice_quality(store, ws.by_hash, config, evaluation.boards, log)
         results["seconds_this_session"] = time.perf_counter() - started
     write_report(ws.out, results, ws.maps, functions.models, config, log)
     return results
@@ -496,19 +502,6 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = Reproduce
 def _runs_by_key(store: DemoStore, prefix: str) -> list[dict]:
     """The stored runs under ``prefix`` in key order: not in the order parallel workers finished."""
     return sorted(store.runs(key_prefix=prefix), key=lambda r: r["key"])
-
-
-def _summary(store: DemoStore, prefix: str) -> dict:
-    records = [store.run(r["id"]) for r in _runs_by_key(store, prefix)]
-    return summarise(records).as_dict()
-
-
-def _slips(store: DemoStore, prefix: str) -> list[float]:
-    out: list[float] = []
-    for r in _runs_by_key(store, prefix):
-        if r["result"].get("success"):
-            out += [1e3 * float(s) for s in store.run(r["id"]).slips()]
-    return out
 
 
 def _demo_summary(demos: list, maps: dict[str, HeightMap]) -> dict:
@@ -530,8 +523,8 @@ SEVERE_SHORTFALL = 10.0  # [value units; 1 cm off the gait-nominal foothold] a c
 
 
 def _choice_quality(store: DemoStore, maps: dict[str, HeightMap], config: ReproduceConfig,
-                    log: Callable[[str], None]) -> dict:
-    """The expert's verdict on every step of the test-board runs, per Table II row.
+                    test: list[str], log: Callable[[str], None]) -> dict:
+    """The expert's verdict on every step of the runs on the ``test`` boards, per method.
 
     For the three functions and the two references: the steps judged, and the
     mean, median and 90th percentile of the shortfall [value units] of the
@@ -544,9 +537,9 @@ def _choice_quality(store: DemoStore, maps: dict[str, HeightMap], config: Reprod
     expert = SyntheticExpert(config.expert)
     log("the expert's verdict on the choices of the test-board runs")
     out = {}
-    for k in (*PAPER_FEATURE_SETS, "expert", "default"):
+    for k in (*PAPER_FEATURE_SETS, "expert", "default"):  # every method of the test boards
         parts = []
-        for row in _runs_by_key(store, f"eval/{k}/"):
+        for row in (r for board in test for r in _runs_by_key(store, f"eval/{board}/{k}/")):
             run = store.run(row["id"])
             parts.append(step_verdicts(run, maps[run.terrain_hash], expert)[1])
         sf = np.concatenate(parts) if parts else np.zeros(0)
@@ -565,7 +558,7 @@ def _ranking(ws: Workspace, store: DemoStore, models: dict, log: Callable[[str],
     from footfall.expert.synthetic import SyntheticExpert
     from footfall.learning.evaluation import expert_values, rank_scores
 
-    config, test = ws.config, ws.maps["test"]
+    config, test = ws.config, ws.maps["test0"]
     expert = SyntheticExpert(config.expert)
     demos = store.demonstrations(source_prefix="walker:test")
     if len(demos) < config.offline_demos:  # collected and stored in one transaction: all or none

@@ -1,0 +1,53 @@
+"""The test difficulty rule on scripted outcomes of the expert (issue 20)."""
+
+import pytest
+
+from footfall.core.errors import FootfallError
+from footfall.experiments.difficulty import choose_difficulty
+
+
+def test_the_hardest_level_up_to_which_the_expert_still_crosses_90_percent():
+    outcomes = {0.5: (10, 10), 0.6: (10, 10), 0.7: (9, 10), 0.8: (8, 10), 0.9: (5, 10)}
+    choice = choose_difficulty(outcomes, 0.9)
+    assert choice.difficulty == 0.7 and choice.met
+    assert [v["passes"] for v in choice.levels.values()] == [True, True, True, False, False]
+    assert choice.levels["0.8"]["successes"] == 8 and choice.levels["0.8"]["runs"] == 10
+    lo, hi = choice.levels["0.8"]["success_ci"]
+    assert lo < 0.8 < hi
+    assert "90%" in choice.rule
+
+
+def test_a_level_that_passes_again_above_a_failing_one_does_not_count():
+    outcomes = {0.5: (10, 10), 0.6: (7, 10), 0.7: (10, 10), 1.0: (10, 10)}
+    assert choose_difficulty(outcomes, 0.9).difficulty == 0.5
+
+
+def test_the_grid_order_is_the_difficulty_not_the_dict_order():
+    outcomes = {0.9: (0, 10), 0.5: (10, 10), 0.7: (10, 10)}
+    assert choose_difficulty(outcomes).difficulty == 0.7
+
+
+def test_every_level_passing_gives_the_hardest():
+    assert choose_difficulty({0.5: (5, 5), 1.0: (9, 10)}).difficulty == 1.0
+
+
+def test_the_threshold_is_inclusive():
+    assert choose_difficulty({0.5: (9, 10), 0.6: (18, 20)}, 0.9).difficulty == 0.6
+    assert choose_difficulty({0.5: (9, 10), 0.6: (17, 20)}, 0.9).difficulty == 0.5
+
+
+def test_an_expert_failing_already_at_the_easiest_level_is_reported_not_met():
+    choice = choose_difficulty({0.5: (6, 10), 0.7: (2, 10)}, 0.9)
+    assert choice.difficulty == 0.5 and not choice.met
+    assert choice.as_dict()["met"] is False
+
+
+def test_bad_outcomes_are_refused():
+    with pytest.raises(FootfallError, match="at least one"):
+        choose_difficulty({})
+    with pytest.raises(FootfallError, match="threshold"):
+        choose_difficulty({0.5: (1, 1)}, 0.0)
+    with pytest.raises(FootfallError, match="successes <= trials"):
+        choose_difficulty({0.5: (3, 2)})
+    with pytest.raises(FootfallError, match=r"\[0, 1\]"):
+        choose_difficulty({1.5: (1, 1)})

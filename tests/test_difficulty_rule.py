@@ -6,7 +6,7 @@ from footfall.core.errors import FootfallError
 from footfall.experiments.difficulty import choose_difficulty
 
 
-def test_the_hardest_level_up_to_which_the_expert_still_crosses_90_percent():
+def test_the_hardest_level_at_which_the_expert_still_crosses_90_percent():
     outcomes = {0.5: (10, 10), 0.6: (10, 10), 0.7: (9, 10), 0.8: (8, 10), 0.9: (5, 10)}
     choice = choose_difficulty(outcomes, 0.9)
     assert choice.difficulty == 0.7 and choice.met
@@ -17,9 +17,32 @@ def test_the_hardest_level_up_to_which_the_expert_still_crosses_90_percent():
     assert "90%" in choice.rule
 
 
-def test_a_level_that_passes_again_above_a_failing_one_does_not_count():
-    outcomes = {0.5: (10, 10), 0.6: (7, 10), 0.7: (10, 10), 1.0: (10, 10)}
-    assert choose_difficulty(outcomes, 0.9).difficulty == 0.5
+def test_one_unlucky_easy_level_does_not_stop_the_climb():
+    """The first default reproduction's calibration: raw, 8 / 10 at 0.6 would stop at 0.5.
+    Fitted non-increasing, 0.6-0.8 pool to 27 / 30 = 0.9."""
+    outcomes = {0.5: (10, 10), 0.6: (8, 10), 0.7: (9, 10), 0.8: (10, 10), 0.9: (6, 10),
+                1.0: (2, 10)}
+    choice = choose_difficulty(outcomes, 0.9)
+    assert choice.difficulty == 0.8 and choice.met
+    fitted = [v["fitted"] for v in choice.levels.values()]
+    assert fitted == pytest.approx([1.0, 0.9, 0.9, 0.9, 0.6, 0.2])
+    assert [v["success_rate"] for v in choice.levels.values()] == [1.0, 0.8, 0.9, 1.0, 0.6, 0.2]
+
+
+def test_one_lucky_hard_level_does_not_set_the_difficulty():
+    """10 / 10 at 0.8 above two levels of 5 / 10: pooled to 20 / 30, below the threshold."""
+    outcomes = {0.5: (10, 10), 0.6: (5, 10), 0.7: (5, 10), 0.8: (10, 10)}
+    choice = choose_difficulty(outcomes, 0.9)
+    assert choice.difficulty == 0.5
+    assert choice.levels["0.8"]["fitted"] == pytest.approx(20 / 30)
+
+
+def test_levels_are_weighted_by_their_runs():
+    """A level of 40 runs outweighs a level of 2 when they are pooled."""
+    outcomes = {0.5: (36, 40), 0.6: (2, 2)}  # pooled: 38 / 42 = 0.905
+    assert choose_difficulty(outcomes, 0.9).difficulty == 0.6
+    outcomes = {0.5: (35, 40), 0.6: (2, 2)}  # pooled: 37 / 42 = 0.881; 0.5 alone 0.875
+    assert not choose_difficulty(outcomes, 0.9).met
 
 
 def test_the_grid_order_is_the_difficulty_not_the_dict_order():

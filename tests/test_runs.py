@@ -62,3 +62,22 @@ def test_video_and_strip_are_written(tmp_path):
     save_strip([(0.5 * i, f) for i, f in enumerate(frames[:4])], tmp_path / "strip.png")
     assert (tmp_path / "strip.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert not list(tmp_path.glob(".*.tmp*"))  # written through a temporary file and renamed
+
+
+def test_a_board_file_is_made_once_and_never_mistaken_for_another_board(tmp_path):
+    """A stage that chooses a board later (the test boards at the calibrated difficulty) must
+    not resume on a file left with another difficulty or seed: one clear error instead."""
+    from footfall.core.errors import FootfallError
+    from footfall.experiments.runs import board_files
+
+    spec = (("rocky", 0.6), ("steps", 0.6))
+    path = board_files(tmp_path, {"test0": (spec, 11, True)})["test0"]
+    made = path.stat().st_mtime_ns
+    assert board_files(tmp_path, {"test0": (spec, 11, True)})["test0"].stat().st_mtime_ns == made
+    flat = ((("flat", 0.0),) * 3)
+    board_files(tmp_path, {"flat": (flat, 5, False)})
+    board_files(tmp_path, {"flat": (flat, 5, False)})  # an all-flat board is itself too
+    for other in ({"test0": ((("rocky", 0.8), ("steps", 0.8)), 11, True)},
+                  {"test0": (spec, 12, True)}):
+        with pytest.raises(FootfallError, match="holds another board than test0"):
+            board_files(tmp_path, other)

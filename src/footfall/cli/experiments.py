@@ -1,4 +1,4 @@
-"""``footfall offline``, ``reproduce``, ``ablation`` and ``demo``: the experiments end to end, and
+"""``footfall offline``, ``reproduce``, ``study``, ``ablation`` and ``demo``: the experiments end to end, and
 the picture demo."""
 
 from __future__ import annotations
@@ -27,6 +27,26 @@ def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
     emit(as_json, summary, f"wrote {Path(out) / 'report.md'}")
 
 
+def test_kinds_option(f):
+    """Add --test-kinds: the modules of the calibration, test and sweep boards."""
+    return click.option(
+        "--test-kinds", default=None, metavar="KIND[,KIND...]",
+        help="Terrain kinds of every calibration, test and sweep board, 'rocky' among them "
+             "[default: rocky,steps]; e.g. rocky,logs to test on kinds never trained on.")(f)
+
+
+def _reproduce_config(seed: int, quick: bool, test_kinds: str | None):
+    """The reproduction's settings for ``seed``: the default or quick ones, with other kinds."""
+    from dataclasses import replace
+
+    from footfall.experiments.reproduce import ReproduceConfig
+
+    config = ReproduceConfig.quick(seed) if quick else ReproduceConfig(seed=seed)
+    if test_kinds is None:
+        return config
+    return replace(config, test_kinds=tuple(k.strip() for k in test_kinds.split(",")))
+
+
 def _table2_line(name: str, row: dict) -> str:
     """One row of Table II: successes of runs, and slip [mm]."""
     slip = ("-" if row["slip_mean_mm"] is None
@@ -39,14 +59,15 @@ def _table2_line(name: str, row: dict) -> str:
               "(and the store of every run; run again with the same arguments to resume).")
 @click.option("--seed", type=SEED, default=0, show_default=True)
 @click.option("--quick", is_flag=True, help="A small version (a few minutes) for a smoke test.")
+@test_kinds_option
 @executor_options
 @json_option
-def reproduce(out: str, seed: int, quick: bool, processes: int | None, executor_name: str,
-              ray_address: str | None, as_json: bool) -> None:
+def reproduce(out: str, seed: int, quick: bool, test_kinds: str | None, processes: int | None,
+              executor_name: str, ray_address: str | None, as_json: bool) -> None:
     """The paper's walking experiment end to end: corrections, learning, Tables I and II."""
-    from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
+    from footfall.experiments.reproduce import run_reproduction
 
-    config = ReproduceConfig.quick(seed) if quick else ReproduceConfig(seed=seed)
+    config = _reproduce_config(seed, quick, test_kinds)
     with opened_executor(executor_name, processes, ray_address) as executor:
         results = run_reproduction(Path(out), config, log=progress_log(as_json),
                                    executor=executor)
@@ -57,6 +78,34 @@ def reproduce(out: str, seed: int, quick: bool, processes: int | None, executor_
     lines += [f"pooled over {boards} test boards:"]
     lines += ["  " + _table2_line(k, v) for k, v in results["table2_pooled"].items()]
     emit(as_json, results, "\n".join(lines + [f"wrote {Path(out) / 'report.md'} and report.html"]))
+
+
+@click.command()
+@click.option("--seeds", "first_seed", type=SEED, required=True, metavar="SEED [SEED ...]",
+              help="The reproduction seeds, e.g. --seeds 0 1 2: each a whole reproduction with "
+                   "its own boards, runs and demonstrations.")
+@click.argument("more_seeds", nargs=-1, type=SEED, metavar="")
+@click.option("--out", "out", default="out/study", show_default=True, help="Study folder: "
+              "a reproduction folder per seed (seedN/) and the summary; run again to resume.")
+@click.option("--quick", is_flag=True, help="Each reproduction's small version (a smoke test).")
+@test_kinds_option
+@executor_options
+@json_option
+def study(first_seed: int, more_seeds: tuple[int, ...], out: str, quick: bool,
+          test_kinds: str | None, processes: int | None, executor_name: str,
+          ray_address: str | None, as_json: bool) -> None:
+    """Several whole reproductions and a verdict on each of the paper's orderings."""
+    from footfall.experiments.study import run_study
+
+    seeds = [first_seed, *more_seeds]
+    _reproduce_config(0, quick, test_kinds)  # bad kinds: one line before anything is walked
+    with opened_executor(executor_name, processes, ray_address) as executor:
+        summary = run_study(Path(out), seeds, executor=executor, log=progress_log(as_json),
+                            config_for=lambda seed: _reproduce_config(seed, quick, test_kinds))
+    lines = [f"{v['ordering']}: success {v['success_verdict']} (p = {v['p_value']:.3g}, "
+             f"{v['a_only']} against {v['b_only']} paired runs), slip {v['slip_verdict']}"
+             for v in summary["verdicts"]]
+    emit(as_json, summary, "\n".join(lines + [f"wrote {Path(out) / 'summary.md'}"]))
 
 
 def _variant_names() -> list[str]:

@@ -12,7 +12,7 @@ import click
 
 from footfall.cli.bench import bench
 from footfall.cli.demos import demos
-from footfall.cli.experiments import ablation, demo, offline, reproduce
+from footfall.cli.experiments import ablation, demo, offline, reproduce, study
 from footfall.cli.features import features
 from footfall.cli.learning import learn, rank_eval_cmd
 from footfall.cli.store import store
@@ -38,7 +38,7 @@ def cli(debug: bool, limits: tuple[str, ...]) -> None:
 
 
 for _command in (terrain, features, demos, store, learn, rank_eval_cmd, walk_cmd,
-                 walk_many_cmd, offline, reproduce, ablation, demo, bench):
+                 walk_many_cmd, offline, reproduce, study, ablation, demo, bench):
     cli.add_command(_command)
 
 

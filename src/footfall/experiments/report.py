@@ -186,11 +186,12 @@ def _calibration(results: dict) -> list[str]:
     lines += [f"The expert on {cfg['calibration_boards']} calibration board(s) per level "
               f"(boards of the test kinds with their own seeds, never trained or tested on), "
               f"{cfg['calibration_runs']} runs each:", "",
-              "| difficulty | expert crossed | 95 % CI (Wilson) | at least "
-              f"{c['threshold']:.0%} |", "| --- | --- | --- | --- |"]
+              "| difficulty | expert crossed | 95 % CI (Wilson) | fitted (non-increasing) | "
+              f"fit at least {c['threshold']:.0%} |", "| --- | --- | --- | --- | --- |"]
     for d, v in c["levels"].items():
         lines.append(f"| {d} | {v['successes']} / {v['runs']} | {_pct(v['success_ci'][0])} - "
-                     f"{_pct(v['success_ci'][1])} | {'yes' if v['passes'] else 'no'} |")
+                     f"{_pct(v['success_ci'][1])} | {_pct(v['fitted'])} | "
+                     f"{'yes' if v['passes'] else 'no'} |")
     return lines + [""]
 
 

@@ -111,7 +111,9 @@ class ReproduceConfig(Params):
         must="a non-empty tuple of boards, each a tuple of (kind, difficulty in [0, 1])",
         doc="the training boards the robot is corrected on")
     test_kinds: tuple[str, ...] = param(
-        ("rocky", "steps"), check=_test_kinds, must="a tuple of terrain kinds with 'rocky' among them",
+        ("rocky", "steps"), check=_test_kinds,
+        must="a tuple of terrain kinds other than flat ('footfall terrain make --help' lists "
+             "them), 'rocky' among them",
         doc="the modules of every calibration, test and sweep board (fresh seeds each)")
     difficulties: tuple[float, ...] = param(
         (0.5, 0.6, 0.7, 0.8, 0.9, 1.0), unit="-", check=_difficulties,
@@ -160,7 +162,7 @@ class ReproduceConfig(Params):
     eval_runs: int = param(21, range=at_least(1),
                            doc="runs per method on each test board, the same seeds on every "
                                "board (the paper's 21)")
-    sweep_runs: int = param(5, range=at_least(1),
+    sweep_runs: int = param(4, range=at_least(1),
                             doc="runs per method at each difficulty of the grid (one board each)")
     offline_demos: int = param(40, range=at_least(1), doc="expert demonstrations on the test "
                                                           "board for the ranking table")

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
+from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.data.runlog import RunRecord
 from footfall.data.store import DemoStore
@@ -150,7 +151,6 @@ def claim_folder(out: Path, settings: dict, what: str, free: tuple[str, ...] = (
     ``free`` may differ: they choose which runs are walked, not how (their run keys tell
     the runs apart).
     """
-    from footfall.core.errors import FootfallError
     from footfall.core.files import write_text_atomic
 
     if out.exists() and not out.is_dir():
@@ -169,6 +169,15 @@ def claim_folder(out: Path, settings: dict, what: str, free: tuple[str, ...] = (
     write_text_atomic(path, json.dumps(settings, sort_keys=True, indent=1))
 
 
+def _holds(hmap: HeightMap, spec: tuple, seed: int) -> bool:
+    """Whether a board file's metadata says it is ``spec`` (flat ends aside) made with ``seed``."""
+    meta = hmap.metadata
+    modules = [(m.get("kind"), m.get("difficulty")) for m in meta.get("modules", [])]
+    inner = [m for m in modules if m[0] != "flat"] or modules
+    wanted = [(k, float(d)) for k, d in spec if k != "flat"] or [(k, float(d)) for k, d in spec]
+    return meta.get("board_seed") == seed and (inner == wanted or modules == wanted)
+
+
 def board_files(out: Path, boards: dict[str, tuple[tuple, int, bool]]) -> dict[str, Path]:
     """The experiment's boards as files ``out/terrain/NAME.npz``, each made once from its seed.
 
@@ -184,5 +193,10 @@ def board_files(out: Path, boards: dict[str, tuple[tuple, int, bool]]) -> dict[s
         path = folder / f"{name}.npz"
         if not path.exists():
             make_board(list(spec), seed=seed, flat_ends=flat_ends).save(path)
+        elif not _holds(HeightMap.load(path), spec, seed):
+            # (a board chosen by a stage, e.g. the test boards at the calibrated difficulty)
+            raise FootfallError(f"{path} holds another board than {name} "
+                                f"({', '.join(f'{k} {d:g}' for k, d in spec)}, seed {seed}); "
+                                f"use another --out")
         paths[name] = path
     return paths

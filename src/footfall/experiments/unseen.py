@@ -112,13 +112,12 @@ def evaluate(ws: Workspace, runner: Runner, choice: DifficultyChoice) -> Evaluat
     jobs += [method_job(ws, f"eval/flat/{ROBOT_FEATURE_SET}/s{s}", "flat", ROBOT_FEATURE_SET, s)
              for s in seeds]
     runner.run(jobs, "evaluation runs")
-    runs = _load(runner.store, "eval/")
+    runs = load_runs(runner.store, "eval/")
     per_board = {board: {m: _row(runs, f"eval/{board}/{m}/") for m in METHODS}
                  for board in names}
     pooled = {m: _row(runs, *(f"eval/{board}/{m}/" for board in names)) for m in METHODS}
     pooled[FLAT] = _row(runs, f"eval/flat/{ROBOT_FEATURE_SET}/")
-    outcomes = {m: {(board, s): _outcome(runs[f"eval/{board}/{m}/s{s}"])
-                    for board in names for s in seeds} for m in METHODS}
+    outcomes = test_outcomes(runs, names, seeds)
     slips = {m: _slips(runs, *(f"eval/{board}/{m}/" for board in names)) for m in METHODS}
     slips[FLAT] = _slips(runs, f"eval/flat/{ROBOT_FEATURE_SET}/")
     crossed = [s for s in seeds if runs[f"eval/{names[0]}/{ROBOT_FEATURE_SET}/s{s}"].result[
@@ -136,17 +135,12 @@ def sweep(ws: Workspace, runner: Runner) -> dict:
     jobs = [method_job(ws, f"sweep/{d:g}/{m}/s{s}", f"sweep{d:g}", m, s)
             for d in config.difficulties for m in METHODS for s in seeds]
     runner.run(jobs, "sweep runs (success against difficulty)")
-    runs = _load(runner.store, "sweep/")
+    runs = load_runs(runner.store, "sweep/")
     return {f"{d:g}": {m: _row(runs, f"sweep/{d:g}/{m}/") for m in METHODS}
             for d in config.difficulties}
 
 
 # ---------------------------------------------------------------- the store
-def _load(store: DemoStore, prefix: str) -> dict:
-    """Run key -> run record of every stored run under ``prefix``."""
-    return {r["key"]: store.run(r["id"]) for r in store.runs(key_prefix=prefix)}
-
-
 def _records(runs: dict, prefixes: tuple[str, ...]) -> list:
     """The runs under ``prefixes``, in key order (not in the order parallel workers finished)."""
     return [runs[k] for k in sorted(runs) if k.startswith(prefixes)]
@@ -157,6 +151,18 @@ def _row(runs: dict, *prefixes: str) -> dict:
     records = _records(runs, prefixes)
     return {**summarise(records).as_dict(),
             **distance_summary([_outcome(r) for r in records])}
+
+
+def test_outcomes(runs: dict, boards: list[str], seeds: list[int], tag: str = "") -> dict:
+    """Every method's test-board runs as paired units: method -> (``tag`` + board, run seed) ->
+    :class:`~footfall.experiments.paired.RunOutcome` (``runs``: key -> record, ``eval/...``)."""
+    return {m: {(tag + board, s): _outcome(runs[f"eval/{board}/{m}/s{s}"])
+                for board in boards for s in seeds} for m in METHODS}
+
+
+def load_runs(store: DemoStore, prefix: str) -> dict:
+    """Run key -> run record of every stored run under ``prefix``."""
+    return {r["key"]: store.run(r["id"]) for r in store.runs(key_prefix=prefix)}
 
 
 def _outcome(record) -> RunOutcome:

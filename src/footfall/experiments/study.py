@@ -1,0 +1,190 @@
+"""Several whole reproductions, and what they say together: ``footfall study`` (issue 20).
+
+One reproduction learns from one set of demonstrations and tests on one
+draw of boards; another seed draws other training boards, other
+corrections, another test difficulty's boards and other run seeds (every
+seed from the reproduction's named streams, :mod:`footfall.core.seeds`: two
+seeds share none). A study runs the reproduction for each seed into
+``OUT/seedN`` -- each a complete reproduction folder that resumes on its
+own, on whichever executor the runs use -- and summarises them:
+
+* each seed's Table II pooled over its test boards, its one-board table's
+  row for templates + features, and its Table I;
+* the spread of each method's success rate and slip across the seeds;
+* a verdict on each of the paper's orderings (templates + features above
+  templates above terrain features, in success and in slip): the paired
+  runs of every seed pooled (units resampled within each seed's board),
+  "held", "reversed" or "not separated" at this sample size, with the
+  statistic behind it (:mod:`footfall.experiments.paired`), and each seed's
+  own verdict beside it.
+
+The summary goes to ``summary.json`` and ``summary.md`` in ``OUT``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from footfall.core.errors import FootfallError
+from footfall.core.files import plain_json, write_text_atomic
+from footfall.data.store import DemoStore
+from footfall.experiments.executors import Executor
+from footfall.experiments.paired import compare
+from footfall.experiments.reproduce import STORE_NAME, ReproduceConfig, run_reproduction
+from footfall.experiments.runs import claim_folder
+from footfall.experiments.unseen import METHODS, load_runs, test_outcomes
+
+PAPER_ORDERINGS = (("both", "templates"), ("templates", "terrain"), ("both", "terrain"))
+# the paper's Table II: the first of each pair crossed more often and slipped less
+NAMES = {"terrain": "terrain features", "templates": "templates",
+         "both": "templates + features", "expert": "expert", "default": "hand-tuned"}
+
+
+def seed_folder(out: Path, seed: int) -> Path:
+    """Where the study keeps the reproduction of ``seed``."""
+    return out / f"seed{seed}"
+
+
+def run_study(out: str | os.PathLike, seeds: list[int], quick: bool = False,
+              executor: Executor | None = None, processes: int | None = None,
+              log: Callable[[str], None] = print,
+              config_for: Callable[[int], ReproduceConfig] | None = None,
+              on_run: Callable[[str], None] | None = None) -> dict:
+    """Run (or resume) a reproduction per seed into ``out/seedN``; summarise them all.
+
+    ``quick``: each reproduction's small version (:meth:`ReproduceConfig.quick`);
+    ``config_for(seed)``: other settings (the same for every seed but the seed).
+    ``on_run(key)`` is called after each run is stored.
+    """
+    seeds = list(seeds)
+    if not seeds or len(set(seeds)) != len(seeds):
+        raise FootfallError(f"a study needs distinct seeds, got {seeds}")
+    config_for = config_for or (ReproduceConfig.quick if quick else
+                                lambda seed: ReproduceConfig(seed=seed))
+    out = Path(out)
+    settings = {k: v for k, v in config_for(0).to_dict().items() if k != "seed"}
+    claim_folder(out, {"study of": "reproduce", "settings": settings}, "a study")
+    started = time.perf_counter()
+    results, outcomes = {}, {m: {} for m in METHODS}
+    for n, seed in enumerate(seeds):
+        log(f"=== reproduction seed {seed} ({n + 1} of {len(seeds)})")
+        folder = seed_folder(out, seed)
+        results[seed] = run_reproduction(folder, config_for(seed), processes=processes, log=log,
+                                         on_run=on_run, executor=executor)
+        with DemoStore(folder / STORE_NAME) as store:
+            runs = load_runs(store, "eval/test")
+        for m, units in test_outcomes(runs, list(results[seed]["table2_boards"]),
+                                      sorted({int(k.rsplit("/s", 1)[1]) for k in runs}),
+                                      tag=f"seed{seed}/").items():
+            outcomes[m].update(units)
+    summary = summarise_study(results, outcomes)
+    summary["seconds_this_session"] = time.perf_counter() - started
+    write_text_atomic(out / "summary.json",
+                      json.dumps(plain_json(summary, nonfinite="keep"), indent=1))
+    write_text_atomic(out / "summary.md", study_markdown(summary))
+    return summary
+
+
+def summarise_study(results: dict[int, dict], outcomes: dict) -> dict:
+    """The study's summary from each seed's reproduction results and every seed's paired test
+    runs (method -> ("seedN/board", run seed) -> RunOutcome)."""
+    per_seed = {}
+    for seed, r in results.items():
+        pairs = {(c["a"], c["b"]): c for c in r["pairs"]}
+        per_seed[seed] = {
+            "test_difficulty": r["test_difficulty"],
+            "calibration_met": r["calibration"]["met"],
+            "test_boards": len(r["table2_boards"]),
+            "table2_pooled": {m: _brief(t) for m, t in r["table2_pooled"].items()},
+            "table2_one_board": {m: _brief(t) for m, t in r["table2"].items()},
+            "table1": r["table1"],
+            "verdicts": {f"{a}>{b}": {"success": pairs[a, b]["success_verdict"],
+                                      "slip": pairs[a, b]["slip_verdict"],
+                                      "p_value": pairs[a, b]["p_value"]}
+                         for a, b in PAPER_ORDERINGS},
+            "seconds_last_session": r.get("seconds_this_session")}
+    spread = {}
+    for m in (*METHODS, "flat"):
+        rates = [per_seed[s]["table2_pooled"][m]["success_rate"] for s in per_seed]
+        slips = [per_seed[s]["table2_pooled"][m]["slip_mean_mm"] for s in per_seed]
+        slips = [x for x in slips if x is not None]
+        spread[m] = {"success_rates": rates, "success_mean": float(np.mean(rates)),
+                     "success_min": float(np.min(rates)), "success_max": float(np.max(rates)),
+                     "slip_means_mm": slips,
+                     "slip_mean_mm": float(np.mean(slips)) if slips else None}
+    verdicts = [{"ordering": f"{NAMES[a]} above {NAMES[b]}",
+                 **compare(outcomes, a, b, seed=0),
+                 "per_seed": {s: per_seed[s]["verdicts"][f"{a}>{b}"] for s in per_seed}}
+                for a, b in PAPER_ORDERINGS]
+    return {"seeds": list(results), "per_seed": per_seed, "spread": spread,
+            "verdicts": verdicts}
+
+
+def _brief(t: dict) -> dict:
+    return {k: t[k] for k in ("successes", "runs", "success_rate", "success_ci",
+                              "slip_mean_mm", "distance_mean_m") if k in t}
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:.1f} %"
+
+
+def study_markdown(summary: dict) -> str:
+    """The summary as Markdown: verdicts first, then the spread, then each seed."""
+    seeds = summary["seeds"]
+    lines = ["# footfall study: the paper's walking experiment over several seeds", "",
+             f"Reproduction seeds {', '.join(map(str, seeds))}: each with its own training "
+             "boards, corrections, test difficulty and boards, and run seeds (`seedN/` holds "
+             "each whole reproduction and its report).", "",
+             "## Verdicts on the paper's orderings", "",
+             "Every seed's paired test-board runs pooled. Success: exact McNemar test on the "
+             "runs only one of the two crossed (held / reversed at p < 0.05). Slip (over the "
+             "successful runs' footholds): 95 % paired bootstrap interval of the difference, "
+             "resampled within each seed's board (held / reversed if it excludes 0).", "",
+             "| ordering | pairs | A only | B only | p (McNemar) | success A - B (95 % CI) | "
+             "success | slip A - B [mm] (95 % CI) | slip | per seed (success / slip) |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for v in summary["verdicts"]:
+        lo, hi = v["success_difference_ci"]
+        slo, shi = v["slip_difference_ci_mm"]
+        slip = "-" if v["slip_difference_mm"] is None else f"{v['slip_difference_mm']:+.1f}"
+        per = "; ".join(f"{s}: {x['success']} / {x['slip']}" for s, x in v["per_seed"].items())
+        lines.append(f"| {v['ordering']} | {v['pairs']} | {v['a_only']} | {v['b_only']} | "
+                     f"{v['p_value']:.3g} | {100 * v['success_difference']:+.1f} % ({100 * lo:+.1f}"
+                     f" to {100 * hi:+.1f}) | **{v['success_verdict']}** | {slip} ({slo:+.1f} to "
+                     f"{shi:+.1f}) | **{v['slip_verdict']}** | {per} |")
+    lines += ["", "## Spread across the seeds (Table II pooled over each seed's test boards)",
+              "", "| method | " + " | ".join(f"seed {s}" for s in seeds)
+              + " | mean | min - max |", "| --- |" + " --- |" * (len(seeds) + 2)]
+    for m, sp in summary["spread"].items():
+        cells = []
+        for s in seeds:
+            t = summary["per_seed"][s]["table2_pooled"][m]
+            slip = "-" if t["slip_mean_mm"] is None else f"{t['slip_mean_mm']:.1f} mm"
+            cells.append(f"{t['successes']} / {t['runs']}, {slip}")
+        lines.append(f"| {NAMES.get(m, 'flat baseline')} | " + " | ".join(cells)
+                     + f" | {_pct(sp['success_mean'])} | {_pct(sp['success_min'])} - "
+                     f"{_pct(sp['success_max'])} |")
+    lines += ["", "## Each seed", "", "| seed | test difficulty | boards | one-board table: "
+              "templates + features | Table I: templates kept (small, medium, large; front / "
+              "hind), templates only | templates + features |", "| --- | --- | --- | --- | --- "
+              "| --- |"]
+    for s in seeds:
+        p = summary["per_seed"][s]
+        one = p["table2_one_board"]["both"]
+        t1 = {fs: " / ".join(",".join(map(str, g["kept"])) for g in p["table1"][fs].values())
+              for fs in ("templates", "both")}
+        met = "" if p["calibration_met"] else " (rule not met)"
+        lines.append(f"| {s} | {p['test_difficulty']:g}{met} | {p['test_boards']} | "
+                     f"{one['successes']} / {one['runs']} | {t1['templates']} | {t1['both']} |")
+    seconds = summary.get("seconds_this_session")
+    if seconds is not None:
+        lines += ["", f"This invocation took {seconds / 60:.0f} min (stored runs are not "
+                      "walked again)."]
+    return "\n".join(lines) + "\n"

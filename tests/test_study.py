@@ -1,0 +1,95 @@
+"""``footfall study``: whole reproductions per seed, resumable, sharing no board or run seed."""
+
+import json
+from dataclasses import replace
+
+import pytest
+
+from cli_helpers import assert_user_error, run
+from footfall.data.store import DemoStore
+from footfall.experiments.reproduce import STORE_NAME, ReproduceConfig
+from footfall.experiments.study import run_study, seed_folder, study_markdown
+from footfall.expert.synthetic import ExpertConfig
+from footfall.sim.episode import WalkConfig
+
+TINY = ReproduceConfig(
+    train_boards=((("rocky", 0.5),),), test_kinds=("rocky",), difficulties=(0.6,),
+    calibration_boards=1, calibration_runs=1, test_boards=2, eval_runs=1, sweep_runs=1,
+    rounds=2, target_demos=1000, corrections_per_run=None, library_size=30,
+    training_candidates=20, cv=2, final_bandwidth_rms=0.004, offline_demos=4,
+    walk=WalkConfig(max_steps=6), expert=ExpertConfig())  # as tests/test_reproduce.py's, smaller
+
+
+def tiny(seed: int) -> ReproduceConfig:
+    return replace(TINY, seed=seed)
+
+
+def _keys(out, seed):
+    with DemoStore(seed_folder(out, seed) / STORE_NAME) as store:
+        return sorted(r["key"] for r in store.runs())
+
+
+def _store_facts(out, seed):
+    with DemoStore(seed_folder(out, seed) / STORE_NAME) as store:
+        runs = [store.run(r["id"]) for r in store.runs()]
+    return {r.seed for r in runs}, {r.terrain_hash for r in runs}
+
+
+def test_a_study_resumes_after_an_interruption_and_its_seeds_share_nothing(tmp_path):
+    first: list[str] = []
+
+    def stop_in_the_second_seed(key: str) -> None:
+        first.append(key)
+        if (seed_folder(tmp_path, 1) / STORE_NAME).exists() and len(first) > 3 and \
+                key.startswith("eval/"):
+            raise KeyboardInterrupt  # seed 0 done, seed 1 part-way through its evaluation
+
+    with pytest.raises(KeyboardInterrupt):
+        run_study(tmp_path, [0, 1], config_for=tiny, processes=1, log=lambda s: None,
+                  on_run=stop_in_the_second_seed)
+    assert not (tmp_path / "summary.json").exists()
+    kept = _keys(tmp_path, 0) + _keys(tmp_path, 1)
+    assert sorted(kept) == sorted(first)  # every finished run was kept, in its seed's store
+
+    second: list[str] = []
+    summary = run_study(tmp_path, [0, 1], config_for=tiny, processes=1, log=lambda s: None,
+                        on_run=second.append)
+    assert second and not set(second) & set(_keys(tmp_path, 0))  # seed 0 not walked again
+    assert len(second) == len(set(second))
+    assert sorted(first + second) == sorted(_keys(tmp_path, 0) + _keys(tmp_path, 1))  # once each
+    # Each reproduction is whole: its report, and every method's test runs on every board.
+    for seed in (0, 1):
+        r = json.loads((seed_folder(tmp_path, seed) / "results.json").read_text())
+        assert r["table2_pooled"]["both"]["runs"] == TINY.test_boards * TINY.eval_runs
+    # No two seeds share a board or a run seed.
+    (runs0, boards0), (runs1, boards1) = _store_facts(tmp_path, 0), _store_facts(tmp_path, 1)
+    assert not runs0 & runs1 and not boards0 & boards1
+
+    saved = json.loads((tmp_path / "summary.json").read_text())
+    assert saved["seeds"] == [0, 1] and len(saved["verdicts"]) == 3
+    for v in summary["verdicts"]:  # pooled over both seeds' paired runs
+        assert v["pairs"] == 2 * TINY.test_boards * TINY.eval_runs
+        assert v["success_verdict"] in ("held", "reversed", "not separated")
+        assert set(v["per_seed"]) == {0, 1}
+    md = (tmp_path / "summary.md").read_text()
+    assert md == study_markdown(summary)
+    assert "templates + features above templates" in md and "Spread across the seeds" in md
+
+    again: list[str] = []  # a third time: nothing left to walk
+    run_study(tmp_path, [0, 1], config_for=tiny, processes=1, log=lambda s: None,
+              on_run=again.append)
+    assert again == []
+
+
+def test_a_study_folder_with_other_settings_is_refused(tmp_path, capsys):
+    (tmp_path / "config.json").write_text(json.dumps({"study of": "reproduce",
+                                                      "settings": {"eval_runs": 99}}))
+    assert_user_error(*run(capsys, "study", "--seeds", 0, 1, "--out", tmp_path)[::2],
+                      "other settings")
+
+
+def test_bad_seed_lists_are_one_line_errors(tmp_path, capsys):
+    for args, match in ((("--seeds", 0, 0), "distinct seeds"), ((), "--seeds"),
+                        (("--seeds", "x"), "'x'")):
+        code, _, err = run(capsys, "study", *args, "--out", tmp_path / "s")
+        assert_user_error(code, err, match)

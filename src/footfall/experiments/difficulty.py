@@ -24,6 +24,14 @@ one hard level would alone set the test difficulty; fitted, each level borrows
 strength from its neighbours. If even the easiest level's fit misses the
 threshold, the easiest level is used and the rule is reported as not met.
 The report gives each level's raw count, its Wilson interval and the fit.
+
+Boards differ more than runs on one board do (the expert crossed 10, 15 and
+14 of 21 runs on three test boards of one difficulty, and 10 of 10 on that
+difficulty's two calibration boards), so the reproduction spends its
+calibration runs on many boards with few runs each (5 boards x 2 runs a
+level by default; the first default run used 2 x 5, and its test boards
+came out far harder for the expert than its calibration boards -- the
+README has the numbers).
 """
 
 from __future__ import annotations

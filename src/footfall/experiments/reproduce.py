@@ -123,9 +123,10 @@ class ReproduceConfig(Params):
         None, unit="-", range=within(0.0, 1.0),
         doc="the test boards' difficulty; None: by the rule (experiments.difficulty) on the "
             "calibration boards")
-    calibration_boards: int = param(2, range=at_least(1),
-                                    doc="calibration boards per grid difficulty")
-    calibration_runs: int = param(5, range=at_least(1),
+    calibration_boards: int = param(5, range=at_least(1),
+                                    doc="calibration boards per grid difficulty (boards differ "
+                                        "more than runs on one board: many boards, few runs)")
+    calibration_runs: int = param(2, range=at_least(1),
                                   doc="the expert's runs on each calibration board")
     calibration_success: float = param(
         0.9, unit="-", range=within(0.0, 1.0, low_open=True),
@@ -162,7 +163,7 @@ class ReproduceConfig(Params):
     eval_runs: int = param(21, range=at_least(1),
                            doc="runs per method on each test board, the same seeds on every "
                                "board (the paper's 21)")
-    sweep_runs: int = param(4, range=at_least(1),
+    sweep_runs: int = param(3, range=at_least(1),
                             doc="runs per method at each difficulty of the grid (one board each)")
     offline_demos: int = param(40, range=at_least(1), doc="expert demonstrations on the test "
                                                           "board for the ranking table")

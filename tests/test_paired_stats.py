@@ -71,3 +71,33 @@ def test_ratios_without_any_successful_run_are_not_a_number():
     assert math.isnan(lo) and math.isnan(hi)
     with pytest.raises(FootfallError, match="one entry per paired unit"):
         paired_ratio_difference_ci((np.ones(3), np.ones(3)), (np.ones(2), np.ones(2)))
+
+
+def test_wilson_intervals_end_exactly_at_0_and_1_and_hold_the_observed_rate():
+    """0 of n and n of n give exact ends (a plot's error bars must never turn negative)."""
+    from footfall.core.stats import wilson_interval
+
+    for n in range(1, 70):
+        assert wilson_interval(0, n)[0] == 0.0 and wilson_interval(n, n)[1] == 1.0
+        for k in range(n + 1):
+            lo, hi = wilson_interval(k, n)
+            assert lo <= k / n <= hi
+
+
+def test_the_success_curves_draw_every_count_from_none_to_all(tmp_path):
+    from footfall.experiments.batch import summarise
+    from footfall.experiments.report import METHODS, _success_curves
+
+    def row(ok, n):
+        from types import SimpleNamespace
+
+        records = [SimpleNamespace(result={"success": i < ok, "speed_cm_s": 5.0,
+                                           "speed_body_lengths_s": 0.2},
+                                   slips=lambda: np.zeros(0)) for i in range(n)]
+        return summarise(records).as_dict()
+
+    sweep = {f"{d:g}": {m: row(k, 3) for m in METHODS}
+             for d, k in ((0.5, 3), (0.7, 2), (0.9, 1), (1.0, 0))}
+    name, caption = _success_curves(tmp_path, {"sweep": sweep, "test_difficulty": 0.7,
+                                               "config": {"sweep_runs": 3}})
+    assert (tmp_path / name).stat().st_size > 0 and "Wilson" in caption

@@ -49,7 +49,9 @@ def wilson_interval(successes: int, trials: int, level: float = 0.95) -> tuple[f
     denom = 1 + z * z / trials
     centre = (p + z * z / (2 * trials)) / denom
     half = z * np.sqrt(p * (1 - p) / trials + z * z / (4 * trials * trials)) / denom
-    return float(max(0.0, centre - half)), float(min(1.0, centre + half))
+    lo = 0.0 if successes == 0 else max(0.0, centre - half)  # exact ends: no rounding
+    hi = 1.0 if successes == trials else min(1.0, centre + half)  # past the observed rate
+    return float(lo), float(hi)
 
 
 def mcnemar_exact(a_only: int, b_only: int) -> float:

@@ -86,8 +86,8 @@ def _success_curves(out: Path, results: dict) -> tuple[str, str]:
         xs = [float(d) + 0.006 * (i - 2) for d in levels]  # side by side, not on top
         rows = [results["sweep"][d][k] for d in levels]
         ys = [100 * r["success_rate"] for r in rows]
-        err = [[100 * (r["success_rate"] - r["success_ci"][0]) for r in rows],
-               [100 * (r["success_ci"][1] - r["success_rate"]) for r in rows]]
+        err = [[max(0.0, 100 * (r["success_rate"] - r["success_ci"][0])) for r in rows],
+               [max(0.0, 100 * (r["success_ci"][1] - r["success_rate"])) for r in rows]]
         ax.errorbar(xs, ys, yerr=err, fmt="o-" if k in PAPER_TABLE1 or k == "terrain" else "s--",
                     capsize=2, label=NAMES[k], lw=1)
     ax.axvline(results["test_difficulty"], color="grey", lw=0.8, ls=":")

@@ -258,18 +258,25 @@ def _pairs(results: dict) -> list[str]:
              "differences A - B with 95 % paired bootstrap intervals (runs resampled as pairs "
              "within each board); verdict on \"A above B\" at p < 0.05 (success) or an "
              "interval excluding 0 (slip: A slips less).", "",
-             "| A | B | pairs | A only | B only | p (McNemar) | success A - B | 95 % CI | "
-             "slip A - B [mm] | 95 % CI | success: A above B | slip: A below B |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+             f"| A | B | {PAIR_COLUMNS} |", "|" + " --- |" * 12]
     for c in results["pairs"]:
-        lo, hi = c["success_difference_ci"]
-        slo, shi = c["slip_difference_ci_mm"]
-        slip = "-" if c["slip_difference_mm"] is None else f"{c['slip_difference_mm']:+.1f}"
-        lines.append(f"| {NAMES[c['a']]} | {NAMES[c['b']]} | {c['pairs']} | {c['a_only']} | "
-                     f"{c['b_only']} | {c['p_value']:.3g} | {100 * c['success_difference']:+.1f} "
-                     f"% | {100 * lo:+.1f} to {100 * hi:+.1f} % | {slip} | {slo:+.1f} to "
-                     f"{shi:+.1f} | {c['success_verdict']} | {c['slip_verdict']} |")
+        lines.append(f"| {NAMES[c['a']]} | {NAMES[c['b']]} | {pair_cells(c)} |")
     return lines + [""]
+
+
+PAIR_COLUMNS = ("pairs | A only | B only | p (McNemar) | success A - B | 95 % CI | "
+                "slip A - B [mm] | 95 % CI | success: A above B | slip: A below B")
+# the columns of pair_cells
+
+
+def pair_cells(c: dict) -> str:
+    """A paired comparison (:func:`footfall.experiments.paired.compare`) as table cells."""
+    lo, hi = c["success_difference_ci"]
+    slo, shi = c["slip_difference_ci_mm"]
+    slip = "-" if c["slip_difference_mm"] is None else f"{c['slip_difference_mm']:+.1f}"
+    return (f"{c['pairs']} | {c['a_only']} | {c['b_only']} | {c['p_value']:.3g} | "
+            f"{100 * c['success_difference']:+.1f} % | {100 * lo:+.1f} to {100 * hi:+.1f} % | "
+            f"{slip} | {slo:+.1f} to {shi:+.1f} | {c['success_verdict']} | {c['slip_verdict']}")
 
 
 def _sweep(results: dict) -> list[str]:

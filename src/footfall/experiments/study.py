@@ -36,6 +36,7 @@ from footfall.core.files import plain_json, write_text_atomic
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor
 from footfall.experiments.paired import compare
+from footfall.experiments.report import PAIR_COLUMNS, pair_cells
 from footfall.experiments.reproduce import STORE_NAME, ReproduceConfig, run_reproduction
 from footfall.experiments.runs import claim_folder
 from footfall.experiments.unseen import METHODS, load_runs, test_outcomes
@@ -147,18 +148,10 @@ def study_markdown(summary: dict) -> str:
              "runs only one of the two crossed (held / reversed at p < 0.05). Slip (over the "
              "successful runs' footholds): 95 % paired bootstrap interval of the difference, "
              "resampled within each seed's board (held / reversed if it excludes 0).", "",
-             "| ordering | pairs | A only | B only | p (McNemar) | success A - B (95 % CI) | "
-             "success | slip A - B [mm] (95 % CI) | slip | per seed (success / slip) |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+             f"| ordering | {PAIR_COLUMNS} | per seed (success / slip) |", "|" + " --- |" * 12]
     for v in summary["verdicts"]:
-        lo, hi = v["success_difference_ci"]
-        slo, shi = v["slip_difference_ci_mm"]
-        slip = "-" if v["slip_difference_mm"] is None else f"{v['slip_difference_mm']:+.1f}"
         per = "; ".join(f"{s}: {x['success']} / {x['slip']}" for s, x in v["per_seed"].items())
-        lines.append(f"| {v['ordering']} | {v['pairs']} | {v['a_only']} | {v['b_only']} | "
-                     f"{v['p_value']:.3g} | {100 * v['success_difference']:+.1f} % ({100 * lo:+.1f}"
-                     f" to {100 * hi:+.1f}) | **{v['success_verdict']}** | {slip} ({slo:+.1f} to "
-                     f"{shi:+.1f}) | **{v['slip_verdict']}** | {per} |")
+        lines.append(f"| {v['ordering']} | {pair_cells(v)} | {per} |")
     lines += ["", "## Spread across the seeds (Table II pooled over each seed's test boards)",
               "", "| method | " + " | ".join(f"seed {s}" for s in seeds)
               + " | mean | min - max |", "| --- |" + " --- |" * (len(seeds) + 2)]

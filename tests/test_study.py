@@ -30,9 +30,16 @@ def _keys(out, seed):
 
 
 def _store_facts(out, seed):
+    """Every run seed of a seed's reproduction, and the content of every board but the flat one
+    (flat ground is the same whatever its seed)."""
+    from footfall.core.heightmap import HeightMap
+
     with DemoStore(seed_folder(out, seed) / STORE_NAME) as store:
-        runs = [store.run(r["id"]) for r in store.runs()]
-    return {r.seed for r in runs}, {r.terrain_hash for r in runs}
+        runs = {store.run(r["id"]).seed for r in store.runs()}
+    boards = {HeightMap.load(p).content_hash()
+              for p in (seed_folder(out, seed) / "terrain").glob("*.npz") if p.stem != "flat"}
+    board_seeds = json.loads((seed_folder(out, seed) / "results.json").read_text())["boards"]
+    return runs, boards, {b["seed"] for b in board_seeds.values()}
 
 
 def test_a_study_resumes_after_an_interruption_and_its_seeds_share_nothing(tmp_path):
@@ -62,8 +69,9 @@ def test_a_study_resumes_after_an_interruption_and_its_seeds_share_nothing(tmp_p
         r = json.loads((seed_folder(tmp_path, seed) / "results.json").read_text())
         assert r["table2_pooled"]["both"]["runs"] == TINY.test_boards * TINY.eval_runs
     # No two seeds share a board or a run seed.
-    (runs0, boards0), (runs1, boards1) = _store_facts(tmp_path, 0), _store_facts(tmp_path, 1)
-    assert not runs0 & runs1 and not boards0 & boards1
+    facts0, facts1 = _store_facts(tmp_path, 0), _store_facts(tmp_path, 1)
+    for a, b in zip(facts0, facts1):  # run seeds, board contents, board seeds
+        assert a and b and not a & b
 
     saved = json.loads((tmp_path / "summary.json").read_text())
     assert saved["seeds"] == [0, 1] and len(saved["verdicts"]) == 3

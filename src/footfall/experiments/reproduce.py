@@ -17,8 +17,8 @@
    cross-validation error (the paper's rule); Table I.
 4. Unseen terrain (Table II; :mod:`footfall.experiments.unseen`): the test
    difficulty chosen by a rule on the calibration boards (the hardest grid
-   level up to which the expert choosing every foothold crosses 90 % of its
-   runs); the three functions, the expert and the hand-tuned reward on
+   level at which the expert choosing every foothold still crosses 90 % of
+   its runs, its success fitted non-increasing over the grid); the three functions, the expert and the hand-tuned reward on
    several fresh test boards at that difficulty with the same 21 run seeds
    (paired runs), the templates + features function on the flat board (the
    slip baseline): Table II per board and pooled, with Wilson intervals,

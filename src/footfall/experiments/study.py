@@ -37,7 +37,12 @@ from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor
 from footfall.experiments.paired import compare
 from footfall.experiments.report import PAIR_COLUMNS, pair_cells
-from footfall.experiments.reproduce import STORE_NAME, ReproduceConfig, run_reproduction
+from footfall.experiments.reproduce import (
+    STORE_NAME,
+    ReproduceConfig,
+    evaluation_seeds,
+    run_reproduction,
+)
 from footfall.experiments.runs import claim_folder
 from footfall.experiments.unseen import METHODS, load_runs, test_outcomes
 
@@ -81,7 +86,7 @@ def run_study(out: str | os.PathLike, seeds: list[int], quick: bool = False,
         with DemoStore(folder / STORE_NAME) as store:
             runs = load_runs(store, "eval/test")
         for m, units in test_outcomes(runs, list(results[seed]["table2_boards"]),
-                                      sorted({int(k.rsplit("/s", 1)[1]) for k in runs}),
+                                      evaluation_seeds(config_for(seed)),
                                       tag=f"seed{seed}/").items():
             outcomes[m].update(units)
     summary = summarise_study(results, outcomes)

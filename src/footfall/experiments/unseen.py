@@ -69,15 +69,13 @@ def calibrate(ws: Workspace, runner: Runner) -> DifficultyChoice:
         return DifficultyChoice(d, True, config.calibration_success, {},
                                 "fixed by the setting test_difficulty (no calibration)")
     seeds = calibration_seeds(config)
-    keys = {d: [f"calibrate/{d:g}/{i}/s{s}" for i in range(config.calibration_boards)
-                for s in seeds] for d in config.difficulties}
-    jobs = [method_job(ws, key, f"cal{d:g}-{key.split('/')[2]}", "expert",
-                       int(key.rsplit("/s", 1)[1]))
-            for d in config.difficulties for key in keys[d]]
-    runner.run(jobs, "calibration runs (the expert)")
+    jobs = {d: [method_job(ws, f"calibrate/{d:g}/{i}/s{s}", f"cal{d:g}-{i}", "expert", s)
+                for i in range(config.calibration_boards) for s in seeds]
+            for d in config.difficulties}
+    runner.run([j for level in jobs.values() for j in level], "calibration runs (the expert)")
     stored = {r["key"]: r["result"] for r in runner.store.runs(key_prefix="calibrate/")}
-    outcomes = {d: (sum(bool(stored[k]["success"]) for k in ks), len(ks))
-                for d, ks in keys.items()}
+    outcomes = {d: (sum(bool(stored[j.key]["success"]) for j in level), len(level))
+                for d, level in jobs.items()}
     choice = choose_difficulty(outcomes, config.calibration_success)
     runner.log("test difficulty " + f"{choice.difficulty:g}" + (
         "" if choice.met else " (the expert missed the threshold even at the easiest level)")

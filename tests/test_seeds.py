@@ -49,6 +49,9 @@ def test_two_reproduction_seeds_share_no_board_seed_and_no_run_seed(make):
         c = make(seed=seed)  # training, flat, test, and per grid level sweep and calibration
         assert len(by_purpose["boards"]) == len(c.train_boards) + 1 + c.test_boards + \
             len(c.difficulties) * (1 + c.calibration_boards)
+        # every calibration board has run seeds of its own (not the same few on every board)
+        assert len(set(by_purpose["calibration runs"])) == \
+            len(c.difficulties) * c.calibration_boards * c.calibration_runs
     for (a, pa), (b, pb) in combinations(planned.items(), 2):
         for purpose in pa:
             assert not set(pa[purpose]) & set(pb[purpose]), \

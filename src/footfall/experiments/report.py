@@ -185,7 +185,7 @@ def _calibration(results: dict) -> list[str]:
     cfg = results["config"]
     lines += [f"The expert on {cfg['calibration_boards']} calibration board(s) per level "
               f"(boards of the test kinds with their own seeds, never trained or tested on), "
-              f"{cfg['calibration_runs']} runs each:", "",
+              f"{cfg['calibration_runs']} runs each (run seeds of each board's own):", "",
               "| difficulty | expert crossed | 95 % CI (Wilson) | fitted (non-increasing) | "
               f"fit at least {c['threshold']:.0%} |", "| --- | --- | --- | --- | --- |"]
     for d, v in c["levels"].items():

@@ -68,10 +68,9 @@ def calibrate(ws: Workspace, runner: Runner) -> DifficultyChoice:
         d = float(config.test_difficulty)
         return DifficultyChoice(d, True, config.calibration_success, {},
                                 "fixed by the setting test_difficulty (no calibration)")
-    seeds = calibration_seeds(config)
     jobs = {d: [method_job(ws, f"calibrate/{d:g}/{i}/s{s}", f"cal{d:g}-{i}", "expert", s)
-                for i in range(config.calibration_boards) for s in seeds]
-            for d in config.difficulties}
+                for i in range(config.calibration_boards) for s in calibration_seeds(config, j, i)]
+            for j, d in enumerate(config.difficulties)}
     runner.run([j for level in jobs.values() for j in level], "calibration runs (the expert)")
     stored = {r["key"]: r["result"] for r in runner.store.runs(key_prefix="calibrate/")}
     outcomes = {d: (sum(bool(stored[j.key]["success"]) for j in level), len(level))

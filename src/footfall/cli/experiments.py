@@ -72,7 +72,11 @@ def reproduce(out: str, seed: int, quick: bool, test_kinds: str | None, processe
         results = run_reproduction(Path(out), config, log=progress_log(as_json),
                                    executor=executor)
     boards = len(results["table2_boards"])
-    lines = [f"test difficulty {results['test_difficulty']:g} ({results['calibration']['rule']})",
+    met = results["calibration"]["met"]
+    lines = [f"test difficulty {results['test_difficulty']:g}"
+             + ("" if met else " (NOT MET: the expert missed the threshold even at the easiest "
+                               "level, which is used)")
+             + f"; rule: {results['calibration']['rule']}",
              "the first test board (the paper's one-board table):"]
     lines += ["  " + _table2_line(k, v) for k, v in results["table2"].items()]
     lines += [f"pooled over {boards} test boards:"]

@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: run offline demo test smoke bench clean
+.PHONY: run offline demo test smoke bench clean chromium
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -32,8 +32,22 @@ smoke: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/footfall reproduce --quick --out out/smoke
 	test -s out/smoke/report.html
 
-test: $(STAMP)
+test: $(STAMP) chromium
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q
+
+# The teaching page's browser tests drive Debian's Chromium (Playwright cannot download its own
+# browsers here): installed with apt where it is missing and this user may (root, or sudo
+# without a password). Without it those tests skip, unless FOOTFALL_REQUIRE_BROWSER is set
+# (.ci/run sets it): then they fail.
+chromium:
+	@command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ]; then SUDO=; elif sudo -n true 2>/dev/null; then SUDO="sudo -n"; \
+	  else SUDO=none; fi; \
+	  if [ "$$SUDO" != none ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "installing Debian's chromium for the browser tests"; \
+	    $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq \
+	      chromium >/dev/null; \
+	  else echo "no Chromium and no apt-get to install it: the browser tests will skip"; fi; }
 
 bench: $(STAMP)
 	$(BIN)/footfall bench scoring

@@ -414,6 +414,7 @@ def _objects(path):
 
 def _as_version_1(path):
     with raw(path) as con:
+        con.execute("DROP TABLE labels")
         con.execute("DROP TABLE run_steps")
         con.execute("DROP TABLE runs")
         con.execute("UPDATE meta SET value = '1' WHERE key = 'schema_version'")
@@ -431,6 +432,24 @@ def test_migrated_store_has_the_schema_of_a_new_one(filled, tmp_path):
         assert store.schema_version == SCHEMA_VERSION
     assert _objects(path) == _objects(tmp_path / "new.sqlite")
     assert contents(path) == before  # the demonstrations and terrains are untouched
+
+
+def test_a_version_2_store_gains_the_labels_table_and_loses_nothing(filled, tmp_path):
+    path, _, _ = filled
+    before = contents(path)
+    with DemoStore(tmp_path / "new.sqlite", create=True):
+        pass
+    with raw(path) as con:
+        con.execute("DROP TABLE labels")
+        con.execute("UPDATE meta SET value = '2' WHERE key = 'schema_version'")
+    con.close()
+    with DemoStore(path, read_only=True) as store:  # read as it is: no labels, none refused
+        assert store.schema_version == 2 and store.labels() == []
+        assert store.summary()["labels"] == {"by_labeler": {}, "disagreements": 0}
+    with DemoStore(path) as store:
+        assert store.schema_version == SCHEMA_VERSION == 3
+    assert _objects(path) == _objects(tmp_path / "new.sqlite")
+    assert contents(path) == before
 
 
 def test_migration_leaves_a_store_another_process_upgraded_alone(filled):

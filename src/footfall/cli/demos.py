@@ -61,7 +61,7 @@ def demos_collect(terrains: tuple[str, ...], more_terrains: tuple[str, ...], n: 
 @click.argument("store_path", metavar="DEMOS.sqlite")
 @json_option
 def demos_info(store_path: str, as_json: bool) -> None:
-    """Count a store's demonstrations by terrain, swing leg and source; check the file."""
+    """Count a store's demonstrations by terrain, swing leg, source and labeler; check the file."""
     from footfall.data.inventory import store_inventory
 
     inventory = store_inventory(store_path)
@@ -74,6 +74,12 @@ def demos_info(store_path: str, as_json: bool) -> None:
     lines.append("  legs:    " + ", ".join(f"{k} {v}" for k, v in summary["by_leg"].items()))
     lines.append("  sources: " + (", ".join(f"{k} {v}" for k, v in summary["by_source"].items())
                                   or "none"))
+    for name, verdicts in summary["labels"]["by_labeler"].items():
+        lines.append(f"  labeler {name}: {verdicts['foothold']} footholds labelled, "
+                     f"{verdicts['fine']} choices marked fine")
+    if summary["labels"]["disagreements"]:
+        lines.append(f"  labelers disagree on {summary['labels']['disagreements']} "
+                     f"{_plural(summary['labels']['disagreements'], 'step')}")
     if summary["candidates"]:
         c = summary["candidates"]
         lines.append(f"  candidates per demonstration: {c['min']} .. {c['max']} "

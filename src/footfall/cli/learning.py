@@ -13,7 +13,8 @@ from footfall.cli.choices import FEATURE_SET, LEARNER, SEED, SELECTION, Finite
 from footfall.cli.output import emit, json_option, progress_log
 from footfall.core.errors import FootfallError
 
-SOURCE_HELP = "Only demonstrations whose source starts with this (e.g. walker:train)."
+SOURCE_HELP = ("Only demonstrations whose source starts with this: walker:train, human (people's "
+               "labels), run: (the synthetic expert's corrections); repeat for several.")
 RMS_RANGE = (1e-5, 1.0)  # [m] = footfall.features.templates.RMS_RANGE (not imported: --help stays light)
 
 
@@ -58,14 +59,14 @@ def model_output(path: str) -> Path:
               help="Cross-validation folds (grouped by demonstration).")
 @click.option("--selection", type=SELECTION, default="1se", show_default=True,
               help="Lambda: one-standard-error rule (sparser) or the smallest CV error.")
-@click.option("--source", default=None, help=SOURCE_HELP)
+@click.option("--source", multiple=True, help=SOURCE_HELP)
 @click.option("--seed", type=SEED, default=0, show_default=True,
               help="Seed of the template library's sample and the training candidates.")
 @click.option("-o", "--output", required=True, help="Output model (.npz).")
 @json_option
 def learn(store_path: str, feature_set: str, learner: str, library_size: int,
           training_candidates: int, bandwidth_rms: tuple[float, float, float] | None, cv: int,
-          selection: str, source: str | None, seed: int, output: str, as_json: bool) -> None:
+          selection: str, source: tuple[str, ...], seed: int, output: str, as_json: bool) -> None:
     """Learn front- and hind-leg foothold ranking functions from demonstrations."""
     from footfall.core.limits import check_count
 
@@ -74,7 +75,7 @@ def learn(store_path: str, feature_set: str, learner: str, library_size: int,
     out = model_output(output)
     from footfall.learning.train import learn_from_store
 
-    learned = learn_from_store(store_path, out, feature_set, learner, source=source,
+    learned = learn_from_store(store_path, out, feature_set, learner, source=source or None,
                                log=progress_log(as_json), library_size=library_size,
                                training_candidates=training_candidates,
                                bandwidth_rms=bandwidth_rms, cv=cv, seed=seed,
@@ -91,14 +92,15 @@ def learn(store_path: str, feature_set: str, learner: str, library_size: int,
 @click.argument("model_path", metavar="MODEL.npz")
 @click.argument("store_path", metavar="DEMOS.sqlite")
 @click.option("--no-expert", is_flag=True, help="Skip the reward loss (needs the expert).")
-@click.option("--source", default=None, help=SOURCE_HELP)
+@click.option("--source", multiple=True, help=SOURCE_HELP)
 @json_option
-def rank_eval_cmd(model_path: str, store_path: str, no_expert: bool, source: str | None,
+def rank_eval_cmd(model_path: str, store_path: str, no_expert: bool, source: tuple[str, ...],
                   as_json: bool) -> None:
     """Top-1 agreement, mean percentile rank and mean reward loss of a model on demonstrations."""
     from footfall.experiments.rank_eval import rank_eval
 
-    agreement = rank_eval(model_path, store_path, with_expert=not no_expert, source=source)
+    agreement = rank_eval(model_path, store_path, with_expert=not no_expert,
+                          source=source or None)
     s = agreement.scores
     emit(as_json, agreement.as_dict(),
          f"{agreement.feature_set}/{agreement.learner} on {s.n} demonstrations: "

@@ -16,6 +16,7 @@ from footfall.cli.experiments import ablation, demo, offline, reproduce, study
 from footfall.cli.features import features
 from footfall.cli.learning import learn, rank_eval_cmd
 from footfall.cli.store import store
+from footfall.cli.teach import teach
 from footfall.cli.terrain import terrain
 from footfall.cli.walking import walk_cmd, walk_many_cmd
 from footfall.core.errors import FootfallError, one_line
@@ -38,7 +39,7 @@ def cli(debug: bool, limits: tuple[str, ...]) -> None:
 
 
 for _command in (terrain, features, demos, store, learn, rank_eval_cmd, walk_cmd,
-                 walk_many_cmd, offline, reproduce, study, ablation, demo, bench):
+                 walk_many_cmd, offline, reproduce, study, ablation, demo, bench, teach):
     cli.add_command(_command)
 
 

@@ -21,3 +21,7 @@ class FootfallError(ValueError):
 
     def __init__(self, message: object = "") -> None:
         super().__init__(one_line(str(message)))
+
+
+class NotFound(FootfallError):
+    """Something asked for by name or number is not there: a run, a step, a label."""

@@ -22,6 +22,7 @@ from typing import Any
 from footfall.core.errors import FootfallError
 from footfall.data import rows, schema
 from footfall.data.connection import decode_text, one_line, read_only_uri
+from footfall.data.label import LABEL_COLUMNS, checked_label
 
 SHOWN_PROBLEMS = 20  # problems listed in a one-line-each report; the rest are counted
 
@@ -36,6 +37,7 @@ class StoreReport:
     terrains: int = 0
     runs: int = 0
     run_steps: int = 0
+    labels: int = 0
     schema_version: int | None = None  # as the file declares it (None: unreadable)
 
     @property
@@ -64,7 +66,8 @@ class StoreReport:
         """Plain data for JSON."""
         return {"store": self.store, "ok": self.ok, "problems": list(self.problems),
                 "schema_version": self.schema_version, "demonstrations": self.demonstrations,
-                "terrains": self.terrains, "runs": self.runs, "run_steps": self.run_steps}
+                "terrains": self.terrains, "runs": self.runs, "run_steps": self.run_steps,
+                "labels": self.labels}
 
 
 def check_store(path: str | os.PathLike) -> StoreReport:
@@ -138,6 +141,7 @@ def _check_rows(con: sqlite3.Connection, report: StoreReport, version: int) -> N
             if not isinstance(v, str):
                 report.problems.append(f"meta row {key!r}: {column} is not text")
     hashes: set[Any] = set()
+    demo_ids: set[Any] = set()
     with _sqlite_errors(report, "table terrains"):
         for row in con.execute(f"SELECT {rows.TERRAIN_COLUMNS} FROM terrains ORDER BY rowid"):
             report.terrains += 1
@@ -147,13 +151,37 @@ def _check_rows(con: sqlite3.Connection, report: StoreReport, version: int) -> N
         for row in con.execute(f"SELECT {rows.DEMONSTRATION_COLUMNS} FROM demonstrations "
                                "ORDER BY id"):
             report.demonstrations += 1
+            demo_ids.add(row[0])
             if _row(report, "demonstrations", repr(row[0]), rows.demonstration, row):
                 _reference(report, "demonstrations", row[0], row[1], hashes)
+    steps: set[tuple[Any, Any]] = set()
     if version >= 2:
-        _check_runs(con, report, hashes)
+        steps = _check_runs(con, report, hashes)
+    if version >= 3:
+        _check_labels(con, report, steps, demo_ids)
 
 
-def _check_runs(con: sqlite3.Connection, report: StoreReport, hashes: set[Any]) -> None:
+def _check_labels(con: sqlite3.Connection, report: StoreReport, steps: set[tuple[Any, Any]],
+                  demo_ids: set[Any]) -> None:
+    """People's labels: each row sound, on a stored run step, a foothold label with its
+    demonstration (a "fine" verdict has none)."""
+    with _sqlite_errors(report, "table labels"):
+        for row in con.execute(f"SELECT {LABEL_COLUMNS} FROM labels ORDER BY id"):
+            report.labels += 1
+            if not _row(report, "labels", repr(row[0]), checked_label, row):
+                continue
+            label = checked_label(row)
+            if (label.run_id, label.k) not in steps:
+                report.problems.append(f"labels row {label.id}: run {label.run_id} has no step "
+                                       f"{label.k} in the store")
+            if (label.verdict == "foothold") != (label.demonstration_id in demo_ids):
+                report.problems.append(f"labels row {label.id}: a {label.verdict!r} label "
+                                       + ("without its demonstration" if label.verdict ==
+                                          "foothold" else "with a demonstration"))
+
+
+def _check_runs(con: sqlite3.Connection, report: StoreReport, hashes: set[Any]
+                ) -> set[tuple[Any, Any]]:
     """The run logs: each run's row, its terrain, its steps numbered 0 .. n_steps - 1."""
     n_steps: dict[Any, Any] = {}
     with _sqlite_errors(report, "table runs"):
@@ -163,6 +191,7 @@ def _check_runs(con: sqlite3.Connection, report: StoreReport, hashes: set[Any]) 
             if _row(report, "runs", repr(row[0]), rows.run_head, row):
                 _reference(report, "runs", row[0], row[2], hashes)
     found: dict[Any, list[Any]] = {}
+    stored: set[tuple[Any, Any]] = set()
     with _sqlite_errors(report, "table run_steps"):
         for row in con.execute(f"SELECT run_id, {rows.STEP_COLUMNS} FROM run_steps "
                                "ORDER BY run_id, k"):
@@ -174,11 +203,13 @@ def _check_runs(con: sqlite3.Connection, report: StoreReport, hashes: set[Any]) 
                 report.problems.append(f"run_steps row {where}: run {run_id!r} is not in "
                                        f"the store")
             found.setdefault(run_id, []).append(step[0])
+            stored.add((run_id, step[0]))
     for run_id, n in n_steps.items():
         ks = found.get(run_id, [])
         if isinstance(n, int) and ks != list(range(n)):
             report.problems.append(f"runs row {run_id!r}: n_steps is {n} but its steps are "
                                    f"numbered {_range(ks)}")
+    return stored
 
 
 def _row(report: StoreReport, table: str, key: str, decode: Callable[[tuple], Any],

@@ -27,8 +27,10 @@ class StoreConnection:
     """
 
     def __init__(self, path: str | os.PathLike, create: bool = False,
-                 busy_timeout: float = DEFAULT_BUSY_TIMEOUT, read_only: bool = False) -> None:
+                 busy_timeout: float = DEFAULT_BUSY_TIMEOUT, read_only: bool = False,
+                 any_thread: bool = False) -> None:
         self.path = Path(path)
+        self._any_thread = bool(any_thread)
         self.read_only = bool(read_only)
         self.schema_version = schema.SCHEMA_VERSION  # of the open file, set by _check_meta
         self._con: sqlite3.Connection | None = None
@@ -71,9 +73,10 @@ class StoreConnection:
             # isolation_level=None: no implicit transactions; each write opens its own.
             if self.read_only:
                 con = sqlite3.connect(read_only_uri(self.path), uri=True, timeout=busy_timeout,
-                                      isolation_level=None)
+                                      isolation_level=None, check_same_thread=not self._any_thread)
             else:
-                con = sqlite3.connect(self.path, timeout=busy_timeout, isolation_level=None)
+                con = sqlite3.connect(self.path, timeout=busy_timeout, isolation_level=None,
+                                      check_same_thread=not self._any_thread)
         except sqlite3.Error as exc:
             raise FootfallError(f"{self.path}: cannot open ({one_line(exc)})") from None
         con.text_factory = decode_text

@@ -11,7 +11,7 @@ import sqlite3
 from collections.abc import Callable, Iterable
 from typing import Any
 
-from footfall.core.errors import FootfallError
+from footfall.core.errors import FootfallError, NotFound
 from footfall.core.heightmap import HeightMap
 from footfall.data import codec, rows
 from footfall.data.demonstration import Demonstration, as_demonstrations
@@ -91,14 +91,14 @@ class RunQueries(TerrainQueries):
         """The stored run ``run_id`` with all its steps, validated."""
         run_id = self._check_id(run_id)
         if not self._has_table("runs"):
-            raise FootfallError(f"run {run_id} is not in the store")
+            raise NotFound(f"run {run_id} is not in the store")
         with self._errors(), self._read() as con:
             head = con.execute(f"SELECT {rows.RUN_COLUMNS} FROM runs WHERE id = ?",
                                (run_id,)).fetchone()
             steps = con.execute(f"SELECT {rows.STEP_COLUMNS} FROM run_steps WHERE run_id = ? "
                                 "ORDER BY k", (run_id,)).fetchall()
         if head is None:
-            raise FootfallError(f"run {run_id} is not in the store")
+            raise NotFound(f"run {run_id} is not in the store")
         try:
             run = rows.run_head(head)
             return RunRecord(run["terrain_hash"], run["seed"], run["settings"], run["result"],

@@ -15,7 +15,7 @@ from pathlib import Path
 from footfall.core.errors import FootfallError
 
 FORMAT = "footfall.demostore"
-SCHEMA_VERSION = 2  # 1: terrains and demonstrations; 2: + runs and run_steps
+SCHEMA_VERSION = 3  # 1: terrains and demonstrations; 2: + runs and run_steps; 3: + labels
 SUFFIXES = (".sqlite", ".sqlite3", ".db")  # the file names of a store footfall writes
 STATE_LAYOUT = ("feet LF, RF, LH, RH x y z [m] (12), body position x y z [m] (3), "
                 "body roll pitch yaw [rad] (3), goal x y [m] (2)")
@@ -95,11 +95,30 @@ CREATE TABLE run_steps (
 )""",
 )
 
+LABEL_TABLES = (  # schema version 3: people's labels of run steps (the teaching interface)
+    """
+CREATE TABLE labels (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,  -- creation order, never reused
+    run_id INTEGER NOT NULL REFERENCES runs(id),
+    k INTEGER NOT NULL,                -- the labelled step of the run
+    labeler TEXT NOT NULL,             -- who labelled (a name the labeler gave)
+    verdict TEXT NOT NULL CHECK (verdict IN ('foothold', 'fine')),
+    chosen INTEGER,                    -- index in the step's F of the labelled foothold ('fine':
+                                       -- the robot's own choice)
+    demonstration_id INTEGER UNIQUE REFERENCES demonstrations(id),  -- 'foothold': the
+                                       -- demonstration the label made; 'fine': NULL
+    created REAL NOT NULL,             -- [s] Unix time the label was stored
+    request TEXT UNIQUE,               -- the client's id of the request: a retry is not doubled
+    FOREIGN KEY (run_id, k) REFERENCES run_steps(run_id, k)
+)""",
+    "CREATE INDEX labels_step ON labels (run_id, k)",
+)
+
 
 # ---------------------------------------------------------------- a new store
 def create(con: sqlite3.Connection, created_by: str) -> None:
     """Create every table of the current schema and its ``meta`` rows (inside the caller's write)."""
-    for statement in DEMONSTRATION_TABLES + RUN_LOG_TABLES:
+    for statement in DEMONSTRATION_TABLES + RUN_LOG_TABLES + LABEL_TABLES:
         con.execute(statement)
     con.executemany("INSERT INTO meta (key, value) VALUES (?, ?)",
                     [("format", FORMAT), ("schema_version", str(SCHEMA_VERSION)),
@@ -115,8 +134,15 @@ def _add_run_log(con: sqlite3.Connection) -> None:
             con.execute(statement)
 
 
+def _add_labels(con: sqlite3.Connection) -> None:
+    """Version 2 -> 3: the labels table; demonstrations and runs are untouched."""
+    if not has_table(con, "labels"):
+        for statement in LABEL_TABLES:
+            con.execute(statement)
+
+
 # version v -> the step that makes a version-v store a version-(v + 1) store
-MIGRATIONS: dict[int, Callable[[sqlite3.Connection], None]] = {1: _add_run_log}
+MIGRATIONS: dict[int, Callable[[sqlite3.Connection], None]] = {1: _add_run_log, 2: _add_labels}
 
 
 def migrate(con: sqlite3.Connection, version: int) -> None:
@@ -208,7 +234,8 @@ def check_pages(con: sqlite3.Connection, path: Path) -> None:
 # ---------------------------------------------------------- the schema's objects
 def _tables(version: int) -> tuple[str, ...]:
     """The CREATE statements of a version-``version`` store."""
-    return DEMONSTRATION_TABLES + (RUN_LOG_TABLES if version >= 2 else ())
+    return (DEMONSTRATION_TABLES + (RUN_LOG_TABLES if version >= 2 else ())
+            + (LABEL_TABLES if version >= 3 else ()))
 
 
 def _objects(con: sqlite3.Connection) -> dict[tuple[str, str], tuple]:

@@ -10,7 +10,8 @@ same file keeps the terrains and the run logs of the simulated robot
 file's schema, version and migrations (:mod:`~footfall.data.schema`), the array
 codec (:mod:`~footfall.data.codec`), the connection and its transactions
 (:mod:`~footfall.data.connection`), the terrain and run-log queries
-(:mod:`~footfall.data.terrain_queries`, :mod:`~footfall.data.run_queries`).
+(:mod:`~footfall.data.terrain_queries`, :mod:`~footfall.data.run_queries`) and people's labels
+of run steps (:mod:`~footfall.data.label_queries`).
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from footfall.core.robot import LEG_NAMES
 from footfall.data import codec, rows, schema
 from footfall.data.connection import DEFAULT_BUSY_TIMEOUT
 from footfall.data.demonstration import Demonstration, as_demonstrations
-from footfall.data.run_queries import RunQueries
+from footfall.data.label_queries import LabelQueries
 from footfall.data.runlog import RunRecord, RunStep
 from footfall.data.schema import FORMAT, SCHEMA_VERSION, STATE_LAYOUT
 from footfall.data.terrain_queries import TerrainQueries
@@ -35,7 +36,7 @@ __all__ = ["DEFAULT_BUSY_TIMEOUT", "FORMAT", "SCHEMA_VERSION", "STATE_LAYOUT", "
            "Demonstration", "RunRecord", "RunStep"]
 
 
-class DemoStore(RunQueries, TerrainQueries):
+class DemoStore(LabelQueries, TerrainQueries):
     """An SQLite file of terrains and demonstrations, safe to share between processes.
 
     Use as a context manager. Every write is one transaction (``BEGIN
@@ -56,6 +57,10 @@ class DemoStore(RunQueries, TerrainQueries):
         Open the file without writing to it, not even to upgrade an older
         schema (:func:`footfall.data.connection.read_only_uri`): for commands
         that only read. A write then fails.
+    any_thread : bool
+        Let another thread than the one that opened it use (or close) the
+        connection. The caller must still never use it from two threads at
+        once (a server's per-thread connections, closed when it stops).
 
     Raises
     ------
@@ -115,7 +120,7 @@ class DemoStore(RunQueries, TerrainQueries):
         return int(cur.lastrowid)
 
     def demonstrations(self, ids: Sequence[int] | None = None, terrain_hash: str | None = None,
-                       source_prefix: str | None = None) -> list[Demonstration]:
+                       source_prefix: str | Sequence[str] | None = None) -> list[Demonstration]:
         """Read demonstrations, each validated.
 
         Parameters
@@ -125,9 +130,9 @@ class DemoStore(RunQueries, TerrainQueries):
             Otherwise all that match the filters, in creation order.
         terrain_hash : str, optional
             Only those on this terrain.
-        source_prefix : str, optional
+        source_prefix : str or sequence of str, optional
             Only those whose source starts with this (case-sensitive), e.g.
-            ``"run:"``.
+            ``"run:"``, or with any of these (``["human", "run:"]``).
 
         Raises
         ------
@@ -165,7 +170,8 @@ class DemoStore(RunQueries, TerrainQueries):
             raise FootfallError(f"{self.path}: demonstration {row[0]!r} is corrupt ({exc})") \
                 from None
 
-    def count(self, terrain_hash: str | None = None, source_prefix: str | None = None) -> int:
+    def count(self, terrain_hash: str | None = None,
+              source_prefix: str | Sequence[str] | None = None) -> int:
         """Number of stored demonstrations (matching the filters of :meth:`demonstrations`)."""
         where, params = _where(terrain_hash, source_prefix)
         with self._errors():
@@ -184,7 +190,8 @@ class DemoStore(RunQueries, TerrainQueries):
             LEG_NAMES order, ``by_source`` {kind: count} where the kind is the
             source up to its first ``:`` (``"run:3:step:7"`` counts as
             ``"run"``), ``candidates`` {min, mean, max} per demonstration
-            (None when empty), ``first_id``/``last_id`` and ``runs`` (run logs stored).
+            (None when empty), ``first_id``/``last_id``, ``runs`` (run logs stored)
+            and ``labels`` (people's labels by labeler, :meth:`label_counts`).
         """
         with self._errors(), self._read() as con:
             total, first, last, cmin, cmean, cmax = con.execute(
@@ -210,16 +217,23 @@ class DemoStore(RunQueries, TerrainQueries):
                 "by_terrain": by_terrain, "by_leg": by_leg, "by_source": by_source,
                 "candidates": None if not total else {"min": int(cmin), "mean": float(cmean),
                                                       "max": int(cmax)},
-                "first_id": first, "last_id": last, "runs": n_runs}
+                "first_id": first, "last_id": last, "runs": n_runs,
+                "labels": self.label_counts()}
 
 
-def _where(terrain_hash: str | None, source_prefix: str | None) -> tuple[str, list[Any]]:
+def _where(terrain_hash: str | None, source_prefix: str | Sequence[str] | None
+           ) -> tuple[str, list[Any]]:
     """The WHERE clause (or "") and its parameters for the demonstration filters."""
     clauses, params = [], []
     if terrain_hash is not None:
         clauses.append("terrain_hash = ?")
         params.append(terrain_hash)
     if source_prefix is not None:  # not LIKE: '_' and '%' are ordinary characters here
-        clauses.append("substr(source, 1, length(?)) = ?")
-        params += [source_prefix, source_prefix]
+        prefixes = [source_prefix] if isinstance(source_prefix, str) else list(source_prefix)
+        if not prefixes or not all(isinstance(p, str) for p in prefixes):
+            raise FootfallError(f"a source filter is a string or a non-empty list of strings, "
+                                f"got {source_prefix!r}")
+        clauses.append("(" + " OR ".join(["substr(source, 1, length(?)) = ?"] * len(prefixes))
+                       + ")")
+        params += [p for prefix in prefixes for p in (prefix, prefix)]
     return (" WHERE " + " AND ".join(clauses)) if clauses else "", params

@@ -14,7 +14,7 @@ import sqlite3
 from collections.abc import Iterator, Sequence
 from typing import Any
 
-from footfall.core.errors import FootfallError
+from footfall.core.errors import FootfallError, NotFound
 from footfall.core.heightmap import HeightMap
 from footfall.data import codec, rows
 from footfall.data.connection import DEFAULT_BUSY_TIMEOUT, StoreConnection
@@ -24,9 +24,10 @@ class TerrainQueries(StoreConnection):
     """Add and read the terrains of a store (part of :class:`footfall.data.store.DemoStore`)."""
 
     def __init__(self, path: str | os.PathLike, create: bool = False,
-                 busy_timeout: float = DEFAULT_BUSY_TIMEOUT, read_only: bool = False) -> None:
+                 busy_timeout: float = DEFAULT_BUSY_TIMEOUT, read_only: bool = False,
+                 any_thread: bool = False) -> None:
         self._terrains: dict[str, HeightMap] = {}  # verified terrains, by hash: hashed once
-        super().__init__(path, create, busy_timeout, read_only)
+        super().__init__(path, create, busy_timeout, read_only, any_thread)
 
     def add_terrain(self, hmap: HeightMap) -> str:
         """Store a terrain once (its first metadata wins); return its content hash.
@@ -60,7 +61,7 @@ class TerrainQueries(StoreConnection):
             row = self._connection.execute(f"SELECT {rows.TERRAIN_COLUMNS} FROM terrains "
                                            "WHERE hash = ?", (terrain_hash,)).fetchone()
         if row is None:
-            raise FootfallError(f"terrain {terrain_hash} is not in the store")
+            raise NotFound(f"terrain {terrain_hash} is not in the store")
         try:
             hmap = rows.terrain(row)
         except FootfallError as exc:

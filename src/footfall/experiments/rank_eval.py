@@ -7,6 +7,7 @@ Here, above both, because the measure needs the learner's model and the expert's
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -33,7 +34,8 @@ class ModelAgreement:
 
 
 def rank_eval(model_path: str | os.PathLike, store_path: str | os.PathLike, *,
-              with_expert: bool = True, source: str | None = None) -> ModelAgreement:
+              with_expert: bool = True, source: str | Sequence[str] | None = None
+              ) -> ModelAgreement:
     """Score the model at ``model_path`` on the store's demonstrations.
 
     ``with_expert`` False skips the reward loss (it needs the expert's values;

@@ -155,9 +155,10 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
                                "seconds": time.perf_counter() - started})
 
 
-def store_demonstrations(path: str | os.PathLike, source: str | None = None
+def store_demonstrations(path: str | os.PathLike, source: str | Sequence[str] | None = None
                          ) -> tuple[list[Demonstration], dict[str, HeightMap]]:
-    """A store's demonstrations (those whose source starts with ``source``) and their terrains.
+    """A store's demonstrations (those whose source starts with ``source``, or with any of
+    several sources) and their terrains.
 
     Returns
     -------
@@ -173,9 +174,13 @@ def store_demonstrations(path: str | os.PathLike, source: str | None = None
         demos = store.demonstrations(source_prefix=source)
         if not demos:
             raise FootfallError(f"{path}: the store holds no demonstrations"
-                                + ("" if source is None else f" from source {source!r}"))
+                                + ("" if source is None else f" from source {_sources(source)}"))
         maps = {h: store.terrain(h) for h in {d.terrain_hash for d in demos}}
     return demos, maps
+
+
+def _sources(source: str | Sequence[str]) -> str:
+    return repr(source) if isinstance(source, str) else " or ".join(map(repr, source))
 
 
 @dataclass(frozen=True)
@@ -205,11 +210,12 @@ def _group_summary(f: RankingFunction, scales: int) -> dict[str, Any]:
 
 
 def learn_from_store(store: str | os.PathLike, path: str | os.PathLike, feature_set: str,
-                     learner: str = "l1", *, source: str | None = None,
+                     learner: str = "l1", *, source: str | Sequence[str] | None = None,
                      log: Callable[[str], None] = lambda s: None, **options: Any) -> LearnedModel:
     """Learn a model (:func:`learn_model`) from a store's demonstrations and save it to ``path``.
 
-    ``source`` keeps only demonstrations whose source starts with it;
+    ``source`` keeps only demonstrations whose source starts with it (or with any of
+    several: ``("human", "run:")`` learns from people's labels and the synthetic expert's);
     ``options`` are :func:`learn_model`'s keyword arguments (library_size,
     training_candidates, bandwidth_rms, cv, seed, selection, ...).
 

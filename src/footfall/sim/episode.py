@@ -871,7 +871,11 @@ class Walk:
                                   s["t_touchdown"], s["touchdown"], s["slip"])
                           for s in steps)
         settings = {"walk": plain_json(self.config.to_dict(), nonfinite="null"),
-                    "perturbation": sim.perturbation.to_dict(), "robot": robot.name}
+                    "perturbation": sim.perturbation.to_dict(), "robot": robot.name,
+                    # which reward ranked the footholds (e.g. "hand-tuned default",
+                    # "both/l1/front" and "both/l1/hind"), as a person reviewing the run sees it
+                    "reward": sorted({str(getattr(self.reward_for(leg), "name", "reward"))
+                                      for leg in LEG_NAMES})}
         if self.judge_name is not None:  # the footholds were chosen by a judge, not a reward
             settings["judge"] = self.judge_name
         self.sim.close()

@@ -30,7 +30,7 @@ def serving(service: TeachService):
     """Serve ``service`` on a free loopback port; yield (base URL, token, page address)."""
     token, sock = new_token(), bind()
     server = uvicorn.Server(uvicorn.Config(create_app(service, token), log_level="error",
-                                           access_log=False, lifespan="off"))
+                                           access_log=False, lifespan="off", ws="none"))
     thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
     thread.start()
     deadline = time.monotonic() + 20

@@ -137,3 +137,12 @@ def test_a_body_over_the_limit_without_a_declared_length_is_refused(server):
 
     answer = http.post("/api/labels", content=chunks())  # chunked: no Content-Length
     assert answer.status_code == 413
+
+
+def test_a_websocket_upgrade_is_not_served(server):
+    _, base, token, *_ = server
+    answer = httpx.get(base + "/api/runs", params={"token": token},
+                       headers={"Connection": "Upgrade", "Upgrade": "websocket",
+                                "Sec-WebSocket-Version": "13",
+                                "Sec-WebSocket-Key": "dGhlIHNhbXBsZSBub25jZQ=="})
+    assert answer.status_code == 200 and isinstance(answer.json(), list)  # plain HTTP only

@@ -272,7 +272,7 @@ def serve(service: TeachService, sock: socket.socket, token: str,
     import uvicorn
 
     config = uvicorn.Config(create_app(service, token), log_level=log_level, access_log=False,
-                            server_header=False, lifespan="off")
+                            server_header=False, lifespan="off", ws="none")  # HTTP only
     try:
         uvicorn.Server(config).run(sockets=[sock])
     except KeyboardInterrupt:  # uvicorn re-raises the SIGINT it handled, once it has stopped

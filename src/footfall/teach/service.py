@@ -256,7 +256,7 @@ def _chooser(settings: dict) -> str:
     """Who chose the run's footholds: the judge (the synthetic expert), or the reward's name(s)
     as the run recorded them ("-" for a run logged before runs named their reward)."""
     if "judge" in settings:
-        return f"judge: {settings['judge']}"
+        return f"judge: {str(settings['judge']).split('.')[0]}"  # e.g. SyntheticExpert
     names = settings.get("reward")
     if isinstance(names, str):
         return names

@@ -10,7 +10,6 @@ from concurrent.futures import ThreadPoolExecutor
 
 import httpx
 import numpy as np
-import pytest
 
 from footfall.data.store import DemoStore
 from footfall.teach.server import MAX_BODY
@@ -131,17 +130,14 @@ def _snapshot(path):
                 [(d.id, d.source, d.chosen) for d in store.demonstrations()])
 
 
-@pytest.mark.parametrize("seed", [0])
-def test_a_thousand_bad_requests_get_4xx_and_change_nothing(tmp_path, seed):
+def test_a_thousand_bad_requests_get_4xx_and_change_nothing(tmp_path):
     path = store_of_runs(tmp_path / "s.sqlite", runs=2, steps=40)
     with DemoStore(path) as store:  # labels someone gave before: an intruder cannot undo them
         store.add_label(1, 0, "ada", "foothold", 2)
         store.add_label(1, 1, "ada", "fine")
     before = _snapshot(path)
-    requests = _bad_requests(np.random.default_rng(seed), "", 0)  # (shape check of the helper)
-    assert requests == []
     with serving(TeachService(path)) as (base, token, _):
-        requests = _bad_requests(np.random.default_rng(seed), token, 1200)
+        requests = _bad_requests(np.random.default_rng(0), token, 1200)
         codes = []
         with httpx.Client(base_url=base, timeout=60) as http:
             for method, url, headers, body in requests:

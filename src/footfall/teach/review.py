@@ -60,10 +60,10 @@ def terrain_window(hmap: HeightMap, centre: np.ndarray, half: float = WINDOW_HAL
     j = np.arange(math.floor((cy - half - hmap.origin[1]) / r),
                   math.ceil((cy + half - hmap.origin[1]) / r) + 1, stride)
     nx, ny = hmap.shape
-    inside = (i[:, None] >= 0) & (i[:, None] < nx) & (j[None, :] >= 0) & (j[None, :] < ny)
-    h = np.full((i.size, j.size), np.nan)
-    h[inside] = hmap.heights[np.clip(i, 0, nx - 1)[:, None].repeat(j.size, 1)[inside],
-                             np.clip(j, 0, ny - 1)[None, :].repeat(i.size, 0)[inside]]
+    ii, jj = np.meshgrid(i, j, indexing="ij")
+    inside = (ii >= 0) & (ii < nx) & (jj >= 0) & (jj < ny)
+    h = np.full(ii.shape, np.nan)
+    h[inside] = hmap.heights[ii[inside], jj[inside]]
     return {"x": (hmap.origin[0] + i * r).tolist(), "y": (hmap.origin[1] + j * r).tolist(),
             "heights": [[None if not np.isfinite(v) else float(v) for v in row] for row in h],
             "step": stride * r}

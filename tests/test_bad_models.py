@@ -20,7 +20,8 @@ from footfall.features.reward import analytic_templates
 from footfall.features.scoring import score_footholds
 from footfall.features.templates import BANDWIDTH_RANGE, TemplateFeatures, TemplateLibrary
 from footfall.features.terrain_features import TerrainFeatures
-from footfall.learning.model import LEG_GROUPS, MAX_WEIGHT, FootholdModel, RankingFunction
+from footfall.learning.function import MAX_WEIGHT, LinearFunction
+from footfall.learning.model import LEG_GROUPS, FootholdModel
 
 CONFIG = FeatureConfig()
 INFO = {"lambda": 0.1, "C": 10.0, "cv_error": 0.2, "n_nonzero": 5, "library_counts": [3, 3, 3],
@@ -35,7 +36,7 @@ def make_model(coef_scale=1.0, bandwidths=None, library=None) -> FootholdModel:
         templates = TemplateFeatures(CONFIG, library, bandwidths)
     families = (TerrainFeatures(CONFIG), templates, PoseFeatures())
     rng = np.random.default_rng(0)
-    functions = {g: RankingFunction(
+    functions = {g: LinearFunction(
         families, tuple(np.clip(coef_scale * rng.normal(size=len(f.columns())), -MAX_WEIGHT,
                                 MAX_WEIGHT) for f in families),
         tuple(np.ones(len(f.columns())) for f in families), dict(INFO)) for g in LEG_GROUPS}

@@ -202,7 +202,7 @@ def test_bad_starts_goals_and_configs_raise(flat):
         plan_body_path(hmap, reward_for, (0.25, 0.0), (1.0, np.nan), grids=grids)
     with pytest.raises(FootfallError, match="start must be"):
         plan_body_path(hmap, reward_for, (0.25,), 1.0, grids=grids)
-    with pytest.raises(FootfallError, match="LinearReward"):
+    with pytest.raises(FootfallError, match="FootholdScorer"):
         terrain_grids(hmap, lambda leg: None)
     for bad in ({"cell": 0.0}, {"search_radius": -0.01}, {"best_k": 0}, {"best_k": 2.5},
                 {"cost_weight": -1.0}, {"smoothing": np.nan}):

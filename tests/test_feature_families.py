@@ -120,7 +120,7 @@ def test_dense_scores_equal_per_candidate_scores(name):
         grid = score_grid(HMAP, reward, spacing=0.01, yaw=yaw, mirror=mirror, dtype=np.float64)
         points = grid.positions
         footholds = np.column_stack([points, HMAP.height_at(points)])
-        direct = reward.terrain_reward(Candidates(HMAP, footholds, yaw, mirror, CONFIG))
+        direct = reward.terrain_values(Candidates(HMAP, footholds, yaw, mirror, CONFIG))
         dense = np.asarray(grid.reward).ravel()
         np.testing.assert_array_equal(np.isfinite(dense), np.isfinite(direct))
         ok = np.isfinite(direct)
@@ -188,7 +188,7 @@ def test_a_new_family_is_learned_saved_and_scored_without_touching_the_others(tm
     state = nominal_state(board, (0.02, 0.0), 0.0, "LF")
     cand = reachable_footholds(board, state)
     c = Candidates.of_state(board, state, cand, CONFIG)
-    np.testing.assert_array_equal(back.reward_for("LF").terrain_reward(c),
-                                  model.reward_for("LF").terrain_reward(c))
+    np.testing.assert_array_equal(back.reward_for("LF").terrain_values(c),
+                                  model.reward_for("LF").terrain_values(c))
     grid = score_grid(board, back.reward_for("LF"), spacing=0.01, dtype=np.float64)
     assert np.isfinite(np.asarray(grid.reward)).sum() > 100

@@ -1,4 +1,4 @@
-"""One suite of checks over every registered learner (footfall.learning.ranker.LEARNERS).
+"""One suite of checks over every registered linear learner (footfall.learning.learner.LEARNERS).
 
 Like scikit-learn's shared estimator checks: a learner is tested the moment it
 registers. ``ridge`` below is a learner of the test's own, registered here
@@ -15,18 +15,13 @@ from footfall.core.state import nominal_state
 from footfall.features.candidates import reachable_footholds
 from footfall.features.family import Candidates
 from footfall.features.terrain_features import TerrainFeatures
+from footfall.learning.learner import LEARNERS, get_learner, register_learner
 from footfall.learning.model import FootholdModel
-from footfall.learning.ranker import (
-    LEARNERS,
-    FootholdRanker,
-    Learner,
-    get_learner,
-    register_learner,
-)
+from footfall.learning.ranker import FootholdRanker, LinearLearner
 from footfall.learning.train import TrainingDemo, learn_model
 from maps import rough_map
 
-RIDGE = Learner("ridge", "ridge classifier (squared loss, L2), for the suite's own check",
+RIDGE = LinearLearner("ridge", "ridge classifier (squared loss, L2), for the suite's own check",
                 lambda C, tol, max_iter: RidgeClassifier(alpha=1.0 / C, fit_intercept=False,
                                                          tol=tol, max_iter=max_iter),
                 lambda pairs, labels, n: np.logspace(-3.0, 1.0, n), logistic=False)
@@ -36,7 +31,7 @@ RIDGE = Learner("ridge", "ridge classifier (squared loss, L2), for the suite's o
 def ridge_registered():
     register_learner(RIDGE)
     yield
-    LEARNERS.pop("ridge", None)
+    LEARNERS.unregister("ridge")
 
 
 NAMES = ("l1", "l2", "svm", "ridge")
@@ -118,10 +113,10 @@ def test_a_learned_model_round_trips_through_its_file_and_the_seed_fixes_it(name
     d = demos[0]
     c = Candidates.of_state(d.hmap, d.state, d.candidates, model.config)
     for leg in ("LF", "LH"):
-        np.testing.assert_array_equal(back.reward_for(leg).terrain_reward(c),
-                                      model.reward_for(leg).terrain_reward(c))
-        np.testing.assert_array_equal(again.reward_for(leg).terrain_reward(c),
-                                      model.reward_for(leg).terrain_reward(c))
+        np.testing.assert_array_equal(back.reward_for(leg).terrain_values(c),
+                                      model.reward_for(leg).terrain_values(c))
+        np.testing.assert_array_equal(again.reward_for(leg).terrain_values(c),
+                                      model.reward_for(leg).terrain_values(c))
     assert isinstance(model.functions["front"].families[0], TerrainFeatures)
 
 
@@ -132,4 +127,4 @@ def test_an_unknown_learner_is_refused_with_the_registered_names():
     with pytest.raises(FootfallError, match="unknown learner"):
         FootholdRanker(learner="lasso").fit(X, y, groups)
     with pytest.raises(ValueError, match="already registered"):
-        register_learner(Learner("l1", "another", RIDGE.make, RIDGE.path))
+        register_learner(LinearLearner("l1", "another", RIDGE.make, RIDGE.path))

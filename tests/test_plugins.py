@@ -9,14 +9,15 @@ import pytest
 from cli_helpers import assert_user_error, run
 from footfall.core import plugins
 from footfall.core.errors import FootfallError
-from footfall.learning.ranker import LEARNERS, get_learner
+from footfall.learning.learner import LEARNERS, get_learner
 from footfall.terrain import KINDS, make_module, unregister_kind
 
 PLUGIN = '''
 import numpy as np
 from sklearn.linear_model import RidgeClassifier
 
-from footfall.learning.ranker import Learner, register_learner
+from footfall.learning.learner import register_learner
+from footfall.learning.ranker import LinearLearner
 from footfall.terrain import register_kind
 
 
@@ -28,10 +29,11 @@ def table(difficulty, rng):
 
 
 register_kind("table", table)
-register_learner(Learner("plugin-ridge", "ridge (a plugin's)",
-                         lambda C, tol, max_iter: RidgeClassifier(alpha=1 / C,
-                                                                  fit_intercept=False),
-                         lambda pairs, labels, n: np.logspace(-2, 1, n), logistic=False))
+register_learner(LinearLearner("plugin-ridge", "ridge (a plugin's)",
+                               lambda C, tol, max_iter: RidgeClassifier(alpha=1 / C,
+                                                                        fit_intercept=False),
+                               lambda pairs, labels, n: np.logspace(-2, 1, n),
+                               logistic=False))
 '''
 
 
@@ -46,7 +48,7 @@ def plugin(tmp_path, monkeypatch):
     monkeypatch.setattr(plugins, "_loaded", [])
     yield
     unregister_kind("table")
-    LEARNERS.pop("plugin-ridge", None)
+    LEARNERS.unregister("plugin-ridge")
     sys.modules.pop("footfall_test_parts", None)
 
 

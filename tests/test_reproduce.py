@@ -76,7 +76,7 @@ def test_the_reproduction_has_every_table(uninterrupted):
     with DemoStore(uninterrupted / "reproduce.sqlite") as store:  # the expert chose its own
         judged = [store.run(x["id"]) for x in store.runs(key_prefix="eval/test0/expert/")]
         plain = [store.run(x["id"]) for x in store.runs(key_prefix="eval/test0/default/")]
-    assert judged and all(run.settings["judge"] == "SyntheticExpert.values" for run in judged)
+    assert judged and all(run.settings["judge"] == "synthetic expert" for run in judged)
     planned = planned_seeds(TINY)  # every run drew its seed from the stream of its purpose
     with DemoStore(uninterrupted / "reproduce.sqlite") as store:
         for prefix, purpose in (("correct/", "correction runs"), ("eval/", "evaluation runs"),

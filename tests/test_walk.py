@@ -29,7 +29,8 @@ from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.features.config import FeatureConfig
 from footfall.features.reward import default_reward
 from footfall.features.terrain_features import TerrainFeatures
-from footfall.learning.model import FootholdModel, RankingFunction
+from footfall.learning.function import LinearFunction
+from footfall.learning.model import FootholdModel
 from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig, foot_slip, walk
 from maps import short_flat_board
 
@@ -201,7 +202,7 @@ def test_cli_walk_refuses_a_model_for_another_robot(tmp_path, capsys):
     config = FeatureConfig()
     terrain = TerrainFeatures(config)
     n = len(terrain.columns())
-    f = RankingFunction(families=(terrain,), coef=(np.eye(n)[0],), scale=(np.ones(n),))
+    f = LinearFunction(families=(terrain,), coef=(np.eye(n)[0],), scale=(np.ones(n),))
     other = RobotDescription(upper_leg=0.09)
     FootholdModel("terrain", "l1", {"front": f, "hind": f}, config, robot=other).save(
         tmp_path / "model.npz")
@@ -212,13 +213,14 @@ def test_cli_walk_refuses_a_model_for_another_robot(tmp_path, capsys):
 
 def test_the_expert_can_choose_every_foothold_itself():
     """A judge in place of the reward: every logged candidate value is the expert's own."""
+    from footfall.expert.scorer import ExpertScorer
     from footfall.expert.synthetic import SyntheticExpert, walking_expert
 
     board = short_flat_board()
     config = WalkConfig(start_setback=0.2, max_steps=3)
     expert = SyntheticExpert(walking_expert(config.footstep.lead))
-    rec = walk(board, lambda leg: default_reward(), 1, config, judge=expert.values)
-    assert rec.settings["judge"] == "SyntheticExpert.values"
+    rec = walk(board, lambda leg: default_reward(), 1, config, judge=ExpertScorer(expert))
+    assert rec.settings["judge"] == "synthetic expert"
     assert len(rec.steps) == 3
     for step in rec.steps:
         np.testing.assert_allclose(step.rewards, expert.values(board, step.state, step.candidates))

@@ -75,9 +75,9 @@ def _legs() -> tuple[str, ...]:
 
 
 def _learners() -> tuple[str, ...]:
-    from footfall.learning.ranker import LEARNERS
+    from footfall.learning.learner import LEARNERS
 
-    return tuple(LEARNERS)
+    return LEARNERS.names()
 
 
 def _selections() -> tuple[str, ...]:
@@ -99,7 +99,7 @@ def _recorded_steps() -> tuple[str, ...]:
 
 
 LEG = RegistryChoice(_legs)  # footfall.core.robot.LEG_NAMES
-LEARNER = RegistryChoice(_learners)  # footfall.learning.ranker.LEARNERS
+LEARNER = RegistryChoice(_learners)  # footfall.learning.learner.LEARNERS
 SELECTION = RegistryChoice(_selections)  # footfall.learning.ranker.SELECTIONS
 TERRAIN_KIND = RegistryChoice(  # footfall.terrain.KINDS, refused in the generator's words
     _terrain_kinds, invalid="unknown terrain module kind {value!r}; known kinds: {choices}")

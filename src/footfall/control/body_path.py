@@ -9,33 +9,31 @@ heuristic penalties for trunk and knee clearance. Dijkstra's algorithm on the
 cheapest path, which is smoothed lightly into a :class:`BodyPath`. The
 footstep planner (:mod:`footfall.control.footstep`) follows that path.
 
-The foothold rewards come from dense terrain-reward grids
-(:func:`footfall.features.scoring.score_grid`), computed once per distinct (reward,
-mirror) pair by :func:`terrain_grids` and shared with the footstep planner.
+The foothold rewards come from dense grids of the scorers' terrain parts
+(:func:`footfall.control.grids.terrain_grids`), computed once per board and
+shared with the footstep planner.
 """
 
 from __future__ import annotations
 
 import math
-import weakref
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from footfall.control.grids import grid_index, grid_spacing, terrain_grids
+from footfall.control.path import BodyPath
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import inverse_kinematics, knee_position
 from footfall.core.params import Params, above, at_least, param
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
-from footfall.features.dense import ScoreGrid, score_grid
-from footfall.features.reward import LinearReward
+from footfall.features.dense import ScoreGrid
+from footfall.features.scorer import FootholdScorer, RewardFor
 from footfall.features.spread import reward_unit
-
-RewardFor = Callable[[str], LinearReward]  # leg name -> the reward its footholds are ranked by
 
 
 @dataclass(frozen=True)
@@ -78,78 +76,7 @@ class BodyPathConfig(Params):
                              doc="length of the moving average that smooths the grid path")
 
 
-# ------------------------------------------------------------ reward grids
-def terrain_grids(hmap: HeightMap, reward_for: RewardFor, robot: RobotDescription = LITTLEDOG,
-                  spacing: float = 0.005, yaw: float = 0.0) -> dict[str, ScoreGrid]:
-    """Dense terrain-reward grids of every leg, one :func:`score_grid` per distinct (reward, mirror).
-
-    Legs whose rewards have the same terrain part and the same mirroring
-    (e.g. both left legs under one reward) share one grid object, and a map's
-    grids are scored once per process: the next run on the same map object
-    (see :func:`footfall.experiments.runs.execute`) reuses them.
-
-    Parameters
-    ----------
-    reward_for : callable
-        ``reward_for(leg_name) -> LinearReward``.
-    spacing : float
-        Lattice spacing [m] of the grids.
-    yaw : float
-        Body heading [rad] the patches are oriented by.
-
-    Returns
-    -------
-    dict
-        Leg name -> :class:`~footfall.features.scoring.ScoreGrid` (reward -inf where invalid).
-    """
-    cache = _GRIDS.setdefault(hmap, {})
-    out = {}
-    for name in LEG_NAMES:
-        reward = reward_for(name)
-        if not isinstance(reward, LinearReward):
-            raise FootfallError(f"reward_for({name!r}) must return a LinearReward, "
-                                f"got {type(reward).__name__}")
-        mirror = robot.leg(name).mirrored
-        key = (reward.key(state=False), mirror, float(spacing), float(yaw))
-        if key not in cache:
-            grid = score_grid(hmap, reward, spacing=spacing, yaw=yaw, mirror=mirror)
-            for array in (grid.x, grid.y, grid.reward, grid.valid):
-                array.setflags(write=False)  # shared by every run on the map
-            cache[key] = grid
-        out[name] = cache[key]
-    return out
-
-
-_GRIDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-# map -> {(reward's terrain key, mirror, spacing, yaw): ScoreGrid}: a board's grids, scored once
-# per process (a map's heights are read-only; every run of a batch on one board shares them)
-
-
-def grid_spacing(grid: ScoreGrid) -> float:
-    """Lattice spacing [m] of a score grid."""
-    return float((grid.x[-1] - grid.x[0]) / (grid.x.size - 1)) if grid.x.size > 1 else \
-        float((grid.y[-1] - grid.y[0]) / max(grid.y.size - 1, 1))
-
-
-def grid_index(grid: ScoreGrid, xy: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray]:
-    """Lattice index (i, j) of the grid point nearest each position [m] (..., 2); may be off the grid."""
-    xy = np.asarray(xy, dtype=np.float64)
-    i = np.floor((xy[..., 0] - grid.x[0]) / spacing + 0.5).astype(np.int64)
-    j = np.floor((xy[..., 1] - grid.y[0]) / spacing + 0.5).astype(np.int64)
-    return i, j
-
-
-def grid_values(grid: ScoreGrid, xy: np.ndarray, spacing: float) -> np.ndarray:
-    """Terrain reward at the lattice point nearest each position [m], (..., 2) -> (...); -inf: off."""
-    i, j = grid_index(grid, xy, spacing)
-    na, nb = grid.reward.shape
-    inside = (i >= 0) & (i < na) & (j >= 0) & (j < nb)
-    out = np.full(i.shape, -np.inf)
-    out[inside] = grid.reward[i[inside], j[inside]]
-    return out
-
-
-def _patch_half_extent(reward: LinearReward, yaw: float) -> tuple[float, float]:
+def _patch_half_extent(reward: FootholdScorer, yaw: float) -> tuple[float, float]:
     """Half extents [m] along the map's x and y of the largest feature patch at heading ``yaw``."""
     hx = max(s.length_x for s in reward.config.scales) / 2
     hy = max(s.length_y for s in reward.config.scales) / 2
@@ -264,7 +191,7 @@ def evaluate_cells(hmap: HeightMap, reward_for: RewardFor, robot: RobotDescripti
     Parameters
     ----------
     reward_for : callable
-        ``reward_for(leg_name) -> LinearReward`` (e.g. ``FootholdModel.reward_for``).
+        ``reward_for(leg_name) -> FootholdScorer`` (e.g. ``FootholdModel.reward_for``).
     yaw : float
         Body heading [rad] assumed in every cell.
     grids : dict, optional
@@ -388,76 +315,6 @@ def cell_rewards(hmap: HeightMap, reward_for: RewardFor, robot: RobotDescription
 
 
 # ---------------------------------------------------------------- the path
-@dataclass(frozen=True, eq=False)
-class BodyPath:
-    """A polyline for the body's horizontal position, with arc-length helpers.
-
-    ``s`` is the arc length [m] from the first waypoint. Positions beyond
-    either end are clamped to the end.
-    """
-
-    waypoints: np.ndarray  # (n, 2) [m] world x, y, n >= 2, consecutive points distinct
-    _s: np.ndarray = field(init=False, repr=False)  # (n,) [m] arc length at each waypoint
-
-    def __post_init__(self) -> None:
-        w = np.array(self.waypoints, dtype=np.float64)
-        if w.ndim != 2 or w.shape[1] != 2 or w.shape[0] < 2:
-            raise FootfallError(f"a body path needs waypoints of shape (n >= 2, 2), got {w.shape}")
-        if not np.isfinite(w).all():
-            raise FootfallError("body path waypoints must be finite")
-        keep = np.concatenate([[True], np.linalg.norm(np.diff(w, axis=0), axis=1) > 1e-12])
-        w = w[keep]
-        if w.shape[0] < 2:
-            raise FootfallError("a body path needs two distinct waypoints")
-        s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(w, axis=0), axis=1))])
-        w.setflags(write=False)
-        s.setflags(write=False)
-        object.__setattr__(self, "waypoints", w)
-        object.__setattr__(self, "_s", s)
-
-    @classmethod
-    def straight(cls, start_xy, goal_xy) -> "BodyPath":
-        """The straight path from ``start_xy`` to ``goal_xy`` [m] (the paper's fixed evaluation path)."""
-        return cls(np.array([start_xy, goal_xy], dtype=np.float64))
-
-    @property
-    def length(self) -> float:
-        """Total arc length [m]."""
-        return float(self._s[-1])
-
-    @property
-    def arc_lengths(self) -> np.ndarray:
-        """Arc length [m] at each waypoint, shape (n,)."""
-        return self._s
-
-    def point_at(self, s) -> np.ndarray:
-        """Position [m] at arc length ``s`` [m], (...) -> (..., 2)."""
-        s = np.clip(np.asarray(s, dtype=np.float64), 0.0, self.length)
-        return np.stack([np.interp(s, self._s, self.waypoints[:, 0]),
-                         np.interp(s, self._s, self.waypoints[:, 1])], axis=-1)
-
-    def heading_at(self, s) -> np.ndarray:
-        """Heading [rad] of the segment at arc length ``s`` [m], (...) -> (...)."""
-        d = np.diff(self.waypoints, axis=0)
-        seg = np.clip(np.searchsorted(self._s, np.asarray(s, dtype=np.float64), side="right") - 1,
-                      0, d.shape[0] - 1)
-        return np.arctan2(d[seg, 1], d[seg, 0])
-
-    def closest(self, xy) -> np.ndarray:
-        """Arc length [m] of the path point nearest to each position [m], (..., 2) -> (...)."""
-        p = np.asarray(xy, dtype=np.float64)
-        if p.shape[-1:] != (2,):
-            raise FootfallError(f"positions must have shape (..., 2), got {p.shape}")
-        a, d = self.waypoints[:-1], np.diff(self.waypoints, axis=0)  # (m, 2)
-        seg_len2 = np.einsum("ij,ij->i", d, d)
-        rel = p[..., None, :] - a  # (..., m, 2)
-        t = np.clip(np.einsum("...ij,ij->...i", rel, d) / seg_len2, 0.0, 1.0)
-        dist2 = np.sum((rel - t[..., None] * d) ** 2, axis=-1)
-        best = np.argmin(dist2, axis=-1)
-        t_best = np.take_along_axis(t, best[..., None], axis=-1)[..., 0]
-        return self._s[best] + t_best * np.sqrt(seg_len2[best])
-
-
 def _smooth(points: np.ndarray, spacing: float, length: float) -> np.ndarray:
     """Resample a polyline every ``spacing`` [m], then a moving average over ``length`` [m].
 

@@ -1,8 +1,8 @@
 """The footstep planner (paper §IV-B.2): the next foothold, with a five-step look-ahead.
 
-Footholds are ranked by the reward function (terrain and templates from
-dense reward grids computed once per map, pose features for the predicted
-state) biased toward the body path: a candidate loses ``bias_weight`` reward
+Footholds are ranked by a foothold scorer (:mod:`footfall.features.scorer`:
+its terrain part from dense grids computed once per map, its state part --
+pose features, say -- for the predicted state) biased toward the body path: a candidate loses ``bias_weight`` reward
 per metre it lies from its *path-nominal* position, the leg's default stance
 position around the body as it will be in the middle of the foot's stance.
 The planner predicts the body pose at the touch-down of each of the next
@@ -15,11 +15,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Callable
 
 import numpy as np
 
-from footfall.control.body_path import BodyPath, RewardFor, grid_spacing, grid_values, terrain_grids
+from footfall.control.body_path import BodyPath
+from footfall.control.grids import grid_spacing, grid_values, terrain_grids
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, above, at_least, param
@@ -29,10 +29,8 @@ from footfall.features.candidates import lattice, reachable_footholds, reaches
 from footfall.features.dense import ScoreGrid
 from footfall.features.family import Candidates
 from footfall.features.reward import default_reward
+from footfall.features.scorer import FootholdScorer, RewardFor
 from footfall.features.spread import reward_spread, spread_key
-
-Judge = Callable[[HeightMap, RobotState, np.ndarray], np.ndarray]  # (map, state, footholds
-# (n, 3) [m]) -> value (n,), higher is better: a foothold judge, e.g. SyntheticExpert.values
 
 GRID_YAW = 0.0  # [rad] heading the planner's dense reward grids are computed for (+x)
 
@@ -156,7 +154,7 @@ class FootstepPlanner:
     hmap : HeightMap
         The terrain.
     reward_for : callable
-        ``reward_for(leg_name) -> LinearReward``; called once per leg here.
+        ``reward_for(leg_name) -> FootholdScorer``; called once per leg here.
     path : BodyPath
         The body path to follow.
     robot : RobotDescription
@@ -211,7 +209,7 @@ class FootstepPlanner:
         if abs(_wrap(yaw - GRID_YAW)) <= self.config.heading_tolerance:
             return grid_values(self.grids_[leg], footholds[:, :2], self.config.spacing)
         reward = self.rewards_[leg]
-        return reward.terrain_reward(Candidates(self.hmap, footholds, yaw,
+        return reward.terrain_values(Candidates(self.hmap, footholds, yaw,
                                                 self.robot.leg(leg).mirrored, reward.config))
 
     def _pose(self, state: RobotState, footholds: np.ndarray) -> np.ndarray:
@@ -219,7 +217,7 @@ class FootstepPlanner:
         if not self._posed[state.swing_leg] or footholds.shape[0] == 0:
             return np.zeros(footholds.shape[0])
         reward = self.rewards_[state.swing_leg]
-        return reward.state_reward(Candidates.of_state(self.hmap, state, footholds, reward.config,
+        return reward.state_values(Candidates.of_state(self.hmap, state, footholds, reward.config,
                                                        self.robot))
 
     def _near(self, state: RobotState, target: np.ndarray) -> np.ndarray:
@@ -452,42 +450,31 @@ class FootstepPlanner:
 class JudgedFootstepPlanner(FootstepPlanner):
     """The footstep planner with a judge in place of the reward function and the path bias.
 
-    The judge -- the synthetic expert, say -- values every candidate of every
-    step, the look-ahead included; it carries its own preference for the path
-    (the walking expert's stance term), so there is no separate bias. Walking
-    with the expert as its own footstep chooser bounds what a function learned
-    from its demonstrations can do. Which lattice points are usable (data,
-    inside the map, feature patches covered) is decided as for the hand-tuned
-    reward, so the candidate sets are the reward planner's. Every candidate
-    is judged (``pose_candidates`` and ``lookahead_candidates`` do not
-    apply): about 0.5 s per step with the synthetic expert, a hundred times
-    the reward planner's time.
+    The judge -- the synthetic expert wrapped as a scorer
+    (:class:`footfall.expert.scorer.ExpertScorer`), say -- values every
+    candidate of every step, the look-ahead included; it carries its own
+    preference for the path (the walking expert's stance term), so there is no
+    separate bias. Walking with the expert as its own footstep chooser bounds
+    what a function learned from its demonstrations can do. Which lattice
+    points are usable is the judge's terrain part (for the expert: data, inside
+    the map, feature patches covered, as for the hand-tuned reward, so the
+    candidate sets are the reward planner's). Every candidate is judged
+    (``pose_candidates`` and ``lookahead_candidates`` do not apply): about
+    0.5 s per step with the synthetic expert, a hundred times the reward
+    planner's time.
     """
 
-    def __init__(self, hmap: HeightMap, judge: Judge, path: BodyPath,
+    def __init__(self, hmap: HeightMap, judge: FootholdScorer, path: BodyPath,
                  robot: RobotDescription = LITTLEDOG, config: FootstepConfig = FootstepConfig(),
                  grids: dict[str, ScoreGrid] | None = None) -> None:
-        if not callable(judge):
-            raise FootfallError(f"a judged footstep planner needs a callable judge, "
+        if not isinstance(judge, FootholdScorer):
+            raise FootfallError(f"a judged footstep planner needs a FootholdScorer, "
                                 f"got {type(judge).__name__}")
-        reward = default_reward()
         config = replace(config, pose_candidates=None, lookahead_candidates=1 << 30)
-        super().__init__(hmap, lambda leg: reward, path, robot, config, grids)
         self.judge = judge
-        self._posed = {name: True for name in LEG_NAMES}
-        self.bias_ = {name: 0.0 for name in LEG_NAMES}
+        super().__init__(hmap, lambda leg: judge, path, robot, config, grids)
+        self._posed = {name: True for name in LEG_NAMES}  # every candidate judged whole
 
-    def _terrain(self, leg: str, footholds: np.ndarray, yaw: float) -> np.ndarray:
-        """0 for a usable foothold, -inf for an unusable one: the judge values it whole."""
-        usable = super()._terrain(leg, footholds, yaw)
-        return np.where(np.isfinite(usable), 0.0, usable)
-
-    def _pose(self, state: RobotState, footholds: np.ndarray) -> np.ndarray:
-        """The judge's value of each foothold (n,) for the state."""
-        if footholds.shape[0] == 0:
-            return np.zeros(0)
-        value = np.asarray(self.judge(self.hmap, state, footholds), dtype=np.float64)
-        if value.shape != (footholds.shape[0],):
-            raise FootfallError(f"the judge returned shape {value.shape} for "
-                                f"{footholds.shape[0]} footholds")
-        return value
+    def _bias_weights(self) -> dict[str, float]:
+        """No path bias: the judge carries its own preference for the path."""
+        return {name: 0.0 for name in LEG_NAMES}

@@ -29,6 +29,7 @@ from footfall.data.schema import SUFFIXES as STORE_SUFFIXES
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor, LocalPool
 from footfall.experiments.runs import RunJob
+from footfall.expert.scorer import ExpertScorer
 from footfall.expert.synthetic import walking_expert
 from footfall.sim.episode import Frames, Walk, WalkConfig
 
@@ -54,10 +55,10 @@ def reward_source(model_path: str | os.PathLike | None, hmap: HeightMap):
 
 
 def expert_judge(config: WalkConfig):
-    """The walking expert's value (:func:`footfall.expert.synthetic.walking_expert`) as a foothold judge."""
+    """The walking expert (:func:`footfall.expert.synthetic.walking_expert`) as a foothold judge."""
     from footfall.expert.synthetic import SyntheticExpert
 
-    return SyntheticExpert(walking_expert(config.footstep.lead)).values
+    return ExpertScorer(SyntheticExpert(walking_expert(config.footstep.lead)))
 
 
 def walk_many(terrain_path: str | os.PathLike, model_path: str | os.PathLike | None, runs: int,

@@ -88,7 +88,7 @@ def bench_scoring(repeats: int = 7, baseline_sample: int = 300, seed: int = 0) -
     loop_values = np.empty(sample.size)
     t0 = time.perf_counter()
     for k, idx in enumerate(sample):  # the slow reference: one candidate per iteration
-        loop_values[k] = reward.terrain_reward(
+        loop_values[k] = reward.terrain_values(
             Candidates(board, pts[idx:idx + 1], 0.0, False, config))[0]
     per_candidate = (time.perf_counter() - t0) / sample.size
     loop_total = per_candidate * pts.shape[0]

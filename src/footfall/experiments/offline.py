@@ -31,8 +31,9 @@ from footfall.expert.synthetic import SyntheticExpert
 from footfall.features.dense import score_grid
 from footfall.features.family import PAPER_FEATURE_SETS, feature_set_families
 from footfall.learning.evaluation import expert_values, rank_scores
+from footfall.learning.learner import LEARNERS
 from footfall.learning.model import FootholdModel
-from footfall.learning.ranker import BUILTIN_LEARNERS, LEARNERS
+from footfall.learning.ranker import BUILTIN_LEARNERS
 from footfall.learning.train import TrainingDemo, learn_model
 from footfall.plots.maps import save_kept_templates, save_score_maps
 from footfall.plots.relief import save_relief

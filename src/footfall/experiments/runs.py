@@ -63,6 +63,7 @@ def execute(job: RunJob) -> RunOutput:
         inspect_run,
         worst_corrections,
     )
+    from footfall.expert.scorer import ExpertScorer
     from footfall.expert.synthetic import SyntheticExpert
     from footfall.sim.episode import walk
 
@@ -70,7 +71,7 @@ def execute(job: RunJob) -> RunOutput:
     # One core per run: the stack's small matrix products only lose to BLAS threads
     # fighting over the cores the other runs use.
     with threadpool_limits(limits=1):
-        judge = SyntheticExpert(job.expert).values if job.judge else None
+        judge = ExpertScorer(SyntheticExpert(job.expert)) if job.judge else None
         record = walk(hmap, reward_source(job.model, hmap), job.seed, job.walk, judge=judge)
         record = replace(record, key=job.key)
         demos = []

@@ -1,4 +1,4 @@
-"""Dense scoring: the terrain part of a reward at every lattice point of a board, in one call.
+"""Dense scoring: the terrain part of a scorer at every lattice point of a board, in one call.
 
 Where the lattice, the patch samples and the map cells line up (heading 0 or
 pi, spacing and template resolution whole multiples of the map resolution:
@@ -20,6 +20,7 @@ blocks. Both give the same numbers as the per-candidate definitions.
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -33,8 +34,7 @@ from footfall.core.heightmap import HeightMap, PatchGrid
 from footfall.features.candidates import lattice
 from footfall.features.config import FeatureConfig
 from footfall.features.family import Candidates, DenseTerms, FeatureFamily
-from footfall.features.patches import foothold_patches
-from footfall.features.reward import LinearReward
+from footfall.features.patches import FootholdPatches, foothold_patches
 
 _BLOCK_FLOATS = 1 << 20  # patch values per block of the interpolating path
 _BLOCK_BYTES = 8 << 20  # patches per block of the strided path: two blocks stay in L3
@@ -67,13 +67,92 @@ def _ratio(a: float, b: float) -> int | None:
     return int(round(k)) if abs(k - round(k)) < 1e-9 and round(k) >= 1 else None
 
 
-def score_grid(hmap: HeightMap, reward: LinearReward, *, spacing: float = 0.005,
-               yaw: float = 0.0, mirror: bool = False, dtype: type = np.float32,
-               fast: bool = True) -> ScoreGrid:
-    """Terrain reward of every lattice point of the map (every ``spacing`` metres).
+def score_grid(hmap: HeightMap, scorer, **options) -> ScoreGrid:
+    """The terrain part of a scorer at every lattice point of the map: ``scorer.dense(hmap, ...)``.
+
+    ``scorer`` is any :class:`~footfall.features.scorer.FootholdScorer`;
+    ``options`` are :meth:`~footfall.features.scorer.FootholdScorer.dense`'s
+    (``spacing`` [m], ``yaw`` [rad], ``mirror``, ``dtype``, ``fast``).
+    """
+    return scorer.dense(hmap, **options)
+
+
+def linear_values(c: Candidates, parts: Sequence[tuple[FeatureFamily, np.ndarray]]) -> np.ndarray:
+    """The sum (n,) of ``family.compute(c) @ weights`` over ``parts``, in their order; 0 if none."""
+    values = [family.compute(c) @ w for family, w in parts]
+    return sum(values[1:], values[0]) if values else np.zeros(c.n)
+
+
+def _lattice(hmap: HeightMap, spacing: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lattice points (n, 2) [m] every ``spacing`` over the map, and their x (na,), y (nb,) [m]."""
+    if not spacing > 0:
+        raise FootfallError(f"candidate spacing must be > 0, got {spacing}")
+    x0, x1, y0, y1 = hmap.bounds
+    pts = lattice(hmap, (x0, x1 - 1e-12), (y0, y1 - 1e-12), spacing)
+    return pts, np.unique(pts[:, 0]), np.unique(pts[:, 1])
+
+
+def dense_values(hmap: HeightMap, values: Callable[[Candidates], np.ndarray],
+                 config: FeatureConfig, *, spacing: float = 0.005, yaw: float = 0.0,
+                 mirror: bool = False) -> ScoreGrid:
+    """Any terrain-only value ``values(candidates) -> (n,)`` at every lattice point of the map.
+
+    The generic dense form, in blocks of lattice points (every ``spacing``
+    [m], heading ``yaw`` [rad], mirrored for a right leg). At heading 0 with
+    the spacing and the template resolution whole multiples of the map
+    resolution -- the planners' usual case -- every patch sample is a cell
+    centre and the patches are gathered from the map by index; otherwise
+    they are interpolated. Both give :func:`foothold_patches`'s patches.
+    """
+    pts, xs, ys = _lattice(hmap, spacing)
+    step = _ratio(spacing, hmap.resolution)
+    tap = _ratio(config.template_resolution, hmap.resolution)
+    patches = None
+    if step is not None and tap is not None and yaw == 0.0:
+        cells = np.rint((pts - np.asarray(hmap.origin)) / hmap.resolution).astype(np.intp)
+        patches = _aligned(hmap, cells, config, tap, mirror)
+    r, valid = _dense_general(hmap, values, config, pts, yaw, mirror, patches)
+    return ScoreGrid(xs, ys, r.reshape(xs.size, ys.size), valid.reshape(xs.size, ys.size))
+
+
+def _aligned(hmap: HeightMap, cells: np.ndarray, config: FeatureConfig, tap: int, mirror: bool
+             ) -> Callable[[slice], FootholdPatches]:
+    """Patches of the points at map cells ``cells`` (n, 2), whose samples lie ``tap`` cells
+    apart: gathered from the map, padded with no data, by index (a block of points at a time)."""
+    margin = np.array([max(g.half_counts[k] for g in config.grids) * tap for k in (0, 1)])
+    padded = np.pad(hmap.heights, ((margin[0],) * 2, (margin[1],) * 2), constant_values=np.nan)
+    width = padded.shape[1]
+    flat_map = padded.ravel()
+    offsets = []  # per scale: the sample offsets in the flat padded map, in patch order
+    for grid in config.grids:  # three scales
+        hu, hv = grid.half_counts
+        du = (np.arange(grid.shape[0]) - hu) * tap
+        dv = (np.arange(grid.shape[1]) - hv) * tap * (-1 if mirror else 1)
+        offsets.append((du[:, None] * width + dv[None, :]).ravel())
+    centres = (cells[:, 0] + margin[0]) * width + cells[:, 1] + margin[1]
+
+    def block(sl: slice) -> FootholdPatches:
+        at = centres[sl]
+        h0 = flat_map[at]
+        rel = tuple(np.take(flat_map, at[:, None] + o) - h0[:, None] for o in offsets)
+        cov = (np.stack([1.0 - np.isnan(r).mean(axis=1) for r in rel], axis=1) if at.size
+               else np.zeros((0, len(rel))))
+        valid = ~np.isnan(h0) & np.all(cov >= config.min_coverage, axis=1)
+        return FootholdPatches(h0, rel, cov, valid)
+
+    return block
+
+
+def dense_linear(hmap: HeightMap, parts: Sequence[tuple[FeatureFamily, np.ndarray]],
+                 config: FeatureConfig, *, spacing: float = 0.005, yaw: float = 0.0,
+                 mirror: bool = False, dtype: type = np.float32, fast: bool = True) -> ScoreGrid:
+    """A linear terrain reward -- ``family.compute @ weights`` summed over ``parts`` -- at every
+    lattice point of the map (every ``spacing`` metres).
 
     Parameters
     ----------
+    parts : sequence of (FeatureFamily, array of shape (k_f,))
+        Families that read only the terrain, with their weights.
     spacing : float
         Lattice spacing [m], measured from the centre of cell (0, 0).
     yaw : float
@@ -88,39 +167,38 @@ def score_grid(hmap: HeightMap, reward: LinearReward, *, spacing: float = 0.005,
     fast : bool
         Allow the strided matrix-product path; ``False`` forces interpolation.
     """
-    if not spacing > 0:
-        raise FootfallError(f"candidate spacing must be > 0, got {spacing}")
-    x0, x1, y0, y1 = hmap.bounds
-    pts = lattice(hmap, (x0, x1 - 1e-12), (y0, y1 - 1e-12), spacing)
-    xs = np.unique(pts[:, 0])
-    ys = np.unique(pts[:, 1])
+    pts, xs, ys = _lattice(hmap, spacing)
     step = _ratio(spacing, hmap.resolution)
-    tap = _ratio(reward.config.template_resolution, hmap.resolution)
+    tap = _ratio(config.template_resolution, hmap.resolution)
     quarter = np.round(yaw / (np.pi / 2))
     flip = None
     if abs(yaw - quarter * np.pi / 2) < 1e-12 and int(quarter) % 2 == 0:
         flip = int(quarter) % 4 == 2  # heading pi: the patch is the map turned half a turn
     if not (fast and step is not None and tap is not None and flip is not None):
-        r, valid = _dense_general(hmap, reward, pts, yaw, mirror)
+        r, valid = _dense_general(hmap, _valid_sum(parts), config, pts, yaw, mirror)
         return ScoreGrid(xs, ys, r.reshape(xs.size, ys.size), valid.reshape(xs.size, ys.size))
     dtype = np.dtype(dtype)
-    terms, rest = _dense_terms(reward, dtype)
-    r, valid = _dense_aligned(hmap, reward.config, terms, step, tap, flip, mirror, dtype)
+    terms, rest = _dense_terms(parts, len(config.scales), dtype)
+    r, valid = _dense_aligned(hmap, config, terms, step, tap, flip, mirror, dtype)
     if rest:  # families without a dense form: their exact values at the valid points
-        others = LinearReward(tuple(f for f, _ in rest), tuple(w for _, w in rest),
-                              reward.config, reward.name)
-        extra, _ = _dense_general(hmap, others, pts[valid.ravel()], yaw, mirror)
+        extra, _ = _dense_general(hmap, _valid_sum(rest), config, pts[valid.ravel()], yaw, mirror)
         r[valid] += extra
     return ScoreGrid(xs, ys, r, valid)
 
 
-def _dense_terms(reward: LinearReward, dtype: np.dtype
+def _valid_sum(parts: Sequence[tuple[FeatureFamily, np.ndarray]]
+               ) -> Callable[[Candidates], np.ndarray]:
+    """The linear sum of ``parts`` where a foothold is valid, -inf elsewhere."""
+    return lambda c: np.where(c.patches.valid, linear_values(c, parts), -np.inf)
+
+
+def _dense_terms(parts: Sequence[tuple[FeatureFamily, np.ndarray]], n_scales: int,
+                 dtype: np.dtype
                  ) -> tuple[list[list[DenseTerms]], list[tuple[FeatureFamily, np.ndarray]]]:
-    """Per scale, the dense terms of the terrain part's families; the families without them."""
-    n_scales = len(reward.config.scales)
+    """Per scale, the dense terms of the families; the families without them."""
     per_scale: list[list[DenseTerms]] = [[] for _ in range(n_scales)]
     rest = []
-    for family, w in reward.parts(state=False):
+    for family, w in parts:
         terms = [family.dense(s, w, dtype) for s in range(n_scales)]
         if any(t is None for t in terms):
             rest.append((family, w))
@@ -130,17 +208,21 @@ def _dense_terms(reward: LinearReward, dtype: np.dtype
     return per_scale, rest
 
 
-def _dense_general(hmap: HeightMap, reward: LinearReward, pts: np.ndarray, yaw: float,
-                   mirror: bool) -> tuple[np.ndarray, np.ndarray]:
-    """Terrain reward and validity of points (n, 2) [m] from interpolated patches, in blocks."""
-    block = max(1, _BLOCK_FLOATS // sum(g.size for g in reward.config.grids))
+def _dense_general(hmap: HeightMap, values: Callable[[Candidates], np.ndarray],
+                   config: FeatureConfig, pts: np.ndarray, yaw: float, mirror: bool,
+                   patches: Callable[[slice], FootholdPatches] | None = None
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Values and validity of points (n, 2) [m], in blocks: patches from ``patches(block)``, or
+    interpolated."""
+    block = max(1, _BLOCK_FLOATS // sum(g.size for g in config.grids))
     out = np.empty(pts.shape[0])
     valid = np.empty(pts.shape[0], dtype=bool)
     for start in range(0, pts.shape[0], block):  # blocks of candidates, each vectorised
         sl = slice(start, start + block)
-        fp = foothold_patches(hmap, pts[sl], yaw, mirror, reward.config)
-        c = Candidates(hmap, pts[sl], yaw, mirror, reward.config, given_patches=fp)
-        out[sl] = reward.terrain_reward(c)
+        fp = (foothold_patches(hmap, pts[sl], yaw, mirror, config) if patches is None
+              else patches(sl))
+        c = Candidates(hmap, pts[sl], yaw, mirror, config, given_patches=fp)
+        out[sl] = values(c)
         valid[sl] = fp.valid
     return out, valid
 

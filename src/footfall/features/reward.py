@@ -2,11 +2,13 @@
 
 A reward holds feature families (terrain features, templates, pose features,
 or any registered family: :mod:`footfall.features.family`) and one weight per
-column of each, on the raw features. Learned ranking functions and the
-hand-tuned default are both a :class:`LinearReward`; the standardisation a
-learner applies is folded into the weights. The *terrain part* sums the
-families that read only the terrain (they can be scored densely over a whole
-board); the *state part* sums those that need the robot's state (pose).
+column of each, on the raw features. It is a
+:class:`~footfall.features.scorer.FootholdScorer`: the hand-tuned default and
+every function a linear learner learns are one (the standardisation a learner
+applies is folded into the weights). The *terrain part* sums the families
+that read only the terrain (scored densely over a whole board by one matrix
+product per scale); the *state part* sums those that need the robot's state
+(pose).
 """
 
 from __future__ import annotations
@@ -18,15 +20,18 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
 from footfall.features.config import FeatureConfig
+from footfall.features.dense import ScoreGrid, dense_linear, linear_values
 from footfall.features.family import Candidates, FeatureFamily
+from footfall.features.scorer import FootholdScorer
 from footfall.features.templates import TemplateFeatures, TemplateLibrary
 from footfall.features.terrain_features import TerrainFeatures
 
 
 @dataclass(frozen=True, eq=False)
-class LinearReward:
-    """Weights over the columns of feature families.
+class LinearReward(FootholdScorer):
+    """Weights over the columns of feature families: a linear foothold scorer.
 
     ``weights[k]`` (len(families[k].columns()),) weighs the columns of
     ``families[k]``, in their order; a column's full name is
@@ -124,20 +129,27 @@ class LinearReward:
         return any(isinstance(f, TemplateFeatures) for f, _ in self.parts())
 
     # ----------------------------------------------------------------- values
-    def terrain_reward(self, c: Candidates) -> np.ndarray:
+    def family_names(self) -> tuple[str, ...]:
+        """Names of the families it reads: those with a non-zero weight."""
+        return tuple(f.name for f, _ in self.parts())
+
+    def terrain_values(self, c: Candidates) -> np.ndarray:
         """The terrain part (families that read only the terrain) of candidates, (n,).
 
         Footholds that are not valid (no data, too little patch coverage) get -inf.
         """
-        return np.where(c.patches.valid, self._sum(c, state=False), -np.inf)
+        return np.where(c.patches.valid, linear_values(c, self.parts(state=False)), -np.inf)
 
-    def state_reward(self, c: Candidates) -> np.ndarray:
+    def state_values(self, c: Candidates) -> np.ndarray:
         """The state part (families that need ``c.state``) of candidates, (n,); 0 without one."""
-        return self._sum(c, state=True)
+        return linear_values(c, self.parts(state=True))
 
-    def _sum(self, c: Candidates, state: bool) -> np.ndarray:
-        values = [family.compute(c) @ w for family, w in self.parts(state=state)]
-        return sum(values[1:], values[0]) if values else np.zeros(c.n)
+    def dense(self, hmap: HeightMap, *, spacing: float = 0.005, yaw: float = 0.0,
+              mirror: bool = False, dtype: type = np.float32, fast: bool = True) -> ScoreGrid:
+        """The terrain part at every lattice point: one matrix product per scale where the
+        lattice lines up with the map (:func:`~footfall.features.dense.dense_linear`)."""
+        return dense_linear(hmap, self.parts(state=False), self.config, spacing=spacing, yaw=yaw,
+                            mirror=mirror, dtype=dtype, fast=fast)
 
     def named_weights(self) -> dict[str, float]:
         """Every non-zero weight by full column name."""

@@ -1,4 +1,4 @@
-"""The scale of a reward: the unit in which its differences compare to another reward's.
+"""The scale of a scorer (a reward): the unit in which its differences compare to another reward's.
 
 Learned weights are logits of preference with no fixed unit, while the
 footstep planner's path bias and the body path's clearance penalties are
@@ -17,9 +17,9 @@ from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LEG_NAMES
 from footfall.core.state import RobotState, nominal_state
 from footfall.features.candidates import reachable_footholds
-from footfall.features.dense import score_grid
 from footfall.features.family import Candidates
-from footfall.features.reward import LinearReward
+from footfall.features.scorer import FootholdScorer
+from footfall.terrain import make_module
 
 REFERENCE_MODULE = ("rocky", 0.5, 0)  # kind, difficulty, seed of the terrain module on which a
 # reward's spread is measured (see reward_spread): rough enough that every feature varies
@@ -44,8 +44,6 @@ def reward_unit(rewards: list[np.ndarray]) -> float:
 
 @lru_cache(maxsize=1)
 def _reference_module() -> HeightMap:
-    from footfall.terrain import make_module
-
     return make_module(*REFERENCE_MODULE)
 
 
@@ -61,12 +59,12 @@ def _reference_states() -> tuple[RobotState, ...]:
 _SPREADS: dict[str, float] = {}  # spread_key -> spread (a few rewards per process)
 
 
-def spread_key(reward: LinearReward) -> str:
+def spread_key(reward: FootholdScorer) -> str:
     """Digest of everything that sets a reward's spread: its terrain part and its state part."""
     return reward.key(state=False) + reward.key(state=True)
 
 
-def reward_spread(reward: LinearReward) -> float:
+def reward_spread(reward: FootholdScorer) -> float:
     """The spread of a reward: the unit in which its differences compare to another reward's.
 
     The terrain part's standard deviation, scored densely (5 mm lattice,
@@ -82,10 +80,10 @@ def reward_spread(reward: LinearReward) -> float:
     key = spread_key(reward)
     if key not in _SPREADS:
         module = _reference_module()
-        grid = score_grid(module, reward, spacing=0.005, yaw=REFERENCE_YAW)
+        grid = reward.dense(module, spacing=0.005, yaw=REFERENCE_YAW)
         spread = reward_unit([np.asarray(grid.reward)[np.asarray(grid.valid)]])
         if reward.has_state_part:
-            state_part = np.concatenate([reward.state_reward(Candidates.of_state(
+            state_part = np.concatenate([reward.state_values(Candidates.of_state(
                 module, state, reachable_footholds(module, state, spacing=0.005), reward.config))
                 for state in _reference_states()])
             spread = math.hypot(spread, float(np.nanstd(state_part)))

@@ -1,14 +1,16 @@
 """The learned foothold model file: ranking functions for front and hind legs.
 
 A model holds, for the front legs and for the hind legs (paper §V: their
-properties differ), a linear ranking function over the feature families of
-one feature set: per family its learned parameters (the kept templates and
-their RBF bandwidths), the weights on its raw columns and the
-standardisation the learner used; and the cross-validation record. Stored as
-a versioned ``.npz`` with JSON metadata -- never pickled -- together with the
+properties differ), a ranking function (:mod:`footfall.learning.function`)
+over the feature families of one feature set: per family its learned
+parameters (the kept templates and their RBF bandwidths), the learner's own
+arrays (a linear learner's: the weights on each family's raw columns and the
+standardisation it used), and the cross-validation record. Stored as a
+versioned ``.npz`` with JSON metadata -- never pickled -- together with the
 robot description and the feature settings it was trained with; loading it
 for another robot or other feature settings fails with a clear error.
-Version 1 files (one flat list of feature names per leg group) are still read.
+Version 1 (one flat list of feature names per leg group) and version 2
+(linear functions only) files are still read.
 """
 
 from __future__ import annotations
@@ -33,53 +35,20 @@ from footfall.core.validate import (
 )
 from footfall.features.config import FeatureConfig
 from footfall.features.family import FeatureFamily, family_class, feature_set_families
-from footfall.features.reward import LinearReward
+from footfall.features.scorer import FootholdScorer
 from footfall.features.templates import TemplateFeatures, TemplateLibrary, check_bandwidths
+from footfall.learning.function import (
+    LinearFunction,
+    RankingFunction,
+    check_function,
+    weight_arrays,
+)
+from footfall.learning.learner import Learner, get_learner
 
 FORMAT = "footfall.model"
-VERSION = 2  # 1: one list of names per group; 2: feature families, each with its parameters
+VERSION = 3  # 1: one list of names per group; 2: feature families, each with its parameters
+# (linear functions); 3: the function's own arrays named in the file, any registered learner
 LEG_GROUPS = ("front", "hind")
-
-
-@dataclass(frozen=True, eq=False)
-class RankingFunction:
-    """A linear ranking function of one leg group over the columns of feature families."""
-
-    families: tuple[FeatureFamily, ...]  # the families, with their learned parameters
-    coef: tuple[np.ndarray, ...]  # per family (k_f,) weights on its raw columns
-    scale: tuple[np.ndarray, ...]  # per family (k_f,) std of each column over the training pairs
-    info: dict = field(default_factory=dict)  # lambda, C, cv error, path, the families' facts
-
-    def __post_init__(self) -> None:
-        if not (len(self.families) == len(self.coef) == len(self.scale)):
-            raise FootfallError("a ranking function needs weights and scales for every family")
-        for f, c, s in zip(self.families, self.coef, self.scale):
-            n = len(f.columns())
-            if np.shape(c) != (n,) or np.shape(s) != (n,):
-                raise FootfallError(f"{f.name} weights do not match its {n} columns")
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        """Full column names (``family.column``), in column order."""
-        return tuple(f"{f.name}.{c}" for f in self.families for c in f.columns())
-
-    def family(self, name: str) -> FeatureFamily | None:
-        """The family called ``name``, or None."""
-        return next((f for f in self.families if f.name == name), None)
-
-    def weights(self, name: str) -> np.ndarray:
-        """The raw-column weights (k_f,) of the family called ``name``; empty if it has none."""
-        return next((c for f, c in zip(self.families, self.coef) if f.name == name), np.zeros(0))
-
-    @property
-    def library(self) -> TemplateLibrary | None:
-        """The kept templates (those with a non-zero weight), if the function has any."""
-        templates = self.family(TemplateFeatures.name)
-        return templates.library if isinstance(templates, TemplateFeatures) else None
-
-    def reward(self, config: FeatureConfig, name: str = "learned") -> LinearReward:
-        """The function as a :class:`LinearReward` over the same families and weights."""
-        return LinearReward(self.families, self.coef, config, name)
 
 
 @dataclass(frozen=True, eq=False)
@@ -98,10 +67,11 @@ class FootholdModel:
         """The ranking function of a leg (LF, RF -> front; LH, RH -> hind)."""
         return self.functions["front" if self.robot.leg(leg).front else "hind"]
 
-    def reward_for(self, leg: str) -> LinearReward:
-        """The reward a leg's footholds are ranked by."""
+    def reward_for(self, leg: str) -> FootholdScorer:
+        """The scorer a leg's footholds are ranked by."""
         group = "front" if self.robot.leg(leg).front else "hind"
-        return self.functions[group].reward(self.config, name=f"{self.feature_set}/{self.learner}/{group}")
+        return self.functions[group].scorer(self.config,
+                                            name=f"{self.feature_set}/{self.learner}/{group}")
 
     def check_compatible(self, robot: RobotDescription | None = None,
                          config: FeatureConfig | None = None,
@@ -133,22 +103,27 @@ class FootholdModel:
     def save(self, path: str | os.PathLike) -> None:
         """Write the model (atomically) as a versioned ``.npz`` with JSON metadata.
 
-        Arrays are named ``<group>.<family>.coef``, ``<group>.<family>.scale``
-        and ``<group>.<family>.<parameter>``.
+        Arrays are named ``<group>.<family>.<parameter>`` (the families'
+        learned parameters) and ``<group>.<name>`` for each of the ranking
+        function's own arrays (a linear function's: ``<family>.coef`` and
+        ``<family>.scale``), which the metadata lists per group.
         """
         arrays: dict[str, np.ndarray] = {}
         groups: dict[str, Any] = {}
         for g, f in self.functions.items():
             families = []
-            for fam, coef, scale in zip(f.families, f.coef, f.scale):
+            for fam in f.families:
                 params, meta = fam.params()
-                prefix = f"{g}.{fam.name}."
-                arrays[prefix + "coef"] = coef
-                arrays[prefix + "scale"] = scale
-                arrays.update({prefix + k: v for k, v in params.items()})
+                arrays.update({f"{g}.{fam.name}.{k}": v for k, v in params.items()})
                 families.append({"name": fam.name, "columns": list(fam.columns()),
                                  "params": meta})
-            groups[g] = {"families": families, "info": f.info}
+            own = f.arrays()
+            clash = sorted(set(f"{g}.{k}" for k in own) & set(arrays))
+            if clash:
+                raise FootfallError(f"the ranking function's array {clash[0]} has the name of a "
+                                    f"family parameter")
+            arrays.update({f"{g}.{k}": v for k, v in own.items()})
+            groups[g] = {"families": families, "function": sorted(own), "info": f.info}
         save_npz(path, FORMAT, VERSION, arrays, {
             "feature_set": self.feature_set, "learner": self.learner,
             "config": self.config.to_dict(), "robot": self.robot.to_dict(),
@@ -171,11 +146,6 @@ class FootholdModel:
             raise FootfallError(f"{path}: malformed model: {exc}") from None
 
 
-MAX_WEIGHT = 1e20
-"""Largest |weight| [reward per unit of feature] and feature scale a model file may hold.
-
-Learned weights are w / scale with the scale floored at 1e-12, so well below; the bound keeps
-every product of a weight with a feature (and the dense scorer's float32 sums) finite."""
 MAX_MAP_RESOLUTION = 1.0  # [m/cell] coarsest training-map resolution a model file may state
 _META_KEYS = ("feature_set", "learner", "config", "robot", "map_resolution", "groups")
 
@@ -190,44 +160,37 @@ def read_model(version: int, arrays: dict[str, np.ndarray], meta: Any) -> Footho
         array (``front.templates.coef``) that is missing, unexpected, of the wrong
         type or shape, not finite or out of range.
     """
-    from footfall.learning.ranker import get_learner  # imports scikit-learn: only when loading
-
     require_keys(meta, "meta", _META_KEYS, optional=("info", "units"))
     for key, value in arrays.items():
         require_float_array(value, f"array {key}", finite=False)
     feature_set = require_type(meta["feature_set"], str, "feature_set")
     names = feature_set_families(feature_set)
-    get_learner(require_type(meta["learner"], str, "learner"))
+    learner = get_learner(require_type(meta["learner"], str, "learner"))
     config = FeatureConfig.from_dict(meta["config"])
     robot = RobotDescription.from_dict(meta["robot"])
     resolution = require_number(meta["map_resolution"], "map_resolution [m/cell]", 0.0,
                                 MAX_MAP_RESOLUTION, low_open=True)
     groups = require_keys(meta["groups"], "groups", LEG_GROUPS)
-    read = _read_group_v1 if version == 1 else _read_group
-    functions = {g: read(g, groups[g], arrays, config, robot, names) for g in LEG_GROUPS}
+    if version < 3 and not issubclass(learner.function_type, LinearFunction):
+        raise FootfallError(f"learner {learner.name!r} makes no linear function, which a "
+                            f"version {version} file holds")
+    if version == 1:
+        functions = {g: _read_group_v1(g, groups[g], arrays, config, robot, names)
+                     for g in LEG_GROUPS}
+    else:
+        functions = {g: _read_group(g, groups[g], arrays, config, robot, names, learner, version)
+                     for g in LEG_GROUPS}
     _refuse_extra_arrays(arrays, functions, version)
     info = require_type(meta.get("info", {}), dict, "info")
     return FootholdModel(feature_set, meta["learner"], functions, config, robot, resolution, info)
 
 
-def _weights(arrays: dict[str, np.ndarray], key: str, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """The weights ``<key>coef`` and scales ``<key>scale`` (n,) of a family, checked."""
-    for name in ("coef", "scale"):
-        if key + name not in arrays:
-            raise FootfallError(f"lacks array {key}{name}")
-    coef = require_float_array(arrays[key + "coef"], f"array {key}coef", (n,), bound=MAX_WEIGHT)
-    scale = require_float_array(arrays[key + "scale"], f"array {key}scale", (n,),
-                                bound=MAX_WEIGHT)
-    if not (scale > 0).all():
-        raise FootfallError(f"array {key}scale must be > 0 (a standard deviation)")
-    return coef, scale
-
-
 def _read_group(group: str, meta: Any, arrays: dict, config: FeatureConfig,
-                robot: RobotDescription, names: tuple[str, ...]) -> RankingFunction:
-    """One leg group's ranking function from a version 2 file."""
+                robot: RobotDescription, names: tuple[str, ...], learner: Learner,
+                version: int) -> RankingFunction:
+    """One leg group's ranking function from a version 2 or 3 file."""
     where = f"groups.{group}"
-    require_keys(meta, where, ("families", "info"))
+    require_keys(meta, where, ("families", "info") + (("function",) if version >= 3 else ()))
     entries = require_type(meta["families"], list, f"{where}.families")
     found = [require_keys(e, f"{where}.families[{k}]", ("name", "columns", "params")).get("name")
              for k, e in enumerate(entries)]
@@ -235,12 +198,20 @@ def _read_group(group: str, meta: Any, arrays: dict, config: FeatureConfig,
         raise FootfallError(f"{where}.families must be of the feature set's families "
                             f"{list(names)}, each at most once and in that order, "
                             f"got {shown(found)}")
-    families, coef, scale = [], [], []
+    if version >= 3:
+        own = require_str_list(meta["function"], f"{where}.function")
+    else:  # version 2: a linear function's weights and scales per family
+        own = [f"{n}.{k}" for n in found for k in ("coef", "scale")]
+    for key in own:
+        if f"{group}.{key}" not in arrays:
+            raise FootfallError(f"lacks array {group}.{key}")
+    mine = {f"{group}.{key}" for key in own}
+    families = []
     for k, entry in enumerate(entries):
         field_path, prefix = f"{where}.families[{k}]", f"{group}.{entry['name']}."
         columns = require_str_list(entry["columns"], f"{field_path}.columns")
         params = {key[len(prefix):]: v for key, v in arrays.items()
-                  if key.startswith(prefix) and key[len(prefix):] not in ("coef", "scale")}
+                  if key.startswith(prefix) and key not in mine}
         try:
             family = family_class(entry["name"]).from_params(config, robot, params,
                                                              entry["params"])
@@ -249,16 +220,16 @@ def _read_group(group: str, meta: Any, arrays: dict, config: FeatureConfig,
         if list(family.columns()) != columns:
             raise FootfallError(f"{field_path}.columns do not match the {entry['name']} "
                                 f"family's {len(family.columns())} columns")
-        c, s = _weights(arrays, prefix, len(columns))
         families.append(family)
-        coef.append(c)
-        scale.append(s)
-    return RankingFunction(tuple(families), tuple(coef), tuple(scale),
-                           _group_info(meta["info"], f"{where}.info", len(config.scales)))
+    info = _group_info(meta["info"], f"{where}.info", len(config.scales))
+    function = learner.function_type.from_arrays(tuple(families), {k: arrays[k] for k in mine},
+                                                 info, prefix=f"{group}.")
+    return check_function(function)
 
 
 def _refuse_extra_arrays(arrays: dict[str, np.ndarray], functions: dict, version: int) -> None:
-    """Refuse arrays the model's families did not write: a file holds exactly its own."""
+    """Refuse arrays the model's families and functions did not write: a file holds exactly its
+    own."""
     expected = set()
     for g, f in functions.items():
         if version == 1:
@@ -266,10 +237,9 @@ def _refuse_extra_arrays(arrays: dict[str, np.ndarray], functions: dict, version
             if f.library is not None:
                 expected |= set(f.library.arrays(prefix=f"{g}_lib_"))
             continue
+        expected |= {f"{g}.{k}" for k in f.arrays()}
         for family in f.families:
-            prefix = f"{g}.{family.name}."
-            expected |= {prefix + "coef", prefix + "scale"}
-            expected |= {prefix + k for k in family.params()[0]}
+            expected |= {f"{g}.{family.name}.{k}" for k in family.params()[0]}
     extra = sorted(set(arrays) - expected)
     if extra:
         raise FootfallError(f"unexpected array(s) {', '.join(extra[:4])}"
@@ -320,7 +290,7 @@ def _read_group_v1(group: str, meta: Any, arrays: dict, config: FeatureConfig,
     names = require_str_list(meta["names"], f"{where}.names")
     if len(set(names)) != len(names):
         raise FootfallError(f"{where}.names must be distinct")
-    coef, scale = _weights(arrays, f"{group}_", len(names))
+    coef, scale = weight_arrays(arrays, f"{group}_", len(names))
     families, coefs, scales, used = [], [], [], []
     for name in families_of_set:
         family, full = _family_v1(name, meta, where, arrays, config, robot, group)
@@ -335,8 +305,8 @@ def _read_group_v1(group: str, meta: Any, arrays: dict, config: FeatureConfig,
     if len(used) != len(names):
         extra = [n for k, n in enumerate(names) if k not in set(used)]
         raise FootfallError(f"{where}.names hold {extra[0]!r}, no column of the feature set")
-    return RankingFunction(tuple(families), tuple(coefs), tuple(scales),
-                           _group_info(meta["info"], f"{where}.info", len(config.scales)))
+    return LinearFunction(tuple(families), tuple(coefs), tuple(scales),
+                          _group_info(meta["info"], f"{where}.info", len(config.scales)))
 
 
 def _family_v1(name: str, meta: dict, where: str, arrays: dict, config: FeatureConfig,

@@ -26,7 +26,9 @@ from sklearn.svm import LinearSVC
 from sklearn.utils.validation import check_is_fitted
 
 from footfall.core.errors import FootfallError
-from footfall.core.plugins import load_plugins
+from footfall.features.family import FeatureFamily
+from footfall.learning.function import LinearFunction, RankingFunction
+from footfall.learning.learner import Learner, get_learner, register_learner
 
 SELECTIONS = ("1se", "min")  # lambda: one-standard-error rule, or the smallest CV error
 L2_LOG_C = (-6.0, 0.0)  # log10 of the smallest and largest C on the L2 / SVM path
@@ -35,8 +37,8 @@ L1_LOG_SPAN = (0.3, 4.0)  # log10 of the L1 path's ends relative to the smallest
 
 # ---------------------------------------------------------------- learners
 @dataclass(frozen=True)
-class Learner:
-    """A linear classifier the ranker can fit on pairwise differences: the registry's entry.
+class LinearLearner(Learner):
+    """A linear classifier the ranker fits on pairwise differences: a linear learner.
 
     ``make(C, tol, max_iter)`` returns an unfitted scikit-learn classifier
     *without intercept* whose fitted ``coef_`` is the weight vector (a
@@ -44,6 +46,7 @@ class Learner:
     any randomness fixed so that a fit is reproducible. ``path(pairs,
     labels, n)`` gives ``n`` increasing values of C = 1 / lambda to
     cross-validate, for standardised pairs (m, d) and labels (m,) of +-1.
+    It makes a :class:`~footfall.learning.function.LinearFunction`.
     """
 
     name: str  # registry key, e.g. "l1"
@@ -51,25 +54,41 @@ class Learner:
     make: Callable[[float, float, int], object]  # (C, tol, max_iter) -> classifier
     path: Callable[[np.ndarray, np.ndarray, int], np.ndarray]  # -> (n,) C values, increasing
     logistic: bool = True  # the loss is the logistic loss (its held-out value is reported)
+    function_type: type[RankingFunction] = LinearFunction
+
+    def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray, *, Cs=10, cv: int = 5,
+            selection: str = "1se") -> FootholdRanker:
+        """:class:`FootholdRanker` with this learner, fitted."""
+        return FootholdRanker(learner=self.name, Cs=Cs, cv=cv, selection=selection).fit(
+            X, y, groups)
+
+    def function(self, fitted: FootholdRanker, families: tuple[FeatureFamily, ...],
+                 n_demonstrations: int) -> LinearFunction:
+        """Per family its kept columns (non-zero weights) with their raw weights and scales."""
+        kept, coef, scale, family_info = [], [], [], {}
+        start = 0
+        for family in families:
+            stop = start + len(family.columns())
+            w, s = fitted.coef_[start:stop], fitted.scale_[start:stop]
+            reduced, keep = family.select(w != 0)
+            kept.append(reduced)
+            coef.append(w[keep])
+            scale.append(s[keep])
+            family_info.update(reduced.info())
+            start = stop
+        info = {"lambda": fitted.lambda_, "C": fitted.C_, "cv_error": fitted.cv_error_,
+                "path": [vars(p) for p in fitted.path_], "n_demonstrations": n_demonstrations,
+                **family_info, "n_nonzero": int(np.count_nonzero(fitted.coef_))}
+        return LinearFunction(tuple(kept), tuple(coef), tuple(scale), info)
 
 
-LEARNERS: dict[str, Learner] = {}  # every registered learner, by name
-
-
-def register_learner(learner: Learner) -> Learner:
-    """Make a learner available by its name (the CLI's ``--learner`` choices come from here)."""
-    if not learner.name or learner.name in LEARNERS and LEARNERS[learner.name] is not learner:
-        raise ValueError(f"learner {learner.name!r} has no name or is already registered")
-    LEARNERS[learner.name] = learner
+def _linear(name: str) -> LinearLearner:
+    """The registered linear learner called ``name``, or a clear error."""
+    learner = get_learner(name)
+    if not isinstance(learner, LinearLearner):
+        raise FootfallError(f"learner {name!r} is not a linear classifier on pairwise "
+                            f"differences")
     return learner
-
-
-def get_learner(name: str) -> Learner:
-    """The registered learner called ``name`` (plugins included: :mod:`footfall.core.plugins`)."""
-    load_plugins()
-    if name not in LEARNERS:
-        raise FootfallError(f"unknown learner {name!r}; use one of {', '.join(LEARNERS)}")
-    return LEARNERS[name]
 
 
 def _l1_path(pairs: np.ndarray, labels: np.ndarray, n: int) -> np.ndarray:
@@ -92,15 +111,15 @@ def _logistic(l1_ratio: float) -> Callable[[float, float, int], object]:
         max_iter=max_iter, random_state=0)
 
 
-register_learner(Learner("l1", "L1-regularised logistic regression (paper Eq. 5): sparse, "
+register_learner(LinearLearner("l1", "L1-regularised logistic regression (paper Eq. 5): sparse, "
                                "selects templates", _logistic(1.0), _l1_path))
-register_learner(Learner("l2", "L2-regularised logistic regression", _logistic(0.0), _l2_path))
-register_learner(Learner(
+register_learner(LinearLearner("l2", "L2-regularised logistic regression", _logistic(0.0), _l2_path))
+register_learner(LinearLearner(
     "svm", "linear SVM (hinge loss, L2)",
     lambda C, tol, max_iter: LinearSVC(C=C, fit_intercept=False, tol=tol, max_iter=max_iter,
                                        dual=True, random_state=0),
     _l2_path, logistic=False))
-BUILTIN_LEARNERS = tuple(LEARNERS)  # the three the offline experiment compares
+BUILTIN_LEARNERS = ("l1", "l2", "svm")  # the three the offline experiment compares
 
 
 def pairwise_transform(X: np.ndarray, y: np.ndarray, groups: np.ndarray,
@@ -175,7 +194,7 @@ def grouped_folds(pair_groups: np.ndarray, n_splits: int) -> list[tuple[np.ndarr
     return list(GroupKFold(n_splits=n_splits).split(pair_groups, groups=pair_groups))
 
 
-def _fit_coef(learner: Learner, C: float, X: np.ndarray, y: np.ndarray, tol: float,
+def _fit_coef(learner: LinearLearner, C: float, X: np.ndarray, y: np.ndarray, tol: float,
               max_iter: int) -> np.ndarray:
     clf = learner.make(C, tol, max_iter)
     with warnings.catch_warnings():
@@ -185,7 +204,7 @@ def _fit_coef(learner: Learner, C: float, X: np.ndarray, y: np.ndarray, tol: flo
     return clf.coef_.ravel().copy()
 
 
-def _cross_validate(learner: Learner, Cs: np.ndarray, X: np.ndarray, y: np.ndarray, folds: list,
+def _cross_validate(learner: LinearLearner, Cs: np.ndarray, X: np.ndarray, y: np.ndarray, folds: list,
                     tol: float, max_iter: int) -> list["PathPoint"]:
     """Held-out errors along the path, the folds of one C fitted one after another.
 
@@ -238,7 +257,7 @@ class FootholdRanker(BaseEstimator):
     Parameters
     ----------
     learner : str
-        A registered learner (:data:`LEARNERS`): ``"l1"`` or ``"l2"``
+        A registered linear learner (:class:`LinearLearner`): ``"l1"`` or ``"l2"``
         regularised logistic regression, or ``"svm"``, a linear SVM (hinge
         loss, L2), all without intercept, on pairwise differences.
     Cs : int or array-like
@@ -288,7 +307,7 @@ class FootholdRanker(BaseEstimator):
         n = int(self.Cs)
         if n < 1:
             raise FootfallError("Cs must be at least 1")
-        return get_learner(self.learner).path(pairs, labels, n)
+        return _linear(self.learner).path(pairs, labels, n)
 
     def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray) -> "FootholdRanker":
         """Learn from stacked candidate features of demonstrations (see :func:`pairwise_transform`).
@@ -299,7 +318,7 @@ class FootholdRanker(BaseEstimator):
         at twice the C; that is what is solved (half the work, the same
         weights). Pairs alternate in sign so that the solver sees two classes.
         """
-        learner = get_learner(self.learner)
+        learner = _linear(self.learner)
         if int(self.cv) < 2:
             raise FootfallError("cv needs at least 2 folds")
         if self.selection not in SELECTIONS:

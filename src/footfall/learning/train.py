@@ -11,6 +11,7 @@ columns the L1 learner left at zero (templates without weight).
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from collections.abc import Callable, Sequence
@@ -39,8 +40,9 @@ from footfall.learning.dataset import (
     stack,
     training_rows,
 )
-from footfall.learning.model import LEG_GROUPS, FootholdModel, RankingFunction
-from footfall.learning.ranker import FootholdRanker, get_learner
+from footfall.learning.function import RankingFunction, check_function
+from footfall.learning.learner import Learner, get_learner
+from footfall.learning.model import LEG_GROUPS, FootholdModel
 
 
 @dataclass(frozen=True)
@@ -53,42 +55,22 @@ class TrainingDemo:
     chosen: int
 
 
-def _fit(examples: list[Example], families: Sequence[FeatureFamily], learner: str, Cs, cv: int,
-         selection: str = "1se") -> FootholdRanker:
+def _fit(examples: list[Example], families: Sequence[FeatureFamily], learner: Learner, Cs,
+         cv: int, selection: str = "1se") -> Any:
     X, y, groups = stack(examples, families)
-    return FootholdRanker(learner=learner, Cs=Cs, cv=cv, selection=selection).fit(X, y, groups)
+    return learner.fit(X, y, groups, Cs=Cs, cv=cv, selection=selection)
 
 
-def _tune(examples: list[Example], families: tuple[FeatureFamily, ...], learner: str, Cs,
+def _tune(examples: list[Example], families: tuple[FeatureFamily, ...], learner: Learner, Cs,
           cv: int, log: Callable[[str], None]) -> tuple[FeatureFamily, ...]:
     """Each family's hyperparameters by the cross-validation error of the whole model."""
     tuned = list(families)
     for k, family in enumerate(families):
         def error(variant: FeatureFamily, k: int = k) -> float:
             trial = tuple(tuned[:k]) + (variant,) + tuple(tuned[k + 1:])
-            return _fit(examples, trial, learner, Cs, cv).cv_error_
+            return float(_fit(examples, trial, learner, Cs, cv).cv_error_)
         tuned[k] = family.tune(error, log)
     return tuple(tuned)
-
-
-def _function(ranker: FootholdRanker, families: tuple[FeatureFamily, ...], n_demos: int
-              ) -> RankingFunction:
-    """The fitted ranker as a ranking function: per family its kept columns and weights."""
-    kept, coef, scale, family_info = [], [], [], {}
-    start = 0
-    for family in families:
-        stop = start + len(family.columns())
-        w, s = ranker.coef_[start:stop], ranker.scale_[start:stop]
-        reduced, keep = family.select(w != 0)
-        kept.append(reduced)
-        coef.append(w[keep])
-        scale.append(s[keep])
-        family_info.update(reduced.info())
-        start = stop
-    info = {"lambda": ranker.lambda_, "C": ranker.C_, "cv_error": ranker.cv_error_,
-            "path": [vars(p) for p in ranker.path_], "n_demonstrations": n_demos,
-            **family_info, "n_nonzero": int(np.count_nonzero(ranker.coef_))}
-    return RankingFunction(tuple(kept), tuple(coef), tuple(scale), info)
 
 
 def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = "l1", *,
@@ -109,7 +91,7 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     :class:`footfall.learning.ranker.FootholdRanker`).
     """
     feature_set = check_feature_set(feature_set)
-    get_learner(learner)  # a registered learner, or a clear error
+    chosen_learner = get_learner(learner)  # a registered learner, or a clear error
     seed = require_int(seed, "seed", 0)
     check_count(library_size, "library_size", 3)
     check_count(training_candidates, "training_candidates", 1)
@@ -139,12 +121,12 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
             raise FootfallError(f"{group} legs have {len(chosen)} demonstrations; "
                                 f"{cv}-fold cross-validation needs at least {cv}")
         log(f"{group} legs: {len(chosen)} demonstrations")
-        tuned = _tune(chosen, families, learner, Cs, cv, log)
-        ranker = _fit(chosen, tuned, learner, Cs, cv, selection)
-        functions[group] = _function(ranker, tuned, len(chosen))
+        tuned = _tune(chosen, families, chosen_learner, Cs, cv, log)
+        fitted = _fit(chosen, tuned, chosen_learner, Cs, cv, selection)
+        functions[group] = check_function(chosen_learner.function(fitted, tuned, len(chosen)))
         info = functions[group].info
-        log(f"  lambda {ranker.lambda_:.4g}, cv error {ranker.cv_error_:.4f}, "
-            f"{info['n_nonzero']} non-zero weights, templates kept "
+        log(f"  lambda {info.get('lambda', math.nan):.4g}, cv error {fitted.cv_error_:.4f}, "
+            f"{info.get('n_nonzero', '?')} non-zero weights, templates kept "
             f"{info.get('kept_counts', [0] * len(config.scales))}")
     return FootholdModel(feature_set, learner, functions, config, robot,
                          map_resolution=max(resolutions),
@@ -200,13 +182,14 @@ class LearnedModel:
 
 
 def _group_summary(f: RankingFunction, scales: int) -> dict[str, Any]:
-    """Lambda, CV error, RBF bandwidths [1/m^2] and [m RMS], templates kept of a ranking function."""
-    return {"lambda": f.info["lambda"], "cv_error": f.info["cv_error"],
+    """Lambda, CV error, RBF bandwidths [1/m^2] and [m RMS], templates kept of a ranking function
+    (None where its learner does not say)."""
+    return {"lambda": f.info.get("lambda"), "cv_error": f.info.get("cv_error"),
             "bandwidths_per_m2": list(getattr(f.family("templates"), "bandwidths", ())),
             "bandwidth_rms_m": f.info.get("bandwidth_rms_m"),
             "templates_kept": f.info.get("kept_counts", [0] * scales),
             "library": f.info.get("library_counts", [0] * scales),
-            "non_zero_weights": f.info["n_nonzero"]}
+            "non_zero_weights": f.info.get("n_nonzero")}
 
 
 def learn_from_store(store: str | os.PathLike, path: str | os.PathLike, feature_set: str,

@@ -17,6 +17,7 @@ from matplotlib.figure import Figure
 from footfall.core.files import atomic_path
 from footfall.core.heightmap import PatchGrid
 from footfall.features.dense import ScoreGrid
+from footfall.learning.function import LinearFunction
 
 DPI = 130  # [dots/inch]
 INVALID_RGBA = (0.6, 0.6, 0.62, 1.0)  # grey: not a valid foothold
@@ -106,14 +107,16 @@ def save_kept_templates(model, path: str | os.PathLike, group: str = "front", ro
     """Draw a model's kept templates with the largest weights, on each of the three scales.
 
     Row r shows, per scale, the template of rank r by |weight| among the kept
-    ones of the ``group`` legs' ranking function (an empty panel where a scale
+    ones of the ``group`` legs' ranking function (in library order for a
+    function without one weight per template; an empty panel where a scale
     kept fewer). Returns False (and writes nothing) if no template was kept.
     """
     f = model.functions[group]
     library = f.library
     if library is None or max(library.counts, default=0) == 0:
         return False
-    w = f.coef[[fam.name for fam in f.families].index("templates")]
+    w = (f.weights("templates") if isinstance(f, LinearFunction)
+         else np.zeros(sum(library.counts)))  # equal |weight|: the stable sort keeps the order
     bounds = np.cumsum((0,) + library.counts)
     by_scale = [w[a:b] for a, b in zip(bounds[:-1], bounds[1:])]  # weights of each scale
     patches, titles = [], []

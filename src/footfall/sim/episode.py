@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -57,7 +56,6 @@ from footfall.control.footstep import (
     FootstepConfig,
     FootstepPlan,
     FootstepPlanner,
-    Judge,
     JudgedFootstepPlanner,
     NoFootholdError,
 )
@@ -90,12 +88,11 @@ from footfall.core.params import Params, at_least, param, within
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState, nominal_state
 from footfall.data.runlog import RunRecord, RunStep
-from footfall.features.reward import LinearReward
+from footfall.features.scorer import FootholdScorer, RewardFor
 from footfall.sim.explain import explain_run
 from footfall.sim.simulation import PerturbationConfig, Simulation
 from footfall.sim.trace import RunTrace, trace_row
 
-RewardFor = Callable[[str], LinearReward]
 _OTHER_LEGS = np.array([[j for j in range(4) if j != k] for k in range(4)])  # stance legs while
 # leg k swings, in order (an index array: np.delete's overhead counts at 100 Hz)
 SNAPSHOT_PERIOD = 0.5  # [s] of simulated time between candidate snapshot frames
@@ -248,7 +245,7 @@ class Walk:
 
     def __init__(self, hmap: HeightMap, reward_for: RewardFor, seed: int,
                  config: WalkConfig = WalkConfig(), robot: RobotDescription = LITTLEDOG,
-                 frames: Frames | None = None, judge: Judge | None = None) -> None:
+                 frames: Frames | None = None, judge: FootholdScorer | None = None) -> None:
         if not isinstance(hmap, HeightMap):
             raise FootfallError(f"a walk needs a HeightMap, got {type(hmap).__name__}")
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
@@ -263,7 +260,7 @@ class Walk:
                                        config.path)
         else:
             self.path = BodyPath.straight(self.start_xy, goal_xy)
-        self.judge_name = None if judge is None else getattr(judge, "__qualname__", "judge")
+        self.judge_name = None if judge is None else judge.name
         self.planner = (FootstepPlanner(hmap, reward_for, self.path, robot, config.footstep)
                         if judge is None else
                         JudgedFootstepPlanner(hmap, judge, self.path, robot, config.footstep))
@@ -885,10 +882,10 @@ class Walk:
 
 def walk(hmap: HeightMap, reward_for: RewardFor, seed: int, config: WalkConfig = WalkConfig(),
          robot: RobotDescription = LITTLEDOG, frames: Frames | None = None,
-         judge: Judge | None = None) -> RunRecord:
+         judge: FootholdScorer | None = None) -> RunRecord:
     """One seeded run over ``hmap`` with the reward ``reward_for(leg)``; the same seed, the same run.
 
-    With ``judge`` (e.g. ``SyntheticExpert(...).values``), the judge chooses
+    With ``judge`` (e.g. ``ExpertScorer(SyntheticExpert(...))``), the judge chooses
     the footholds instead of the reward (:class:`JudgedFootstepPlanner`);
     ``reward_for`` then only plans the body path if ``config.plan_path``.
     """

@@ -1,0 +1,84 @@
+"""An expert as a foothold scorer: its judgement of F, the ceiling a learned scorer aims at.
+
+:class:`ExpertScorer` wraps any expert (:class:`footfall.expert.protocol.Expert`,
+the synthetic one by default) in the :class:`~footfall.features.scorer.FootholdScorer`
+contract, so that an evaluation can rank, score and walk with the expert's own
+values wherever a reward goes: walking with it as the footstep chooser
+(``walk(..., judge=ExpertScorer(...))``) bounds what a function learned from
+its demonstrations can do. Its terrain part only marks the footholds that are
+not valid (as for the hand-tuned reward: no data, too little patch coverage,
+so the candidate sets are the reward planner's); its state part is the
+expert's whole value.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.expert.protocol import Expert, expert_settings
+from footfall.features.config import FeatureConfig
+from footfall.features.dense import ScoreGrid
+from footfall.features.family import Candidates
+from footfall.features.reward import LinearReward, default_reward
+from footfall.features.scorer import FootholdScorer
+
+
+@dataclass(frozen=True, eq=False)
+class ExpertScorer(FootholdScorer):
+    """An expert's values of F as a scorer (the state part; the terrain part: validity only)."""
+
+    expert: Expert  # values (hmap, state, candidates (n, 3) [m]) -> (n,), higher is better
+    config: FeatureConfig = field(default_factory=FeatureConfig)  # patch coverage of validity
+    name: str = "synthetic expert"
+
+    @cached_property
+    def _usable(self) -> LinearReward:
+        """The hand-tuned reward, whose valid footholds are the expert's candidates."""
+        return default_reward(self.config)
+
+    def family_names(self) -> tuple[str, ...]:
+        """None: the expert reads the terrain itself."""
+        return ()
+
+    def terrain_values(self, c: Candidates) -> np.ndarray:
+        """0 where the foothold is usable, -inf where not (n,)."""
+        usable = self._usable.terrain_values(c)
+        return np.where(np.isfinite(usable), 0.0, usable)
+
+    @property
+    def has_state_part(self) -> bool:
+        return True
+
+    def state_values(self, c: Candidates) -> np.ndarray:
+        """The expert's value (n,) of each candidate for ``c.state``."""
+        if c.state is None:
+            raise FootfallError("the expert values footholds for a robot state; none was given")
+        if c.n == 0:
+            return np.zeros(0)
+        value = np.asarray(self.expert.values(c.hmap, c.state, c.footholds), dtype=np.float64)
+        if value.shape != (c.n,):
+            raise FootfallError(f"the expert returned shape {value.shape} for {c.n} footholds")
+        return value
+
+    def dense(self, hmap: HeightMap, *, spacing: float = 0.005, yaw: float = 0.0,
+              mirror: bool = False, dtype: type = np.float32, fast: bool = True) -> ScoreGrid:
+        """Usable lattice points (0) and the others (-inf), from the hand-tuned reward's grid."""
+        grid = self._usable.dense(hmap, spacing=spacing, yaw=yaw, mirror=mirror, dtype=dtype,
+                                  fast=fast)
+        return ScoreGrid(grid.x, grid.y, np.where(np.isfinite(grid.reward), 0.0, grid.reward),
+                         grid.valid)
+
+    def key(self, state: bool) -> str:
+        """The validity of the hand-tuned reward's footholds (terrain), or the expert's settings."""
+        if state:
+            text = json.dumps(expert_settings(self.expert), sort_keys=True)
+        else:
+            text = "usable:" + self._usable.key(state=False)
+        return hashlib.sha256(f"expert-scorer:{text}".encode()).hexdigest()

@@ -1,0 +1,149 @@
+"""A learned ranking function of one leg group: feature families and what a learner made of them.
+
+A :class:`RankingFunction` holds the feature families it reads, with their
+learned parameters (the kept templates and their RBF bandwidths), the
+learner's own arrays and its training record. It turns into a
+:class:`~footfall.features.scorer.FootholdScorer` for the planners
+(:meth:`RankingFunction.scorer`) and into named arrays for the model file
+(:meth:`RankingFunction.arrays`, :meth:`RankingFunction.from_arrays`): each
+learner keeps its own arrays, and the file never pickles. The linear
+function of the paper (Eq. 1), :class:`LinearFunction`, is the one every
+built-in learner makes.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from footfall.core.errors import FootfallError
+from footfall.core.validate import require_float_array
+from footfall.features.config import FeatureConfig
+from footfall.features.family import FeatureFamily
+from footfall.features.reward import LinearReward
+from footfall.features.scorer import FootholdScorer
+from footfall.features.templates import TemplateFeatures, TemplateLibrary
+
+MAX_WEIGHT = 1e20
+"""Largest |weight| [reward per unit of feature] and feature scale a model file may hold.
+
+Learned weights are w / scale with the scale floored at 1e-12, so well below; the bound keeps
+every product of a weight with a feature (and the dense scorer's float32 sums) finite."""
+
+
+class RankingFunction(ABC):
+    """A learned ranking function over the columns of feature families (one leg group).
+
+    Subclasses are frozen dataclasses with the fields ``families`` (the
+    feature families, with their learned parameters) and ``info`` (the
+    training record: lambda, cross-validation error, the families' facts),
+    and whatever arrays their learner keeps.
+    """
+
+    families: tuple[FeatureFamily, ...]
+    info: dict
+
+    # ------------------------------------------------------------ required
+    @abstractmethod
+    def scorer(self, config: FeatureConfig, name: str) -> FootholdScorer:
+        """The function as a foothold scorer with feature settings ``config``, called ``name``."""
+
+    @abstractmethod
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The learner's own arrays by name (the model file prefixes them with the leg group)."""
+
+    @classmethod
+    @abstractmethod
+    def from_arrays(cls, families: tuple[FeatureFamily, ...], arrays: dict[str, np.ndarray],
+                    info: dict, prefix: str = "") -> RankingFunction:
+        """The function from its families and the arrays :meth:`arrays` wrote, each under its
+        name with ``prefix`` before it (the model file's leg group, ``"front."``); every array
+        checked (shape, finite, bounded: raise :class:`FootfallError` naming it)."""
+
+    # ------------------------------------------------------------ shared
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Full column names (``family.column``), in column order."""
+        return tuple(f"{f.name}.{c}" for f in self.families for c in f.columns())
+
+    def family(self, name: str) -> FeatureFamily | None:
+        """The family called ``name``, or None."""
+        return next((f for f in self.families if f.name == name), None)
+
+    @property
+    def library(self) -> TemplateLibrary | None:
+        """The kept templates (those the learner kept), if the function has any."""
+        templates = self.family(TemplateFeatures.name)
+        return templates.library if isinstance(templates, TemplateFeatures) else None
+
+
+def weight_arrays(arrays: dict[str, np.ndarray], key: str, n: int
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """The weights ``<key>coef`` and scales ``<key>scale`` (n,) of a family, checked."""
+    for name in ("coef", "scale"):
+        if key + name not in arrays:
+            raise FootfallError(f"lacks array {key}{name}")
+    coef = require_float_array(arrays[key + "coef"], f"array {key}coef", (n,), bound=MAX_WEIGHT)
+    scale = require_float_array(arrays[key + "scale"], f"array {key}scale", (n,),
+                                bound=MAX_WEIGHT)
+    if not (scale > 0).all():
+        raise FootfallError(f"array {key}scale must be > 0 (a standard deviation)")
+    return coef, scale
+
+
+@dataclass(frozen=True, eq=False)
+class LinearFunction(RankingFunction):
+    """A linear ranking function w^T x (paper Eq. 1): one weight per raw column of each family."""
+
+    families: tuple[FeatureFamily, ...]  # the families, with their learned parameters
+    coef: tuple[np.ndarray, ...]  # per family (k_f,) weights on its raw columns
+    scale: tuple[np.ndarray, ...]  # per family (k_f,) std of each column over the training pairs
+    info: dict = field(default_factory=dict)  # lambda, C, cv error, path, the families' facts
+
+    def __post_init__(self) -> None:
+        if not (len(self.families) == len(self.coef) == len(self.scale)):
+            raise FootfallError("a ranking function needs weights and scales for every family")
+        for f, c, s in zip(self.families, self.coef, self.scale):
+            n = len(f.columns())
+            if np.shape(c) != (n,) or np.shape(s) != (n,):
+                raise FootfallError(f"{f.name} weights do not match its {n} columns")
+
+    def weights(self, name: str) -> np.ndarray:
+        """The raw-column weights (k_f,) of the family called ``name``; empty if it has none."""
+        return next((c for f, c in zip(self.families, self.coef) if f.name == name), np.zeros(0))
+
+    def scorer(self, config: FeatureConfig, name: str = "learned") -> LinearReward:
+        """The function as a :class:`LinearReward` over the same families and weights."""
+        return LinearReward(self.families, self.coef, config, name)
+
+    def reward(self, config: FeatureConfig, name: str = "learned") -> LinearReward:
+        """The same as :meth:`scorer` (a linear function's scorer is a reward w^T x)."""
+        return self.scorer(config, name)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """``<family>.coef`` and ``<family>.scale`` of every family."""
+        out = {}
+        for f, c, s in zip(self.families, self.coef, self.scale):
+            out[f"{f.name}.coef"] = c
+            out[f"{f.name}.scale"] = s
+        return out
+
+    @classmethod
+    def from_arrays(cls, families: tuple[FeatureFamily, ...], arrays: dict[str, np.ndarray],
+                    info: dict, prefix: str = "") -> LinearFunction:
+        pairs = [weight_arrays(arrays, f"{prefix}{f.name}.", len(f.columns())) for f in families]
+        extra = sorted(set(arrays) - {f"{prefix}{f.name}.{k}" for f in families
+                                      for k in ("coef", "scale")})
+        if extra:
+            raise FootfallError(f"unexpected array(s) {', '.join(extra[:4])}")
+        return cls(tuple(families), tuple(c for c, _ in pairs), tuple(s for _, s in pairs), info)
+
+
+def check_function(function: Any) -> RankingFunction:
+    """``function`` if it is a ranking function, else a clear error."""
+    if not isinstance(function, RankingFunction):
+        raise FootfallError(f"a learner must make a RankingFunction, got {type(function).__name__}")
+    return function

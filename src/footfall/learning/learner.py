@@ -1,0 +1,83 @@
+"""What a learner is: the extension point through which ranking learners plug in.
+
+A learner learns a ranking function of one leg group from the stacked
+feature matrices of demonstrations (paper §II-C): :meth:`Learner.fit` returns
+a fitted scikit-learn estimator, and :meth:`Learner.function` turns it into a
+:class:`~footfall.learning.function.RankingFunction` -- which families and
+columns it keeps, and its own arrays for the model file. The built-in
+learners (:mod:`footfall.learning.ranker`) are linear classifiers on pairwise
+differences; a non-linear ranker is one new module with a
+:class:`~footfall.learning.function.RankingFunction` of its own and a
+``register_learner`` call.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import Any
+
+import numpy as np
+
+from footfall.core.registry import Registry
+from footfall.features.family import FeatureFamily
+from footfall.learning.function import RankingFunction
+
+
+class Learner(ABC):
+    """A ranking learner: the registry's entry.
+
+    Attributes ``name`` (the registry key, ``footfall learn --learner``),
+    ``description`` (one line for --help and reports) and ``function_type``
+    (the :class:`RankingFunction` class it makes, which reads its arrays back
+    from a model file).
+    """
+
+    name: str
+    description: str
+    function_type: type[RankingFunction]
+
+    @abstractmethod
+    def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray, *, Cs: Any = 10,
+            cv: int = 5, selection: str = "1se") -> Any:
+        """A fitted estimator for stacked candidates of demonstrations.
+
+        Parameters
+        ----------
+        X : array of shape (n_candidates, n_features)
+            Features of the candidates of all demonstrations, stacked.
+        y : array of shape (n_candidates,)
+            1 for the chosen candidate of its demonstration, 0 for the others.
+        groups : array of shape (n_candidates,)
+            The demonstration each candidate belongs to (cross-validation
+            folds never split one).
+        Cs, cv, selection
+            The regularisation path, folds and selection rule, for learners
+            that use them.
+
+        Returns
+        -------
+        estimator
+            With ``decision_function(X) -> (n,)`` (higher: preferred) and
+            ``cv_error_``, its held-out pairwise error (the families tune their
+            hyperparameters, e.g. the RBF bandwidths, by it).
+        """
+
+    @abstractmethod
+    def function(self, fitted: Any, families: tuple[FeatureFamily, ...],
+                 n_demonstrations: int) -> RankingFunction:
+        """The fitted estimator as a ranking function over ``families`` (whose columns are
+        ``X``'s, in order); a sparse learner drops the columns it left at zero
+        (:meth:`FeatureFamily.select <footfall.features.family.FeatureFamily.select>`)."""
+
+
+LEARNERS: Registry[Learner] = Registry("learner")  # every registered learner, by name
+
+
+def register_learner(learner: Learner) -> Learner:
+    """Make a learner available by its name (the CLI's ``--learner`` choices come from here)."""
+    return LEARNERS.register(learner.name, learner)
+
+
+def get_learner(name: str) -> Learner:
+    """The registered learner called ``name`` (plugins included: :mod:`footfall.core.plugins`)."""
+    return LEARNERS.get(name)

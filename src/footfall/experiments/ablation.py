@@ -44,8 +44,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
+from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
-from footfall.core.files import write_text_atomic
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, at_least, param, within
 from footfall.core.stats import mcnemar_exact

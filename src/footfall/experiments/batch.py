@@ -192,7 +192,7 @@ def save_strip(frames: list, path: str | os.PathLike, title: str | None = None) 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from footfall.core.files import atomic_path
+    from footfall.core.atomic import atomic_path
 
     if not frames:
         raise FootfallError("no frames to draw")
@@ -213,7 +213,7 @@ def save_video(images: list, path: str | os.PathLike, fps: float) -> None:
     """Write frames (h, w, 3) uint8 as an H.264 MP4 (imageio's bundled ffmpeg)."""
     import imageio.v2 as imageio
 
-    from footfall.core.files import atomic_path
+    from footfall.core.atomic import atomic_path
 
     if not images:
         raise FootfallError("no frames to write")

@@ -154,7 +154,7 @@ def shipped_file(data: bytes, suffix: str, folder: str | os.PathLike | None = No
 
     ``folder``: where such files are kept [default: footfall-ray in the temporary folder].
     """
-    from footfall.core.files import atomic_path
+    from footfall.core.atomic import atomic_path
 
     base = Path(folder) if folder is not None else Path(tempfile.gettempdir()) / "footfall-ray"
     base.mkdir(parents=True, exist_ok=True)

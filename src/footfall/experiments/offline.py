@@ -20,8 +20,8 @@ from typing import Callable
 
 import numpy as np
 
+from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
-from footfall.core.files import write_text_atomic
 from footfall.core.params import Params, at_least, param
 from footfall.core.seeds import SeedStreams
 from footfall.core.stats import bootstrap_ci

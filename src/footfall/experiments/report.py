@@ -13,7 +13,8 @@ import re
 from pathlib import Path
 from typing import Callable
 
-from footfall.core.files import atomic_path, plain_json, write_text_atomic
+from footfall.core.atomic import atomic_path, write_text_atomic
+from footfall.core.files import plain_json
 
 PAPER_TABLE2 = {"terrain": (47.6, 24.8, 5.9), "templates": (76.2, 20.2, 5.1),
                 "both": (100.0, 17.3, 3.3), "flat": (100.0, 13.4, 0.4)}

@@ -151,7 +151,7 @@ def claim_folder(out: Path, settings: dict, what: str, free: tuple[str, ...] = (
     ``free`` may differ: they choose which runs are walked, not how (their run keys tell
     the runs apart).
     """
-    from footfall.core.files import write_text_atomic
+    from footfall.core.atomic import write_text_atomic
 
     if out.exists() and not out.is_dir():
         raise FootfallError(f"output path is not a directory: {out}")

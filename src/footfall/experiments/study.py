@@ -31,8 +31,9 @@ from typing import Callable
 
 import numpy as np
 
+from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
-from footfall.core.files import plain_json, write_text_atomic
+from footfall.core.files import plain_json
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor
 from footfall.experiments.paired import compare

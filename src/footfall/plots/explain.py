@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from footfall.core.files import atomic_path
+from footfall.core.atomic import atomic_path
 from footfall.core.robot import LEG_NAMES, RobotDescription
 from footfall.sim.explain import (
     SLIP_MOVED,

@@ -53,10 +53,10 @@ from typing import Any, Callable
 import numpy as np
 
 from footfall.core.errors import FootfallError
-from footfall.core.files import readable_file
 from footfall.core.heightmap import MAX_COORDINATE, HeightMap
 from footfall.core.limits import Limits, current_limits
 from footfall.core.npz import HEADER_ERRORS, npy_header
+from footfall.core.paths import readable_file
 
 __all__ = ["import_terrain", "rasterize_points", "SUFFIXES", "MAX_CELLS"]
 

@@ -38,14 +38,10 @@ from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor
 from footfall.experiments.paired import compare
 from footfall.experiments.report import PAIR_COLUMNS, pair_cells
-from footfall.experiments.reproduce import (
-    STORE_NAME,
-    ReproduceConfig,
-    evaluation_seeds,
-    run_reproduction,
-)
+from footfall.experiments.reproduce import STORE_NAME, ReproduceConfig, run_reproduction
 from footfall.experiments.runs import claim_folder
 from footfall.experiments.unseen import METHODS, load_runs, test_outcomes
+from footfall.experiments.workspace import evaluation_seeds
 
 PAPER_ORDERINGS = (("both", "templates"), ("templates", "terrain"), ("both", "terrain"))
 # the paper's Table II: the first of each pair crossed more often and slipped less

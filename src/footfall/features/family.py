@@ -243,9 +243,11 @@ def register_feature_set(name: str, families: tuple[str, ...]) -> None:
     """Name a feature set: the families it uses, in column order."""
     if not families or len(set(families)) != len(families):
         raise ValueError(f"feature set {name!r} needs distinct families, got {families!r}")
-    if name in FEATURE_SETS and FEATURE_SETS.get(name) == tuple(families):
-        return  # the same set named again (a plugin imported twice): nothing changes
-    FEATURE_SETS.register(name, tuple(families))
+    try:
+        FEATURE_SETS.register(name, tuple(families))
+    except ValueError:  # the name is taken: by the same set, named again, nothing changes
+        if FEATURE_SETS.get(name) != tuple(families):
+            raise
 
 
 def family_class(name: str) -> type[FeatureFamily]:

@@ -51,6 +51,7 @@ import numpy as np
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LEG_NAMES, RobotDescription
+from footfall.sim.foot_pads import PAD_HALF_SIZE, PAD_HALF_THICKNESS, BallSurface, pad_pose
 
 JOINTS = ("hip_roll", "hip_pitch", "knee")  # joint name suffixes, in kinematics.py order
 TERRAIN_BASE = 0.02  # [m] thickness of the solid slab under the height field's lowest point
@@ -528,8 +529,6 @@ def pads_on() -> bool:
 
 
 def _pad_geom(name: str | None = None) -> str:
-    from footfall.sim.foot_pads import PAD_HALF_SIZE, PAD_HALF_THICKNESS
-
     named = "" if name is None else f'name="{name}" '
     return (f'<geom {named}type="box" '
             f'size="{_f(PAD_HALF_SIZE, PAD_HALF_SIZE, PAD_HALF_THICKNESS)}" '
@@ -564,8 +563,6 @@ def compile_probe_model(robot: RobotDescription, hmap: HeightMap, xy: np.ndarray
         for k, (x, y) in enumerate(xy))
     pairs = ""
     if pads_on():  # each probe over its own fixed pad, as a foot over its pad
-        from footfall.sim.foot_pads import BallSurface, pad_pose
-
         surface = BallSurface(terrain_surface(hmap), hmap, robot.foot_radius,
                               registration_centre(hmap, max_spacing), 0.0, np.zeros(3))
         pos, quat = pad_pose(*surface.contact(xy))

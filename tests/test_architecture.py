@@ -374,3 +374,66 @@ def test_the_cycle_check_catches_a_planted_cycle(tmp_path):
     assert import_cycles(tmp_path) == [["footfall.experiments.batch",
                                         "footfall.experiments.executors",
                                         "footfall.experiments.runs"]]
+
+
+# ------------------------------------------------------------------ imports inside functions
+# Every import sits at its module's top, but for these (module, imported name): a heavy or
+# optional dependency that only one path of the program needs.
+LAZY_IMPORTS = {
+    ("footfall.experiments.executors", "ray"):
+        "Ray: an optional extra (footfall[ray]), and heavy; only the ray executor connects",
+    ("footfall.experiments.batch", "matplotlib.pyplot"):
+        "pyplot picks its backend when imported: only after matplotlib.use('Agg')",
+    ("footfall.plots.explain", "matplotlib.pyplot"):
+        "pyplot picks its backend when imported: only after matplotlib.use('Agg')",
+    ("footfall.experiments.batch", "imageio.v2"):
+        "imageio and its bundled ffmpeg: only for a video (footfall walk --video)",
+    ("footfall.teach.server", "uvicorn"): "the server itself: only `footfall teach` serves",
+    ("footfall.core.stats", "scipy.stats"):
+        "about a second to import: only the exact McNemar test asks for it",
+    ("footfall.cli.bench", "footfall.cli.fuzz.campaign"):
+        "the fuzz suite is built on Hypothesis, a test extra: only `footfall bench fuzz`",
+}
+
+def function_level_imports(root: Path) -> list[tuple[str, str, int]]:
+    """Every import inside a function below ``root``: (module, imported name, line).
+
+    Imports under ``if TYPE_CHECKING:`` are left out; names as :func:`_imports` gives them.
+    """
+    return [(module, name, line) for module, line, name, inside in _imports(root) if inside]
+
+
+def unlisted_lazy_imports(root: Path, allowed=LAZY_IMPORTS) -> list[str]:
+    """The function-level imports below ``root`` that ``allowed`` does not name, as
+    ``module:line name``; an allowed name covers what is imported from it (``a.b`` covers
+    ``a.b.c``)."""
+    return [f"{module}:{line} {name}" for module, name, line in function_level_imports(root)
+            if not any(module == m and (name == n or name.startswith(n + "."))
+                       for m, n in allowed)]
+
+
+def test_only_heavy_optional_dependencies_are_imported_inside_functions():
+    found = unlisted_lazy_imports(SRC)
+    assert found == [], ("imports inside functions (move them to the module's top, or add "
+                         "them to LAZY_IMPORTS with the reason):\n" + "\n".join(found))
+    used = {(m, n) for m, n in LAZY_IMPORTS
+            if any(module == m and (name == n or name.startswith(n + "."))
+                   for module, name, _ in function_level_imports(SRC))}
+    assert used == set(LAZY_IMPORTS)  # the list names no import that has gone
+
+
+def test_the_lazy_import_check_names_an_unlisted_import_and_accepts_a_listed_one(tmp_path):
+    (tmp_path / "plots").mkdir()
+    (tmp_path / "plots" / "maps.py").write_text(
+        "import numpy\n\n\n"
+        "def draw():\n    import matplotlib.pyplot as plt\n    from footfall.core import files\n"
+        "    return plt, files\n\n\n"
+        "def typed():\n    from typing import TYPE_CHECKING\n    if TYPE_CHECKING:\n"
+        "        from footfall.core.heightmap import HeightMap\n")
+    found = unlisted_lazy_imports(tmp_path, allowed={})
+    assert found == ["footfall.plots.maps:5 matplotlib.pyplot",
+                     "footfall.plots.maps:6 footfall.core.files",
+                     "footfall.plots.maps:11 typing.TYPE_CHECKING"]
+    assert unlisted_lazy_imports(tmp_path, allowed={("footfall.plots.maps", "matplotlib"): "",
+                                                    ("footfall.plots.maps", "footfall.core"): "",
+                                                    ("footfall.plots.maps", "typing"): ""}) == []

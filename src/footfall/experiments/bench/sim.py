@@ -5,7 +5,7 @@ physics' fidelity.
 where their CPU time goes, bare stepping of the same model (the ceiling), a
 run on flat ground, and how faithfully the contact follows the map
 (:mod:`footfall.sim.fidelity`); optionally for a physics variant against the
-documented model (:func:`footfall.sim.mjcf.physics_variant`).
+documented model (:func:`footfall.sim.variants.physics_variant`).
 """
 
 from __future__ import annotations
@@ -21,8 +21,8 @@ from footfall.core.state import nominal_state
 from footfall.features.reward import default_reward
 from footfall.sim.episode import Walk
 from footfall.sim.fidelity import ball_rest_errors, slope_creep
-from footfall.sim.mjcf import physics_variant
 from footfall.sim.simulation import Simulation, bench_stepping
+from footfall.sim.variants import physics_variant
 from footfall.terrain import make_board
 
 
@@ -44,7 +44,7 @@ def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0,
     ``physics`` (MuJoCo ``<option>`` attributes as text), ``hfield_spacing``
     [m] and ``foot_contact`` ("pads": :mod:`footfall.sim.foot_pads`) walk and
     measure another physics
-    (:func:`footfall.sim.mjcf.physics_variant`), each rocky seed also walked
+    (:func:`footfall.sim.variants.physics_variant`), each rocky seed also walked
     with the documented model in turn (``documented``: the baseline); the
     bare stepping stays the documented model's, the reference.
     """

@@ -17,10 +17,11 @@ from footfall.terrain.rocky import rocky
 
 KINDS: Registry[Generator] = Registry("terrain kind")
 """Terrain module kinds: name -> generator ``(difficulty, rng) -> heights (610, 610) [m]``."""
-for _name, _generator in (("flat", flat), ("steps", steps), ("barrier", barrier),
-                          ("slope", slope), ("logs", logs), ("rocky", rocky)):
+_BUILTIN = (("flat", flat), ("steps", steps), ("barrier", barrier), ("slope", slope),
+            ("logs", logs), ("rocky", rocky))  # the paper's module kinds (§IV-A), in this order
+for _name, _generator in _BUILTIN:
     KINDS.register(_name, _generator)
-BUILTIN_KINDS = ("flat", "steps", "barrier", "slope", "logs", "rocky")  # the paper's (§IV-A)
+BUILTIN_KINDS = tuple(name for name, _ in _BUILTIN)  # kinds unregister_kind keeps
 
 
 def register_kind(name: str, generator: Generator) -> Generator:

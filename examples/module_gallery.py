@@ -13,7 +13,7 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
-from footfall.core.files import atomic_path
+from footfall.core.atomic import atomic_path
 from footfall.plots.relief import draw_relief
 from footfall.terrain import KINDS, make_module
 

@@ -162,7 +162,7 @@ def test_the_registry_lists_the_default_variants_first():
 
 
 def test_no_hard_walks_issue_18_s_boards_only(tmp_path, capsys, monkeypatch):
-    import footfall.experiments.ablation as ablation
+    import footfall.cli.experiments as commands  # what `footfall ablation` calls
 
     seen = []
 
@@ -170,8 +170,8 @@ def test_no_hard_walks_issue_18_s_boards_only(tmp_path, capsys, monkeypatch):
         seen.append(config)
         return {}
 
-    monkeypatch.setattr(ablation, "run_ablation", fake)
-    monkeypatch.setattr(ablation, "ablation_markdown", lambda config, summary: "")
+    monkeypatch.setattr(commands, "run_ablation", fake)
+    monkeypatch.setattr(commands, "ablation_markdown", lambda config, summary: "")
     for flag, hard_runs in (("--no-hard", 0), ("--hard", AblationConfig().hard_runs)):
         code, _, _ = run(capsys, "ablation", flag, "--out", tmp_path / "a")
         assert code == 0

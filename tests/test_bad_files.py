@@ -22,14 +22,9 @@ import pytest
 from PIL import Image
 
 from cli_helpers import assert_user_error, run
+from footfall.core.atomic import atomic_path, remove_stale_temporaries
 from footfall.core.errors import FootfallError
-from footfall.core.files import (
-    atomic_path,
-    json_depth,
-    load_npz,
-    remove_stale_temporaries,
-    writable_path,
-)
+from footfall.core.files import json_depth, load_npz, writable_path
 from footfall.core.heightmap import HeightMap, module_records
 from footfall.core.limits import Limits, use_limits
 from footfall.core.npz import read_npz_members

@@ -9,7 +9,7 @@ from footfall.core.files import save_npz
 from footfall.core.heightmap import FORMAT, VERSION, HeightMap
 from footfall.core.limits import Limits, use_limits
 from footfall.terrain import FileModule, make_board, make_module, parse_board_spec, register_kind
-from footfall.terrain.modules import MODULE_CELLS, MODULE_SIZE
+from footfall.terrain.geometry import MODULE_CELLS, MODULE_SIZE
 
 BOARD_RES = 0.001  # [m/cell] of every board
 

@@ -156,4 +156,4 @@ def test_choices_come_from_the_registries(tmp_path, capsys, monkeypatch):
         code, out, _ = run(capsys, "learn", "--help")
         assert code == 0 and "terrain|templates|both|edges" in out
     finally:
-        del FEATURE_SETS["edges"]
+        FEATURE_SETS.unregister("edges")

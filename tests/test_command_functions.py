@@ -3,8 +3,6 @@ FootfallError, and the result's JSON is what the command prints."""
 
 import json
 import math
-import sys
-import types
 
 import numpy as np
 import pytest
@@ -24,6 +22,7 @@ from footfall.experiments.batch import (
     walk_once,
 )
 from footfall.experiments.rank_eval import ModelAgreement, rank_eval
+from footfall.expert import collect
 from footfall.expert.collect import CollectedDemonstrations, collect_into_store
 from footfall.learning.train import LearnedModel, learn_from_store, store_demonstrations
 from footfall.plots.relief import save_relief_of_file
@@ -43,10 +42,9 @@ def boards(tmp_path_factory):
 
 
 def _fake_expert(monkeypatch):
-    """test_walker's fast stand-in for the synthetic expert, where collect_into_store imports it."""
-    module = types.ModuleType("footfall.expert.synthetic")
-    module.ExpertConfig, module.SyntheticExpert = FakeExpertConfig, FakeSyntheticExpert
-    monkeypatch.setitem(sys.modules, "footfall.expert.synthetic", module)
+    """test_walker's fast stand-in for the synthetic expert, where collect_into_store finds it."""
+    monkeypatch.setattr(collect, "ExpertConfig", FakeExpertConfig)
+    monkeypatch.setattr(collect, "SyntheticExpert", FakeSyntheticExpert)
 
 
 @pytest.fixture(scope="module")

@@ -10,14 +10,9 @@ from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import body_to_world, inverse_kinematics, knee_position, world_to_body
 from footfall.core.robot import LITTLEDOG
 from footfall.core.state import RobotState, nominal_state
-from footfall.expert.synthetic import (
-    EXPERT_TERM_NAMES,
-    EXPERT_TERMS,
-    ExpertConfig,
-    SyntheticExpert,
-    _sphere_surface,
-    walking_expert,
-)
+from footfall.expert.surface import sphere_surface
+from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
+from footfall.expert.terms import EXPERT_TERM_NAMES, EXPERT_TERMS
 from footfall.features.candidates import reachable_footholds
 from footfall.terrain.modules import make_board
 
@@ -76,7 +71,7 @@ def test_ball_surface_is_the_lowered_ball():
     h[20:30, 25:40] = np.nan
     m = HeightMap(h, RES, (0.0, 0.0))
     r = LITTLEDOG.foot_radius
-    surf = _sphere_surface(m, np.array([0.015, 0.015]), np.array([0.045, 0.045]), r)
+    surf = sphere_surface(m, np.array([0.015, 0.015]), np.array([0.045, 0.045]), r)
     for i, j in [(30, 30), (22, 30), (15, 45), (40, 18)]:
         d2 = ((np.arange(60)[:, None] - i) ** 2 + (np.arange(60)[None, :] - j) ** 2) * RES ** 2
         lift = np.where((d2 <= r * r) & ~np.isnan(h), h + np.sqrt(np.clip(r * r - d2, 0, None)),
@@ -87,7 +82,7 @@ def test_ball_surface_is_the_lowered_ball():
     plane = hmap(x - P[0] + 0 * x)
     _, t = judge(plane)
     cand = np.array([[*P, 0.0]])
-    seat = _sphere_surface(plane, P, P, r).at(cand[:, :2])[0]
+    seat = sphere_surface(plane, P, P, r).at(cand[:, :2])[0]
     assert seat == pytest.approx(r * math.sqrt(2), abs=2e-5)
     assert t["slip_margin"] == pytest.approx(math.atan(LITTLEDOG.foot_friction) - math.pi / 4,
                                              abs=0.02)
@@ -363,8 +358,6 @@ def _window_surface(hmap, lo, hi, radius):
 
 
 def test_the_per_map_sphere_surface_equals_the_window_dilation_where_it_is_sampled():
-    from footfall.expert.synthetic import _sphere_surface
-
     board = make_board([("rocky", 0.7)], seed=3)
     rng = np.random.default_rng(1)
     h = np.array(board.heights)
@@ -375,7 +368,7 @@ def test_the_per_map_sphere_surface_equals_the_window_dilation_where_it_is_sampl
     for lo, hi in (((0.70, -0.20), (0.80, -0.10)), ((0.60, 0.20), (0.90, 0.31)),
                    ((0.0, -0.31), (0.05, -0.25))):  # ... and at the map's border
         lo, hi = np.array(lo), np.array(hi)
-        cached = _sphere_surface(holes, lo, hi, r)
+        cached = sphere_surface(holes, lo, hi, r)
         direct, (i0, j0) = _window_surface(holes, lo, hi, r)
         # every cell a sample inside [lo, hi] reads (with its bilinear neighbours)
         a = np.floor((lo - holes.origin) / holes.resolution).astype(int) - (i0, j0)

@@ -78,7 +78,8 @@ def test_a_worker_loads_a_board_file_once_while_it_is_unchanged(tmp_path):
 
 def test_a_physics_variant_changes_the_models_compiled_inside_it_only():
     from footfall.core.errors import FootfallError
-    from footfall.sim.mjcf import compile_model, physics_variant
+    from footfall.sim.mjcf import compile_model
+    from footfall.sim.variants import physics_variant
 
     flat = make_board([("flat", 0.0)], seed=0)
     with physics_variant({"cone": "pyramidal", "impratio": "10"}, max_spacing=0.004):
@@ -105,7 +106,7 @@ def test_bench_sim_refuses_a_bad_physics_option_in_one_line(capsys):
 
 def test_foot_pads_touch_where_a_ball_rests_on_the_registered_terrain():
     from footfall.sim.foot_pads import BallSurface
-    from footfall.sim.mjcf import registration_centre, terrain_surface
+    from footfall.sim.hfield import registration_centre, terrain_surface
 
     res, grade = 0.001, 0.3
     x = np.arange(600) * res
@@ -132,8 +133,8 @@ def test_the_pads_variant_gives_each_foot_one_contact_and_leaves_the_documented_
     import mujoco
 
     from footfall.core.state import nominal_state
-    from footfall.sim.mjcf import physics_variant
     from footfall.sim.simulation import Simulation
+    from footfall.sim.variants import physics_variant
 
     board = make_board([("rocky", 0.5)], seed=0)
     with physics_variant(foot_contact="pads"):

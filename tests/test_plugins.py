@@ -9,6 +9,10 @@ import pytest
 from cli_helpers import assert_user_error, run
 from footfall.core import plugins
 from footfall.core.errors import FootfallError
+from footfall.core.registry import Registry
+from footfall.experiments.ablation import VARIANTS
+from footfall.experiments.executors import EXECUTORS, LocalPool, make_executor
+from footfall.features.family import FAMILIES, FEATURE_SETS, feature_set_families
 from footfall.learning.learner import LEARNERS, get_learner
 from footfall.terrain import KINDS, make_module, unregister_kind
 
@@ -16,6 +20,9 @@ PLUGIN = '''
 import numpy as np
 from sklearn.linear_model import RidgeClassifier
 
+from footfall.experiments.ablation import register_variant
+from footfall.experiments.executors import LocalPool, register_executor
+from footfall.features.family import register_feature_set
 from footfall.learning.learner import register_learner
 from footfall.learning.ranker import LinearLearner
 from footfall.terrain import register_kind
@@ -34,6 +41,9 @@ register_learner(LinearLearner("plugin-ridge", "ridge (a plugin's)",
                                                                         fit_intercept=False),
                                lambda pairs, labels, n: np.logspace(-2, 1, n),
                                logistic=False))
+register_feature_set("plugin-set", ("terrain", "pose"))
+register_executor("plugin-pool", lambda processes=None, address=None: LocalPool(1))
+register_variant("plugin-variant", "the defaults, from a plugin", lambda walk: walk)
 '''
 
 
@@ -49,15 +59,35 @@ def plugin(tmp_path, monkeypatch):
     yield
     unregister_kind("table")
     LEARNERS.unregister("plugin-ridge")
+    FEATURE_SETS.unregister("plugin-set")
+    EXECUTORS.unregister("plugin-pool")
+    VARIANTS.unregister("plugin-variant")
     sys.modules.pop("footfall_test_parts", None)
 
 
 def test_a_plugin_registers_its_parts_before_any_registry_answers(plugin):
-    assert "table" not in KINDS
+    assert "footfall_test_parts" not in sys.modules  # nothing imported it yet
     module = make_module("table", 0.5, 0)  # the terrain registry loads the plugins first
-    assert np.max(module.heights) == pytest.approx(0.02)
+    assert np.max(module.heights) == pytest.approx(0.02) and "table" in KINDS
     assert get_learner("plugin-ridge").name == "plugin-ridge"
     assert plugins.load_plugins() == ["table-parts"]  # imported once
+
+
+@pytest.mark.parametrize("registry", [FAMILIES, FEATURE_SETS, KINDS, EXECUTORS, VARIANTS],
+                         ids=lambda r: r.kind)
+def test_every_registry_is_one_type_and_loads_the_plugins_before_it_answers(plugin, registry):
+    assert isinstance(registry, Registry)
+    assert "footfall_test_parts" not in sys.modules
+    assert len(registry) > 0  # asking loads the plugins (families: none of the plugin's)
+    assert plugins.load_plugins() == ["table-parts"]
+
+
+def test_a_plugins_feature_set_executor_and_variant_are_found(plugin):
+    assert feature_set_families("plugin-set") == ("terrain", "pose")  # loads the plugins
+    assert isinstance(make_executor("plugin-pool"), LocalPool)
+    assert VARIANTS.get("plugin-variant").description == "the defaults, from a plugin"
+    with pytest.raises(FootfallError, match="unknown executor 'none'; use one of local, ray"):
+        make_executor("none")
 
 
 def test_the_command_line_offers_a_plugins_parts(plugin, tmp_path, capsys):

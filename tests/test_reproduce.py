@@ -6,7 +6,8 @@ import pytest
 
 from footfall.core.errors import FootfallError
 from footfall.data.store import DemoStore
-from footfall.experiments.reproduce import ReproduceConfig, planned_seeds, run_reproduction
+from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
+from footfall.experiments.workspace import planned_seeds
 from footfall.expert.synthetic import ExpertConfig
 from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig
 

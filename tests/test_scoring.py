@@ -163,3 +163,26 @@ def test_low_coverage_makes_a_point_invalid():
     assert (~enough[:, 15:20]).any() and enough[:, 15:20].any()  # the limit is crossed
     assert np.all(grid.reward[~enough] == -np.inf)
     assert np.isfinite(grid.reward[enough]).all()
+
+
+@pytest.mark.parametrize("mirror", [False, True])
+def test_the_generic_dense_form_gathers_the_patches_it_would_interpolate(mirror):
+    """A scorer without a matrix form is scored on the lattice from patches gathered by index
+    (the samples fall on map cells): the same patches, validity and values as interpolating
+    them at every lattice point, holes and the map's border included."""
+    from footfall.features.dense import dense_general, dense_values, lattice_points
+
+    terrain = TerrainFeatures(CONFIG)
+    w = np.random.default_rng(3).normal(size=len(terrain.columns()))
+
+    def values(c):  # a non-linear function of the features, defined where the foothold is valid
+        return np.where(c.patches.valid, np.tanh(np.nan_to_num(terrain.compute(c)) @ w), -np.inf)
+
+    grid = dense_values(HMAP, values, CONFIG, spacing=SPACING, mirror=mirror)
+    pts, _, _ = lattice_points(HMAP, SPACING)
+    slow, valid = dense_general(HMAP, values, CONFIG, pts, 0.0, mirror)
+    slow, valid = slow.reshape(grid.reward.shape), valid.reshape(grid.valid.shape)
+    np.testing.assert_array_equal(grid.valid, valid)
+    assert (~valid).any() and valid.mean() > 0.5  # the hole and the border are in it
+    np.testing.assert_array_equal(np.isfinite(grid.reward), valid)
+    np.testing.assert_allclose(grid.reward[valid], slow[valid], rtol=0, atol=1e-10)

@@ -8,7 +8,8 @@ import pytest
 from footfall.core.errors import FootfallError
 from footfall.core.seeds import PURPOSES, SeedStreams
 from footfall.experiments.offline import OfflineConfig
-from footfall.experiments.reproduce import ReproduceConfig, planned_seeds
+from footfall.experiments.reproduce import ReproduceConfig
+from footfall.experiments.workspace import planned_seeds
 
 
 def test_a_stream_gives_the_same_seed_for_the_same_name_and_index():

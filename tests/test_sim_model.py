@@ -21,13 +21,8 @@ from footfall.core.kinematics import (
 )
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.state import nominal_state
-from footfall.sim.mjcf import (
-    TERRAIN_GEOM_GROUP,
-    build_mjcf,
-    compile_model,
-    terrain_layout,
-    terrain_surface,
-)
+from footfall.sim.hfield import terrain_layout, terrain_surface
+from footfall.sim.mjcf import TERRAIN_GEOM_GROUP, build_mjcf, compile_model
 from footfall.sim.sensors import LEG_PARTS, Sensors
 from footfall.sim.simulation import (
     PerturbationConfig,

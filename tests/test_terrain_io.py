@@ -12,7 +12,8 @@ from plyfile import PlyData, PlyElement
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.terrain.scans import MAX_CELLS, SUFFIXES, import_terrain, rasterize_points
+from footfall.terrain.raster import MAX_CELLS, rasterize_points
+from footfall.terrain.scans import SUFFIXES, import_terrain
 
 RES = 0.1  # [m/cell]
 

@@ -3,8 +3,6 @@
 import json
 import shutil
 import sqlite3
-import sys
-import types
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,18 +14,16 @@ from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG
 from footfall.data.store import DemoStore
+from footfall.expert import collect
 from footfall.expert.collect import (
-    EDGE_MARGIN,
     PATH_OFFSETS,
-    WalkOptions,
-    WalkPath,
     collect_demonstrations,
     estimated_steps,
-    expert_settings,
     lateral_paths,
     rough_x_range,
-    walk_demonstrations,
 )
+from footfall.expert.protocol import expert_settings
+from footfall.expert.walker import EDGE_MARGIN, WalkOptions, WalkPath, walk_demonstrations
 from footfall.features.candidates import reachable_footholds
 from footfall.features.config import FeatureConfig
 
@@ -273,10 +269,9 @@ class FakeSyntheticExpert(ProgressExpert):
 
 @pytest.fixture
 def fake_expert(monkeypatch):
-    module = types.ModuleType("footfall.expert.synthetic")
-    module.ExpertConfig = FakeExpertConfig
-    module.SyntheticExpert = FakeSyntheticExpert
-    monkeypatch.setitem(sys.modules, "footfall.expert.synthetic", module)
+    """The fast stand-in where collect_into_store (``footfall demos collect``) finds the expert."""
+    monkeypatch.setattr(collect, "ExpertConfig", FakeExpertConfig)
+    monkeypatch.setattr(collect, "SyntheticExpert", FakeSyntheticExpert)
     monkeypatch.setattr(FakeSyntheticExpert, "calls", 0)
     return FakeSyntheticExpert
 
@@ -288,8 +283,6 @@ def terrain_file(tmp_path_factory):
                                {"kind": "rocky", "difficulty": 0.6, "x_start": 0.3,
                                 "x_end": 0.6}]).save(path)
     return path
-
-
 
 
 def test_collect_appends_and_info_counts(tmp_path, terrain_file, fake_expert, capsys):

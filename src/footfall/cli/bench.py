@@ -6,7 +6,13 @@ from __future__ import annotations
 import click
 
 from footfall.cli.choices import SEED
-from footfall.cli.output import emit, json_option
+from footfall.cli.output import emit, json_option, progress_log
+from footfall.core.errors import FootfallError
+from footfall.experiments.bench.executors import bench_executors, format_executors
+from footfall.experiments.bench.expert import bench_expert, format_expert
+from footfall.experiments.bench.learning import bench_learning, format_learning
+from footfall.experiments.bench.scoring import bench_scoring, format_scoring
+from footfall.experiments.bench.sim import bench_sim, format_sim
 
 
 @click.group()
@@ -21,8 +27,6 @@ def bench() -> None:
 @json_option
 def bench_scoring_cmd(repeats: int, baseline_sample: int, as_json: bool) -> None:
     """Dense scoring of a 3-module board at 5 mm with 60 templates and 27 features."""
-    from footfall.experiments.bench import bench_scoring, format_scoring
-
     result = bench_scoring(repeats=repeats, baseline_sample=baseline_sample)
     emit(as_json, result, format_scoring(result))
 
@@ -33,8 +37,6 @@ def bench_scoring_cmd(repeats: int, baseline_sample: int, as_json: bool) -> None
 @json_option
 def bench_learning_cmd(n_demos: int, library_size: int, as_json: bool) -> None:
     """Paper-scale learning against scikit-learn's LogisticRegressionCV."""
-    from footfall.experiments.bench import bench_learning, format_learning
-
     result = bench_learning(n_demos=n_demos, library_size=library_size)
     emit(as_json, result, format_learning(result))
 
@@ -58,9 +60,6 @@ def bench_sim_cmd(seed: int, runs: int, physics: tuple[str, ...], hfield_spacing
                   foot_contact: str, as_json: bool) -> None:
     """Real-time factor of the walking stack against bare MuJoCo stepping, with the physics'
     fidelity."""
-    from footfall.core.errors import FootfallError
-    from footfall.experiments.bench import bench_sim, format_sim
-
     options = {}
     for item in physics:
         key, sep, value = item.partition("=")
@@ -78,8 +77,6 @@ def bench_sim_cmd(seed: int, runs: int, physics: tuple[str, ...], hfield_spacing
 @json_option
 def bench_executors_cmd(runs: int, processes: int, as_json: bool) -> None:
     """Runs per minute of a batch on the local process pool against a Ray cluster."""
-    from footfall.experiments.bench import bench_executors, format_executors
-
     result = bench_executors(runs=runs, processes=processes)
     emit(as_json, result, format_executors(result))
 
@@ -89,8 +86,6 @@ def bench_executors_cmd(runs: int, processes: int, as_json: bool) -> None:
 @json_option
 def bench_expert_cmd(states: int, as_json: bool) -> None:
     """The walking expert's judgement with its placement error against without."""
-    from footfall.experiments.bench import bench_expert, format_expert
-
     result = bench_expert(states=states)
     emit(as_json, result, format_expert(result))
 
@@ -105,8 +100,8 @@ def bench_expert_cmd(states: int, as_json: bool) -> None:
 @json_option
 def bench_fuzz_cmd(minutes: float, seed: int, targets: tuple[str, ...], as_json: bool) -> None:
     """Hostile files and arguments at every loader and command: inputs tried, failures found."""
+    # The fuzz suite is built on Hypothesis, a test extra: imported only when it runs.
     from footfall.cli.fuzz.campaign import format_campaign, run_campaign
-    from footfall.cli.output import progress_log
 
     result = run_campaign(minutes, seed, targets or None, log=progress_log(as_json))
     emit(as_json, result, format_campaign(result))

@@ -1,18 +1,25 @@
 """Option choices read from footfall's registries when a command is parsed or its help shown.
 
 Read late on purpose: a name registered after import (a new learner, feature
-set or terrain kind) is a valid choice at once, and ``footfall --help`` does
-not import scikit-learn to list them.
+set or terrain kind, a plugin's) is a valid choice at once.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterable
 from typing import Any
 
 import click
 
 from footfall.core.errors import FootfallError
+from footfall.core.limits import current_limits
+from footfall.core.robot import LEG_NAMES
+from footfall.expert.collect import RECORDED_STEPS
+from footfall.features.family import FEATURE_SETS, feature_set_families
+from footfall.learning import ranker
+from footfall.learning.learner import LEARNERS
+from footfall.terrain import KINDS
 
 
 class RegistryChoice(click.Choice):
@@ -46,14 +53,10 @@ class FeatureSetChoice(click.ParamType):
     name = "feature set"
 
     def get_metavar(self, param: click.Parameter, ctx: click.Context | None = None) -> str:
-        from footfall.features.family import FEATURE_SETS
-
         return "[" + "|".join([*FEATURE_SETS, "FAMILY+FAMILY..."]) + "]"
 
     def convert(self, value: Any, param: click.Parameter | None,
                 ctx: click.Context | None) -> str:
-        from footfall.features.family import feature_set_families
-
         try:
             feature_set_families(value)
         except FootfallError as exc:
@@ -69,32 +72,22 @@ class ChoiceArgument(click.Argument):
 
 
 def _legs() -> tuple[str, ...]:
-    from footfall.core.robot import LEG_NAMES
-
     return tuple(LEG_NAMES)
 
 
 def _learners() -> tuple[str, ...]:
-    from footfall.learning.learner import LEARNERS
-
-    return LEARNERS.names()
+    return LEARNERS.names()  # read when used: plugins and later registrations count
 
 
 def _selections() -> tuple[str, ...]:
-    from footfall.learning.ranker import SELECTIONS
-
-    return tuple(SELECTIONS)
+    return tuple(ranker.SELECTIONS)
 
 
 def _terrain_kinds() -> tuple[str, ...]:
-    from footfall.terrain import KINDS
-
     return tuple(KINDS)
 
 
 def _recorded_steps() -> tuple[str, ...]:
-    from footfall.expert.collect import RECORDED_STEPS
-
     return tuple(RECORDED_STEPS)
 
 
@@ -124,8 +117,6 @@ class _Count(click.IntRange):
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None
                 ) -> Any:
-        from footfall.core.limits import current_limits
-
         number = super().convert(value, param, ctx)
         limit = current_limits().max_count
         if number > limit:
@@ -141,8 +132,6 @@ class Finite(click.FloatRange):
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None
                 ) -> Any:
-        import math
-
         number = super().convert(value, param, ctx)
         if not math.isfinite(number):
             self.fail(f"{value!r} is not a finite number", param, ctx)

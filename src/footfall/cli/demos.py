@@ -6,6 +6,8 @@ import click
 
 from footfall.cli.choices import RECORDED_STEP, SEED, Finite, count_range
 from footfall.cli.output import emit, json_option, progress_bar
+from footfall.data.inventory import store_inventory
+from footfall.expert.collect import collect_into_store
 
 
 @click.group()
@@ -44,8 +46,6 @@ def demos_collect(terrains: tuple[str, ...], more_terrains: tuple[str, ...], n: 
     store is written in one transaction at the end: a failed or interrupted
     command leaves it as it was.
     """
-    from footfall.expert.collect import collect_into_store
-
     with progress_bar(n, "collect", "demo", quiet=as_json) as step:
         added = collect_into_store(terrains + more_terrains, output, n, seed, noise=noise,
                                    second_best=second_best, steps=steps, progress=step)
@@ -62,8 +62,6 @@ def demos_collect(terrains: tuple[str, ...], more_terrains: tuple[str, ...], n: 
 @json_option
 def demos_info(store_path: str, as_json: bool) -> None:
     """Count a store's demonstrations by terrain, swing leg, source and labeler; check the file."""
-    from footfall.data.inventory import store_inventory
-
     inventory = store_inventory(store_path)
     summary = inventory.summary
     lines = [(f"{store_path}: {summary['demonstrations']} demonstrations on "

@@ -8,19 +8,14 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Iterator
-from typing import TYPE_CHECKING
 
 import click
 
 from footfall.cli.choices import RegistryChoice
-
-if TYPE_CHECKING:
-    from footfall.experiments.executors import Executor
+from footfall.experiments.executors import EXECUTORS, Executor, make_executor
 
 
 def _executor_names() -> tuple[str, ...]:
-    from footfall.experiments.executors import EXECUTORS
-
     return tuple(EXECUTORS)
 
 
@@ -44,8 +39,6 @@ def executor_options(f):
 def opened_executor(name: str, processes: int | None,
                     address: str | None) -> Iterator[Executor]:
     """The executor the options chose, closed (its cluster connection ended) afterwards."""
-    from footfall.experiments.executors import make_executor
-
     executor = make_executor(name, processes, address)
     try:
         yield executor

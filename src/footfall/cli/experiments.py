@@ -3,6 +3,7 @@ the picture demo."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import click
@@ -10,6 +11,11 @@ import click
 from footfall.cli.choices import SEED, RegistryChoice
 from footfall.cli.executors import executor_options, opened_executor
 from footfall.cli.output import emit, json_option, progress_log
+from footfall.experiments.ablation import VARIANTS, AblationConfig, ablation_markdown, run_ablation
+from footfall.experiments.offline import OfflineConfig, run_offline
+from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
+from footfall.experiments.study import run_study
+from footfall.plots.showcase import run_demo
 
 
 @click.command()
@@ -20,8 +26,6 @@ from footfall.cli.output import emit, json_option, progress_log
 @json_option
 def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
     """The offline experiment: learn from demonstrations, rank unseen terrain (Table I)."""
-    from footfall.experiments.offline import OfflineConfig, run_offline
-
     config = OfflineConfig.quick(seed) if quick else OfflineConfig(seed=seed)
     summary = run_offline(Path(out), config, log=progress_log(as_json))
     emit(as_json, summary, f"wrote {Path(out) / 'report.md'}")
@@ -37,10 +41,6 @@ def test_kinds_option(f):
 
 def _reproduce_config(seed: int, quick: bool, test_kinds: str | None):
     """The reproduction's settings for ``seed``: the default or quick ones, with other kinds."""
-    from dataclasses import replace
-
-    from footfall.experiments.reproduce import ReproduceConfig
-
     config = ReproduceConfig.quick(seed) if quick else ReproduceConfig(seed=seed)
     if test_kinds is None:
         return config
@@ -65,8 +65,6 @@ def _table2_line(name: str, row: dict) -> str:
 def reproduce(out: str, seed: int, quick: bool, test_kinds: str | None, processes: int | None,
               executor_name: str, ray_address: str | None, as_json: bool) -> None:
     """The paper's walking experiment end to end: corrections, learning, Tables I and II."""
-    from footfall.experiments.reproduce import run_reproduction
-
     config = _reproduce_config(seed, quick, test_kinds)
     with opened_executor(executor_name, processes, ray_address) as executor:
         results = run_reproduction(Path(out), config, log=progress_log(as_json),
@@ -99,8 +97,6 @@ def study(first_seed: int, more_seeds: tuple[int, ...], out: str, quick: bool,
           test_kinds: str | None, processes: int | None, executor_name: str,
           ray_address: str | None, as_json: bool) -> None:
     """Several whole reproductions and a verdict on each of the paper's orderings."""
-    from footfall.experiments.study import run_study
-
     seeds = [first_seed, *more_seeds]
     _reproduce_config(0, quick, test_kinds)  # bad kinds: one line before anything is walked
     with opened_executor(executor_name, processes, ray_address) as executor:
@@ -113,8 +109,6 @@ def study(first_seed: int, more_seeds: tuple[int, ...], out: str, quick: bool,
 
 
 def _variant_names() -> list[str]:
-    from footfall.experiments.ablation import VARIANTS
-
     return list(VARIANTS)
 
 
@@ -138,10 +132,6 @@ def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], hard: bo
              processes: int | None, executor_name: str, ray_address: str | None,
              as_json: bool) -> None:
     """The walking controller's ablation: each part switched off alone, paired runs."""
-    from dataclasses import replace
-
-    from footfall.experiments.ablation import AblationConfig, ablation_markdown, run_ablation
-
     config = AblationConfig.quick() if quick else AblationConfig()
     if not hard:
         config = replace(config, hard_runs=0)
@@ -161,7 +151,5 @@ def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], hard: bo
 @json_option
 def demo(out: str, seed: int, as_json: bool) -> None:
     """Build a board, score it densely and draw the terrain, features and templates."""
-    from footfall.plots.showcase import run_demo
-
     result = run_demo(Path(out), seed=seed)
     emit(as_json, result, "\n".join(f"wrote {p}" for p in result["files"]))

@@ -8,6 +8,9 @@ import click
 
 from footfall.cli.choices import LEG, Finite
 from footfall.cli.output import emit, json_option
+from footfall.core.heightmap import HeightMap
+from footfall.features.config import FeatureConfig
+from footfall.features.describe import describe_foothold
 
 
 @click.command()
@@ -24,10 +27,6 @@ from footfall.cli.output import emit, json_option
 def features(source: str, at: tuple[float, float], yaw: float, leg: str,
              template_resolution: float | None, as_json: bool) -> None:
     """The 27 terrain features and three template patches of a foothold."""
-    from footfall.core.heightmap import HeightMap
-    from footfall.features.config import FeatureConfig
-    from footfall.features.describe import describe_foothold
-
     hmap = HeightMap.load(source)
     config = FeatureConfig() if template_resolution is None else FeatureConfig(template_resolution)
     info = describe_foothold(hmap, at[0], at[1], yaw, leg, config)

@@ -12,6 +12,10 @@ import click
 from footfall.cli.choices import FEATURE_SET, LEARNER, SEED, SELECTION, Finite
 from footfall.cli.output import emit, json_option, progress_log
 from footfall.core.errors import FootfallError
+from footfall.core.files import writable_path
+from footfall.core.limits import check_count
+from footfall.experiments.rank_eval import rank_eval
+from footfall.learning.train import learn_from_store
 
 SOURCE_HELP = ("Only demonstrations whose source starts with this: walker:train, human (people's "
                "labels), run: (the synthetic expert's corrections); repeat for several.")
@@ -27,8 +31,6 @@ def model_output(path: str) -> Path:
         If ``path`` is a directory, its directory does not exist or is not writable, or it
         does not end in ``.npz``.
     """
-    from footfall.core.files import writable_path
-
     out = writable_path(path)
     if out.suffix.lower() != ".npz":
         raise FootfallError(f"output model {out} must end in .npz")
@@ -68,13 +70,9 @@ def learn(store_path: str, feature_set: str, learner: str, library_size: int,
           training_candidates: int, bandwidth_rms: tuple[float, float, float] | None, cv: int,
           selection: str, source: tuple[str, ...], seed: int, output: str, as_json: bool) -> None:
     """Learn front- and hind-leg foothold ranking functions from demonstrations."""
-    from footfall.core.limits import check_count
-
     check_count(library_size, "--library-size", 3)
     check_count(training_candidates, "--training-candidates", 1)
     out = model_output(output)
-    from footfall.learning.train import learn_from_store
-
     learned = learn_from_store(store_path, out, feature_set, learner, source=source or None,
                                log=progress_log(as_json), library_size=library_size,
                                training_candidates=training_candidates,
@@ -97,8 +95,6 @@ def learn(store_path: str, feature_set: str, learner: str, library_size: int,
 def rank_eval_cmd(model_path: str, store_path: str, no_expert: bool, source: tuple[str, ...],
                   as_json: bool) -> None:
     """Top-1 agreement, mean percentile rank and mean reward loss of a model on demonstrations."""
-    from footfall.experiments.rank_eval import rank_eval
-
     agreement = rank_eval(model_path, store_path, with_expert=not no_expert,
                           source=source or None)
     s = agreement.scores

@@ -7,10 +7,14 @@ from __future__ import annotations
 
 import contextlib
 import json
+import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
 import click
+
+from footfall.core.files import plain_json
+from footfall.core.progress import BatchProgress
 
 json_option = click.option("--json", "as_json", is_flag=True, help="Print machine-readable JSON.")
 
@@ -22,8 +26,6 @@ def emit(as_json: bool, data: dict[str, Any], text: str) -> None:
     printed as null, never as the invalid token ``NaN`` and never as a traceback.
     """
     if as_json:
-        from footfall.core.files import plain_json
-
         click.echo(json.dumps(plain_json(data, nonfinite="null"), indent=2, allow_nan=False))
     else:
         click.echo(text)
@@ -49,10 +51,6 @@ def progress_bar(total: int | Callable[[], int], desc: str, unit: str, quiet: bo
     the error as the only line; ``total`` may be a function, asked then (the items left
     once a resumed batch knows what it holds).
     """
-    import time
-
-    from footfall.core.progress import BatchProgress
-
     bar = None
     started = time.monotonic()  # the work began here, before the first item finished
 

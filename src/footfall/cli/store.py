@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from footfall.cli.output import emit, json_option
+from footfall.data.check import check_store
 
 
 @click.group("store")
@@ -21,8 +22,6 @@ def store_check(store_path: str, as_json: bool) -> None:
     Prints "STORE: ok (...)" and exits 0, or one line per problem found (the
     first 20) and exits 2, the last line on standard error naming the first.
     """
-    from footfall.data.check import check_store
-
     report = check_store(store_path)
     emit(as_json, report.as_dict(), "\n".join(report.lines()))
     if not report.ok:

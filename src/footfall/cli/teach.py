@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import json
+import webbrowser
 
 import click
 
 from footfall.cli.output import emit, json_option
+from footfall.teach.server import address, bind, new_token, serve
+from footfall.teach.service import TeachService
 
 
 @click.command("teach")
@@ -26,9 +29,6 @@ def teach(store_path: str, labeler: str | None, host: str, port: int, open_brows
     it, click the foothold the robot should have chosen. Labels are demonstrations with source
     'human' (footfall learn STORE --source human). Ctrl-C stops the server. With --json the
     address is printed as a JSON line when serving starts, and a second line when it stops."""
-    from footfall.teach.server import address, bind, new_token, serve
-    from footfall.teach.service import TeachService
-
     service = TeachService(store_path, labeler=labeler)
     sock = bind(host, port)
     token = new_token()
@@ -40,8 +40,6 @@ def teach(store_path: str, labeler: str | None, host: str, port: int, open_brows
     else:
         click.echo(f"footfall teach: serving {store_path} at\n    {url}\n(Ctrl-C stops it)")
     if open_browser:
-        import webbrowser
-
         webbrowser.open(url)
     serve(service, sock, token)
     emit(as_json, {"stopped": store_path}, "footfall teach: stopped")

@@ -2,15 +2,12 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import click
 
 from footfall.cli.choices import SEED, TERRAIN_KIND, ChoiceArgument, Finite
 from footfall.cli.output import emit, json_option
-
-if TYPE_CHECKING:
-    from footfall.terrain.saving import MapSummary
+from footfall.plots.relief import save_relief_of_file
+from footfall.terrain.saving import MapSummary, save_board, save_imported, save_module
 
 
 @click.group()
@@ -51,8 +48,6 @@ def _file_module_notes(summary: MapSummary) -> tuple[str, ...]:
 @json_option
 def terrain_make(kind: str, difficulty: float, seed: int, output: str, as_json: bool) -> None:
     """Make one 61 x 61 cm terrain module of KIND."""
-    from footfall.terrain.saving import save_module
-
     _emit_map(as_json, save_module(kind, difficulty, seed, output))
 
 
@@ -72,8 +67,6 @@ def terrain_board(specs: tuple[str, ...], seed: int, flat_ends: bool, output: st
     too, e.g. `flat my_scan.npz rocky:0.5`: resampled to 1 mm, its own length,
     padded (no data) or cropped to the board's width, lowest point at z = 0.
     """
-    from footfall.terrain.saving import save_board
-
     summary = save_board(specs, seed, output, flat_ends=flat_ends)
     _emit_map(as_json, summary, _file_module_notes(summary))
 
@@ -90,8 +83,6 @@ def terrain_board(specs: tuple[str, ...], seed: int, flat_ends: bool, output: st
 def terrain_import(source: str, resolution: float | None, z_scale: float | None,
                    nodata: float | None, output: str, as_json: bool) -> None:
     """Import SOURCE (.npy, 16-bit .png, .ply, .xyz, .npz) as a footfall height map."""
-    from footfall.terrain.saving import save_imported
-
     _emit_map(as_json, save_imported(source, output, resolution=resolution, z_scale=z_scale,
                                      nodata=nodata))
 
@@ -102,7 +93,5 @@ def terrain_import(source: str, resolution: float | None, z_scale: float | None,
 @json_option
 def terrain_show(source: str, output: str, as_json: bool) -> None:
     """Draw a shaded relief of a height map with a colour bar."""
-    from footfall.plots.relief import save_relief_of_file
-
     out = save_relief_of_file(source, output)
     emit(as_json, {"file": str(out), "source": str(source)}, f"wrote {out}")

@@ -8,6 +8,9 @@ import click
 from footfall.cli.choices import SEED, count_range
 from footfall.cli.executors import executor_options, opened_executor
 from footfall.cli.output import emit, json_option, progress_bar
+from footfall.core.files import writable_path
+from footfall.experiments.batch import SNAPSHOT_SUFFIXES, VIDEO_SUFFIXES, walk_batch, walk_once
+from footfall.sim.explain import explanation_lines
 
 TERRAIN_OPTION = click.option("--terrain", "terrain_path", required=True,
                               help="Board height map (.npz).")
@@ -40,9 +43,6 @@ def _run_text(result: dict) -> str:
 def _check_picture_outputs(snapshots: str | None, video: str | None,
                            explain_plot: str | None = None) -> None:
     """Refuse a --snapshots, --video or --explain-plot path that could not be written, first."""
-    from footfall.core.files import writable_path
-    from footfall.experiments.batch import SNAPSHOT_SUFFIXES, VIDEO_SUFFIXES
-
     if snapshots is not None:
         writable_path(snapshots, SNAPSHOT_SUFFIXES, what="--snapshots", kind="picture")
     if explain_plot is not None:
@@ -73,9 +73,6 @@ def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: st
              explain_plot: str | None, expert: bool, search_radius: float | None,
              as_json: bool) -> None:
     """One run of the simulated robot across a board (success, slip, speed)."""
-    from footfall.experiments.batch import walk_once
-    from footfall.sim.explain import explanation_lines
-
     _check_picture_outputs(snapshots, video, explain_plot)
     outcome = walk_once(terrain_path, seed, model_path=model_path, expert=expert,
                         search_radius=search_radius, snapshots=snapshots, frames=frames,
@@ -104,8 +101,6 @@ def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: in
                   processes: int | None, executor_name: str, ray_address: str | None,
                   as_json: bool) -> None:
     """N runs in parallel: success rate (Wilson 95 % CI), slip, speed."""
-    from footfall.experiments.batch import walk_batch
-
     todo = {"runs": runs}
 
     def reused(count: int) -> None:

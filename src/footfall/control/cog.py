@@ -17,7 +17,7 @@ the four feet's support polygon, inset by the same margin, during the shift.
 
 The boundary states solve a small convex quadratic programme (8 unknowns per
 step), solved exactly by one non-negative least-squares solve (see
-:func:`least_squares_inequality`): minimise the integrated squared
+:func:`~footfall.control.least_squares.least_squares_inequality`): minimise the integrated squared
 acceleration of the whole path plus a weak pull of each swing's lift-off and
 touch-down positions toward the triangle's incentre. This is the paper's
 "continuous forward movement of the COG with optimal, velocity-dependent
@@ -51,10 +51,15 @@ from typing import Sequence
 
 import numpy as np
 from scipy.interpolate import PPoly
-from scipy.linalg import solve_triangular
-from scipy.optimize import nnls
 from scipy.spatial import ConvexHull, QhullError
 
+from footfall.control.least_squares import least_squares_inequality
+from footfall.control.support import (
+    halfplanes,
+    incircle,
+    support_margin,  # noqa: F401 - imported from here by sim.episode and control.reflexes
+    triangle_halfplanes,
+)
 from footfall.core.errors import FootfallError
 from footfall.core.params import Params, above, at_least, param
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
@@ -85,92 +90,6 @@ class CogConfig(Params):
                                     "no limit")
     slowdown: float = param(2.0, unit="-", range=at_least(1),
                             doc="factor on every shift's duration when the ZMP cannot be kept in")
-
-
-def support_margin(triangle: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Signed distance [m] of points inside a triangle: > 0 inside, < 0 outside.
-
-    Parameters
-    ----------
-    triangle : array of shape (..., 3, 2)
-        Vertices [m], either orientation.
-    points : array of shape (..., 2)
-        Points [m]; broadcast against the triangles' leading shape.
-
-    Returns
-    -------
-    ndarray of shape (...)
-        The smallest signed distance to the three edge lines: inside, the
-        distance to the boundary; outside, minus at most the distance to it.
-        A triangle with a zero-length edge leaves no margin (0 on that edge).
-    """
-    tri = np.asarray(triangle, dtype=np.float64)
-    p = np.asarray(points, dtype=np.float64)
-    if tri.shape[-2:] != (3, 2) or p.shape[-1:] != (2,):
-        raise FootfallError(f"support_margin needs triangles (..., 3, 2) and points (..., 2), "
-                            f"got {tri.shape} and {p.shape}")
-    a, b, c = tri[..., 0, :], tri[..., 1, :], tri[..., 2, :]
-    cross = (b - a)[..., 0] * (c - a)[..., 1] - (b - a)[..., 1] * (c - a)[..., 0]
-    orient = np.where(cross >= 0, 1.0, -1.0)
-    out = None
-    for start, end in ((a, b), (b, c), (c, a)):  # the three edges
-        edge = end - start
-        length = np.hypot(edge[..., 0], edge[..., 1])
-        rel = p - start
-        signed = orient * (edge[..., 0] * rel[..., 1] - edge[..., 1] * rel[..., 0])
-        dist = np.divide(signed, length, out=np.zeros(np.broadcast_shapes(signed.shape, length.shape)),
-                         where=length > 0)
-        out = dist if out is None else np.minimum(out, dist)
-    return out
-
-
-def incircle(triangle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Incentres (..., 2) [m] and inradii (...) [m] of triangles (..., 3, 2).
-
-    A triangle without area has inradius 0 (its incentre then lies on it;
-    all three vertices on one spot give that spot).
-    """
-    tri = np.asarray(triangle, dtype=np.float64)
-    opposite = np.linalg.norm(tri[..., [1, 2, 0], :] - tri[..., [2, 0, 1], :], axis=-1)
-    perimeter = opposite.sum(axis=-1)
-    e1, e2 = tri[..., 1, :] - tri[..., 0, :], tri[..., 2, :] - tri[..., 0, :]
-    area = 0.5 * np.abs(e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0])
-    safe = np.where(perimeter > 0, perimeter, 1.0)
-    centre = np.where((perimeter > 0)[..., None],
-                      np.einsum("...k,...kd->...d", opposite, tri) / safe[..., None],
-                      tri.mean(axis=-2))
-    return centre, 2 * area / safe
-
-
-def _halfplanes(vertices: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
-    """Inward unit normals (m, 2) and offsets (m,) of a convex polygon's edges, inset by margin.
-
-    A point p is inside the inset polygon iff ``normals @ p >= offsets``.
-    """
-    following = np.r_[1:len(vertices), 0]  # index of the next vertex
-    edges = vertices[following] - vertices
-    cross = np.sum(edges[:, 0] * edges[following, 1] - edges[:, 1] * edges[following, 0])
-    sign = 1.0 if cross >= 0 else -1.0
-    normals = sign * np.column_stack([-edges[:, 1], edges[:, 0]])
-    length = np.linalg.norm(normals, axis=1)
-    keep = length > 0
-    normals = normals[keep] / length[keep, None]
-    return normals, np.sum(normals * vertices[keep], axis=1) + margin
-
-
-def _triangle_halfplanes(triangles: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
-    """Inward unit normals (K, 3, 2) and offsets (K, 3) of triangles (K, 3, 2), inset by margin.
-
-    A point p is inside the inset triangle k iff ``normals[k] @ p >= offsets[k]``; a
-    zero-length edge gets a zero normal (callers skip such degenerate triangles).
-    """
-    edges = np.roll(triangles, -1, axis=1) - triangles
-    cross = edges[:, 0, 0] * edges[:, 1, 1] - edges[:, 0, 1] * edges[:, 1, 0]
-    sign = np.where(cross >= 0, 1.0, -1.0)[:, None, None]
-    normals = sign * np.stack([-edges[..., 1], edges[..., 0]], axis=-1)
-    length = np.linalg.norm(normals, axis=-1, keepdims=True)
-    normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
-    return normals, np.sum(normals * triangles, axis=-1) + margin
 
 
 @dataclass(frozen=True, eq=False)
@@ -366,7 +285,7 @@ def _constraints(w: dict[str, np.ndarray], stances: np.ndarray, triangles: np.nd
     with ``reach`` (:func:`_reach_boxes`), in every phase the COG's inside its box.
     """
     n_steps, n = triangles.shape[0], 4 * 2 * triangles.shape[0]
-    normals, offsets = _triangle_halfplanes(triangles, config.margin + _SAFETY)  # (K, 3, 2), (K, 3)
+    normals, offsets = triangle_halfplanes(triangles, config.margin + _SAFETY)  # (K, 3, 2), (K, 3)
     points_m, points_c = _linear(np.concatenate([w["bezier"], w["zmp"]], axis=1), inputs)
     points_m, points_c = points_m[1::2], points_c[1::2]  # the swings
     rows_m = np.einsum("ked,kqdn->kqen", normals, points_m)[~pinned]
@@ -380,7 +299,7 @@ def _constraints(w: dict[str, np.ndarray], stances: np.ndarray, triangles: np.nd
                 hull = stances[k][ConvexHull(stances[k]).vertices]
             except QhullError:  # feet in a line: no polygon to keep the ZMP in
                 continue
-            nrm, off = _halfplanes(hull, config.margin + _SAFETY)
+            nrm, off = halfplanes(hull, config.margin + _SAFETY)
             C.append(np.einsum("ed,qdn->qen", nrm, zmp_m[k]).reshape(-1, n))
             c.append((zmp_c[k] @ nrm.T - off).ravel())
     if reach is not None:
@@ -412,35 +331,6 @@ def _reach_boxes(stances: np.ndarray, legs: tuple[str, ...], robot: RobotDescrip
         hi.append(np.where(mask[..., None], rel, np.inf).min(axis=1) + reach)
     # phases in order: shift 0, swing 0, shift 1, ...
     return (np.stack(lo, axis=1).reshape(-1, 2), np.stack(hi, axis=1).reshape(-1, 2))
-
-
-def least_squares_inequality(G: np.ndarray, g: np.ndarray, C: np.ndarray, c: np.ndarray
-                             ) -> np.ndarray | None:
-    """Minimise |G z + g|^2 subject to C z + c >= 0; None if the constraints are incompatible.
-
-    ``G`` (r, n) must have full column rank. Lawson & Hanson's reduction
-    (Solving Least Squares Problems, 1974, ch. 23), the one SLSQP runs at
-    every iteration: with G = QR and w = R z + Q^T g the problem becomes a
-    least-distance programme, min |w| subject to E w >= f, whose solution
-    comes from one non-negative least-squares solve (scipy.optimize.nnls)
-    of size (n + 1, m). A QP this small solves in well under a millisecond.
-    """
-    q, r = np.linalg.qr(G)
-    qg = q.T @ g
-    if C.shape[0] == 0:
-        return solve_triangular(r, -qg)
-    e = solve_triangular(r, C.T, trans="T").T  # C R^-1, (m, n)
-    f = e @ qg - c  # C z + c >= 0  <=>  E w >= f
-    n = G.shape[1]
-    lhs = np.vstack([e.T, f[None]])  # (n + 1, m)
-    rhs = np.zeros(n + 1)
-    rhs[n] = 1.0
-    u, _ = nnls(lhs, rhs)
-    res = lhs @ u - rhs
-    if not res[n] < -1e-12:  # zero residual: the constraints are incompatible
-        return None
-    w = res[:n] / -res[n]
-    return solve_triangular(r, w - qg)
 
 
 def _trajectory(states: np.ndarray, durations: np.ndarray) -> tuple[PPoly, np.ndarray]:

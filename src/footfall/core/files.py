@@ -1,118 +1,28 @@
-"""Atomic, versioned, pickle-free files.
+"""Versioned, pickle-free files and strict JSON.
 
-Every file footfall writes goes to a temporary file in the target directory
-and is renamed into place, so an interrupted command never leaves a
-half-written file. Array files are ``.npz`` archives read with
-``allow_pickle=False`` and carry a ``format`` name and a ``version`` number.
+Array files are ``.npz`` archives read with ``allow_pickle=False`` (through
+:mod:`footfall.core.npz`, inspected before anything is inflated) and carry a
+``format`` name and a ``version`` number; they are written atomically
+(:mod:`footfall.core.atomic`). JSON is read strictly (bounded, finite) and
+written from plain data only.
 """
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import json
 import math
 import os
 import re
-import stat
-import tempfile
-import time
 from pathlib import Path
-from typing import Any, Callable, Iterator, Literal
+from typing import Any, Callable, Literal
 
 import numpy as np
 
+from footfall.core.atomic import atomic_path
 from footfall.core.errors import FootfallError
 from footfall.core.limits import current_limits
-
-STALE_TEMP_AGE = 3600.0  # [s] a temporary file without a writer's pid older than this is stale
-
-
-@contextlib.contextmanager
-def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
-    """Yield a temporary path beside ``path``; rename it onto ``path`` on success.
-
-    The temporary file is ``.NAME.PID.XXXXXXXX.tmpSUFFIX``: it names the writing
-    process, so that the next write to ``path`` can remove the leftovers of a
-    writer that was killed (:func:`remove_stale_temporaries`) without touching
-    the live temporary file of a concurrent writer.
-    """
-    target = Path(path)
-    directory = target.parent if str(target.parent) else Path(".")
-    if not directory.is_dir():
-        raise FootfallError(f"output directory does not exist: {directory}")
-    remove_stale_temporaries(target)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.{os.getpid()}.",
-                               suffix=".tmp" + target.suffix, dir=directory)
-    os.close(fd)
-    tmp_path = Path(tmp)
-    os.chmod(tmp_path, 0o666 & ~_umask())  # mkstemp makes 0600; give the usual permissions
-    try:
-        yield tmp_path
-        os.replace(tmp_path, target)
-    finally:
-        if tmp_path.exists():
-            tmp_path.unlink()
-
-
-def _process_alive(pid: int) -> bool:
-    """Whether a process ``pid`` runs on this host (one of another user counts as running)."""
-    if pid <= 0:
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, OSError):
-        return True
-    return True
-
-
-def remove_stale_temporaries(path: str | os.PathLike) -> list[Path]:
-    """Remove the temporary files :func:`atomic_path` left beside ``path`` when killed.
-
-    A temporary file of ``path`` is removed when the process named in its name
-    no longer runs on this host; one of an older footfall, without a pid, when
-    it is older than :data:`STALE_TEMP_AGE`. A live writer's file is never
-    touched. Returns the files removed; files that cannot be removed are left.
-    """
-    target = Path(path)
-    directory = target.parent if str(target.parent) else Path(".")
-    pattern = re.compile(rf"\.{re.escape(target.name)}\.(?:(\d+)\.)?[A-Za-z0-9_]+"
-                         rf"\.tmp{re.escape(target.suffix)}")
-    removed = []
-    try:
-        entries = list(os.scandir(directory))
-    except OSError:
-        return removed
-    now = time.time()
-    for entry in entries:
-        match = pattern.fullmatch(entry.name)
-        if match is None or not entry.is_file(follow_symlinks=False):
-            continue
-        try:
-            if match.group(1) is not None:
-                stale = not _process_alive(int(match.group(1)))
-            else:
-                stale = now - entry.stat(follow_symlinks=False).st_mtime > STALE_TEMP_AGE
-            if stale:
-                os.unlink(entry.path)
-                removed.append(Path(entry.path))
-        except OSError:
-            continue
-    return removed
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-def write_text_atomic(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` atomically (UTF-8)."""
-    with atomic_path(path) as tmp:
-        tmp.write_text(text, encoding="utf-8")
+from footfall.core.npz import read_npz_members
 
 
 def save_npz(path: str | os.PathLike, fmt: str, version: int, arrays: dict[str, np.ndarray],
@@ -154,8 +64,6 @@ def load_npz(path: str | os.PathLike, fmt: str, max_version: int, *,
         corrupt, truncated or oversized file, another format, a newer
         version, or a malformed ``format``/``version``/``meta`` header.
     """
-    from footfall.core.npz import read_npz_members
-
     p = Path(path)
     arrays = read_npz_members(p, check_member)
     header = {}
@@ -315,33 +223,4 @@ def writable_path(path: str | os.PathLike, suffixes: tuple[str, ...] = (), *, wh
         known = " or ".join(suffixes)
         raise FootfallError(f"{lead}{p}: unknown {kind} format {p.suffix or '(no suffix)'!r} "
                             f"(use {known})")
-    return p
-
-
-def readable_file(path: str | os.PathLike) -> Path:
-    """``path`` as an existing regular file this process may read, within ``max_file_bytes``.
-
-    Raises
-    ------
-    FootfallError
-        Naming the file: missing, not a regular file, permission denied, or
-        larger than the ``max_file_bytes`` limit.
-    """
-    p = Path(path)
-    try:
-        st = p.stat()
-    except FileNotFoundError:
-        raise FootfallError(f"no such file: {p}") from None
-    except PermissionError:
-        raise FootfallError(f"{p}: permission denied") from None
-    except OSError as exc:
-        raise FootfallError(f"{p}: cannot read ({exc.strerror or exc})") from None
-    if not stat.S_ISREG(st.st_mode):
-        raise FootfallError(f"{p}: not a regular file")
-    if not os.access(p, os.R_OK):
-        raise FootfallError(f"{p}: permission denied")
-    limit = current_limits().max_file_bytes
-    if st.st_size > limit:
-        raise FootfallError(f"{p}: the file is {st.st_size} bytes, above the limit of {limit} "
-                            f"(raise it with --limit max_file_bytes=N)")
     return p

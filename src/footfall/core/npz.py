@@ -22,8 +22,8 @@ from typing import IO, Callable
 import numpy as np
 
 from footfall.core.errors import FootfallError
-from footfall.core.files import readable_file
 from footfall.core.limits import Limits, current_limits
+from footfall.core.paths import readable_file
 
 MemberCheck = Callable[[str, tuple[int, ...], np.dtype], None]
 """``(name, shape, dtype)`` of an array about to be read; raises FootfallError to refuse it."""

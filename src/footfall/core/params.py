@@ -26,6 +26,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
 
 _KEY = "footfall.param"  # where a field's Param sits in its dataclass metadata
@@ -357,8 +358,6 @@ def main(argv: list[str] | None = None) -> int:
         if fresh != text:
             stale.append(path)
             if not args.check:
-                from footfall.core.files import write_text_atomic  # files reads core.limits
-
                 write_text_atomic(path, fresh)
     for path in stale:
         print(f"{path}: {'out of date' if args.check else 'tables rewritten'}")

@@ -15,6 +15,8 @@ import time
 from collections.abc import Callable
 from typing import TextIO
 
+from tqdm import tqdm
+
 LINES_PER_BATCH = 20  # [-] about this many lines for a batch, plus the last
 INTERVAL = 60.0  # [s] a line at least this often while items finish
 
@@ -66,8 +68,6 @@ class BatchProgress:
         self._lines = lines and not quiet and not tty
         self._bar = None
         if not quiet and tty:
-            from tqdm import tqdm
-
             self._bar = tqdm(total=self.total, unit=unit, desc=desc, file=self.stream,
                              dynamic_ncols=True)
 

@@ -76,8 +76,6 @@ def nominal_state(hmap, body_xy, yaw: float, swing_leg: str, goal=None, robot=No
     nominal height above the mean foot height. ``goal`` defaults to 1 km
     straight ahead.
     """
-    from footfall.core.robot import LITTLEDOG
-
     robot = robot or LITTLEDOG
     c, s = np.cos(yaw), np.sin(yaw)
     rot = np.array([[c, -s], [s, c]])

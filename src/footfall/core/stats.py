@@ -29,7 +29,6 @@ def bootstrap_ci(values: np.ndarray, level: float = 0.95, n: int = BOOTSTRAP,
     return float(lo), float(hi)
 
 
-
 def wilson_interval(successes: int, trials: int, level: float = 0.95) -> tuple[float, float]:
     """Wilson score interval of a success rate (e.g. 10 successes of 21 runs).
 
@@ -63,7 +62,7 @@ def mcnemar_exact(a_only: int, b_only: int) -> float:
     p-value is the two-sided exact binomial test of ``a_only`` of
     ``a_only + b_only`` at 1/2 (1 without discordant pairs).
     """
-    from scipy.stats import binomtest
+    from scipy.stats import binomtest  # about a second to import: only where a p-value is asked
 
     for v, what in ((a_only, "a_only"), (b_only, "b_only")):
         if isinstance(v, bool) or not isinstance(v, numbers.Integral) or v < 0:

@@ -14,6 +14,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, Self
 
+from footfall import __version__
 from footfall.core.errors import FootfallError
 from footfall.data import schema
 
@@ -117,8 +118,6 @@ class StoreConnection:
             raise FootfallError(f"{self.path}: not a footfall demonstration store "
                                 f"(no footfall metadata)")
         con.execute("PRAGMA journal_mode = WAL")  # before the first write: no journal swap
-        from footfall import __version__
-
         with self._write():
             if schema.has_table(con, "meta"):  # another process initialised it meanwhile
                 return

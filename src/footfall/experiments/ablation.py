@@ -44,10 +44,11 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
+from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
-from footfall.core.files import write_text_atomic
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, at_least, param, within
+from footfall.core.registry import Registry
 from footfall.core.stats import mcnemar_exact
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor, LocalPool
@@ -71,16 +72,20 @@ class Variant:
     change: Callable[[WalkConfig], WalkConfig]  # the default walk -> this variant's walk
 
 
-VARIANTS: dict[str, Variant] = {}
+VARIANTS: Registry[Variant] = Registry("controller variant")
+"""The controller variants by name: the defaults, each part switched off, the parts off by default
+switched on."""
 
 
 def register_variant(name: str, description: str,
                      change: Callable[[WalkConfig], WalkConfig]) -> Variant:
     """Add a controller variant to :data:`VARIANTS` (a new part of the controller adds its own)."""
-    if not name or "/" in name or name in VARIANTS:
+    if not name or "/" in name:
         raise FootfallError(f"a variant needs a new name without '/', got {name!r}")
-    VARIANTS[name] = Variant(name, description, change)
-    return VARIANTS[name]
+    try:
+        return VARIANTS.register(name, Variant(name, description, change))
+    except ValueError:  # the name is taken
+        raise FootfallError(f"a variant needs a new name without '/', got {name!r}") from None
 
 
 def _reflexes(walk: WalkConfig, **switches) -> WalkConfig:
@@ -95,33 +100,36 @@ def _no_reach(walk: WalkConfig) -> WalkConfig:
     return replace(walk, cog=replace(walk.cog, reach=None))
 
 
-register_variant("defaults", "the default controller", lambda w: w)
-register_variant("no-lift-off-gate", "without the lift-off gate",
-                 lambda w: _reflexes(w, lift_off_gate=False))
-register_variant("no-touchdown-check", "without the touch-down check",
-                 lambda w: _reflexes(w, touchdown_check=False))
-register_variant("no-tilt-reflex", "without the tilt reflex",
-                 lambda w: _reflexes(w, tilt_reflex=False))
-register_variant("no-load-control", "without the stance load control",
-                 lambda w: _lowlevel(w, load_gain=0.0))
-register_variant("no-cog-reach", "without the COG plan within the legs' reach", _no_reach)
-register_variant("no-hand-over", "without the body correction handed to the stance anchors at "
-                 "each touch-down", lambda w: _lowlevel(w, hand_over=False))
-register_variant("no-support-feedforward", "without the support torques fed forward",
-                 lambda w: _lowlevel(w, support_feedforward=0.0))
-register_variant("none", "no reflexes, no load control, no reach, no hand-over, no support "
-                 "torques (the controller before issue 18)",
-                 lambda w: _no_reach(_lowlevel(_reflexes(
-                     w, lift_off_gate=False, touchdown_check=False, tilt_reflex=False,
-                     slip_reflex=False, rebase_distance=None),
-                     load_gain=0.0, hand_over=False, support_feedforward=0.0)))
-register_variant("with-slip-reflex", "with the stance slip reflex (off by default)",
-                 lambda w: _reflexes(w, slip_reflex=True))
-register_variant("with-re-anchoring", "with slipped stance feet re-anchored where they stand "
-                 "(0.3 s; off by default)", lambda w: _lowlevel(w, anchor_follow_time=0.3))
-register_variant("with-rebase", "with the stance re-based after a recovery that leaves the body "
-                 "more than 30 mm off (off by default)",
-                 lambda w: _reflexes(w, rebase_distance=0.03))
+BUILTIN_VARIANTS = tuple(variant.name for variant in (
+    register_variant("defaults", "the default controller", lambda w: w),
+    register_variant("no-lift-off-gate", "without the lift-off gate",
+                     lambda w: _reflexes(w, lift_off_gate=False)),
+    register_variant("no-touchdown-check", "without the touch-down check",
+                     lambda w: _reflexes(w, touchdown_check=False)),
+    register_variant("no-tilt-reflex", "without the tilt reflex",
+                     lambda w: _reflexes(w, tilt_reflex=False)),
+    register_variant("no-load-control", "without the stance load control",
+                     lambda w: _lowlevel(w, load_gain=0.0)),
+    register_variant("no-cog-reach", "without the COG plan within the legs' reach", _no_reach),
+    register_variant("no-hand-over", "without the body correction handed to the stance anchors "
+                     "at each touch-down", lambda w: _lowlevel(w, hand_over=False)),
+    register_variant("no-support-feedforward", "without the support torques fed forward",
+                     lambda w: _lowlevel(w, support_feedforward=0.0)),
+    register_variant("none", "no reflexes, no load control, no reach, no hand-over, no support "
+                     "torques (the controller before issue 18)",
+                     lambda w: _no_reach(_lowlevel(_reflexes(
+                         w, lift_off_gate=False, touchdown_check=False, tilt_reflex=False,
+                         slip_reflex=False, rebase_distance=None),
+                         load_gain=0.0, hand_over=False, support_feedforward=0.0))),
+    register_variant("with-slip-reflex", "with the stance slip reflex (off by default)",
+                     lambda w: _reflexes(w, slip_reflex=True)),
+    register_variant("with-re-anchoring", "with slipped stance feet re-anchored where they "
+                     "stand (0.3 s; off by default)",
+                     lambda w: _lowlevel(w, anchor_follow_time=0.3)),
+    register_variant("with-rebase", "with the stance re-based after a recovery that leaves the "
+                     "body more than 30 mm off (off by default)",
+                     lambda w: _reflexes(w, rebase_distance=0.03)),
+))  # the controller's own variants, in table order: an ablation walks them all by default
 
 
 # ------------------------------------------------------------------ settings
@@ -131,7 +139,7 @@ def _is_spec(value: object) -> bool:
                     and isinstance(m[1], (int, float)) and 0 <= m[1] <= 1 for m in value))
 
 
-def _names(value: object, known: tuple[str, ...] | dict) -> bool:
+def _names(value: object, known: tuple[str, ...] | Registry) -> bool:
     return (isinstance(value, tuple) and len(value) > 0 and len(set(value)) == len(value)
             and all(v in known for v in value))
 
@@ -141,8 +149,8 @@ class AblationConfig(Params):
     """The ablation's boards, seeds and variants; written next to its results."""
 
     variants: tuple[str, ...] = param(
-        tuple(VARIANTS), check=lambda v: _names(v, VARIANTS),
-        must=f"a tuple of distinct variant names ({', '.join(VARIANTS)})",
+        BUILTIN_VARIANTS, check=lambda v: _names(v, VARIANTS),
+        must=f"a tuple of distinct variant names ({', '.join(BUILTIN_VARIANTS)})",
         doc="the controller variants, compared with 'defaults' (walked whether listed or not)")
     who: tuple[str, ...] = param(WHO, check=lambda v: _names(v, WHO),
                                  must="a tuple of 'expert' and / or 'hand'",
@@ -185,7 +193,7 @@ class AblationConfig(Params):
 
     def variant_walk(self, variant: str) -> WalkConfig:
         """The walking settings of ``variant``: its change of :attr:`walk`."""
-        return VARIANTS[variant].change(self.walk)
+        return VARIANTS.get(variant).change(self.walk)
 
     def boards(self) -> dict[str, tuple[Spec, int, int, int]]:
         """Board name -> (modules, board seed, runs, first run seed)."""
@@ -265,7 +273,7 @@ def summarise_ablation(config: AblationConfig, results: dict[str, dict]) -> dict
     """Per variant and chooser: crossings on the test and calibration boards, the failure
     taxonomy, the mean speed [cm/s] of the crossings, and the paired comparison with the
     defaults. ``results``: run key -> stored result."""
-    return {v: {"description": VARIANTS[v].description,
+    return {v: {"description": VARIANTS.get(v).description,
                 **{who: _row(config, results, v, who) for who in config.who}}
             for v in _variants(config)}
 
@@ -309,13 +317,16 @@ def ablation_markdown(config: AblationConfig, summary: dict) -> str:
 
 
 # ------------------------------------------------------------------ the job
-def run_ablation(out: str | os.PathLike, config: AblationConfig = AblationConfig(),
+def run_ablation(out: str | os.PathLike, config: AblationConfig | None = None,
                  processes: int | None = None, log: Callable[[str], None] = print,
                  executor: Executor | None = None) -> dict:
     """Walk (or resume) the ablation into ``out``; return the summary (also ablation.json/.md).
 
     The runs are walked on ``executor`` [default: a local pool of ``processes`` workers].
     """
+    # Built here, not at import: a config's checks ask the registries, which load the
+    # plugins (a broken plugin must fail as one line when the command runs, not on import).
+    config = AblationConfig() if config is None else config
     out = Path(out)
     claim_folder(out, config.to_dict(), "an ablation", free=("variants", "who"))
     paths = board_files(out, {name: (spec, seed, True)

@@ -16,48 +16,28 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
+import matplotlib
 import numpy as np
 
+from footfall.core.atomic import atomic_path
 from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
 from footfall.core.files import plain_json, writable_path
 from footfall.core.heightmap import HeightMap, module_records
-from footfall.core.robot import LITTLEDOG
 from footfall.core.stats import wilson_interval
 from footfall.data.runlog import RunRecord
 from footfall.data.schema import SUFFIXES as STORE_SUFFIXES
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor, LocalPool
-from footfall.experiments.runs import RunJob
+from footfall.experiments.runs import RunJob, reward_source
 from footfall.expert.scorer import ExpertScorer
-from footfall.expert.synthetic import walking_expert
+from footfall.expert.synthetic import SyntheticExpert, walking_expert
+from footfall.plots.explain import save_explain_plot
 from footfall.sim.episode import Frames, Walk, WalkConfig
-
-
-def reward_source(model_path: str | os.PathLike | None, hmap: HeightMap):
-    """The reward ``reward_for(leg)`` of a model file, or the hand-tuned default (None).
-
-    Raises
-    ------
-    FootfallError
-        If the model is for another robot or another map resolution.
-    """
-    if model_path is None:
-        from footfall.features.reward import default_reward
-
-        reward = default_reward()
-        return lambda leg: reward
-    from footfall.learning.model import FootholdModel
-
-    model = FootholdModel.load(model_path)
-    model.check_compatible(robot=LITTLEDOG, map_resolution=hmap.resolution)
-    return model.reward_for
 
 
 def expert_judge(config: WalkConfig):
     """The walking expert (:func:`footfall.expert.synthetic.walking_expert`) as a foothold judge."""
-    from footfall.expert.synthetic import SyntheticExpert
-
     return ExpertScorer(SyntheticExpert(walking_expert(config.footstep.lead)))
 
 
@@ -188,12 +168,8 @@ VIDEO_SUFFIXES = (".mp4",)  # what save_video writes (H.264 in an MP4 container)
 
 def save_strip(frames: list, path: str | os.PathLike, title: str | None = None) -> None:
     """A strip of snapshot frames [(time [s], image)] side by side (as the paper's Fig. 4)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
+    matplotlib.use("Agg")  # headless: pyplot picks its backend when it is imported
     import matplotlib.pyplot as plt
-
-    from footfall.core.files import atomic_path
 
     if not frames:
         raise FootfallError("no frames to draw")
@@ -212,9 +188,7 @@ def save_strip(frames: list, path: str | os.PathLike, title: str | None = None) 
 
 def save_video(images: list, path: str | os.PathLike, fps: float) -> None:
     """Write frames (h, w, 3) uint8 as an H.264 MP4 (imageio's bundled ffmpeg)."""
-    import imageio.v2 as imageio
-
-    from footfall.core.files import atomic_path
+    import imageio.v2 as imageio  # with its ffmpeg: only for a video
 
     if not images:
         raise FootfallError("no frames to write")
@@ -324,8 +298,6 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
                judge=expert_judge(config) if expert else None)
     record = run.run()
     if explain_plot is not None:
-        from footfall.plots.explain import save_explain_plot
-
         save_explain_plot(run.trace.series(), record.result.get("explanation"), run.robot,
                           explain_plot, title=f"{Path(terrain_path).name}, seed {seed}: "
                                               f"{record.result['reason']}")

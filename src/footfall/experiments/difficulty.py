@@ -40,6 +40,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from sklearn.isotonic import IsotonicRegression
 
 from footfall.core.errors import FootfallError
 from footfall.core.stats import wilson_interval
@@ -82,8 +83,6 @@ def choose_difficulty(outcomes: dict[float, tuple[int, int]], threshold: float =
     if isinstance(threshold, bool) or not (isinstance(threshold, (int, float))
                                            and 0 < threshold <= 1):
         raise FootfallError(f"the success threshold must be in (0, 1], got {threshold!r}")
-    from sklearn.isotonic import IsotonicRegression
-
     grid = sorted(outcomes)
     for d in grid:
         if not (isinstance(d, (int, float)) and math.isfinite(d) and 0 <= d <= 1):

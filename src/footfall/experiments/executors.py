@@ -28,7 +28,9 @@ registered with :func:`register_executor`.
 from __future__ import annotations
 
 import hashlib
+import logging
 import os
+import socket
 import tempfile
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -37,8 +39,10 @@ from multiprocessing import get_context
 from pathlib import Path
 from typing import Any, Protocol
 
+from footfall.core.atomic import atomic_path
 from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
+from footfall.core.registry import Registry
 from footfall.experiments.runs import RunJob, RunOutput, execute
 
 RAY_RETRIES = 3  # times Ray walks a run again whose worker process or node died
@@ -62,14 +66,13 @@ class Executor(Protocol):
         ...
 
 
-EXECUTORS: dict[str, Callable[..., Executor]] = {}
+EXECUTORS: Registry[Callable[..., Executor]] = Registry("executor")
+"""Where batches are walked: name -> factory ``(processes=..., address=...) -> Executor``."""
 
 
 def register_executor(name: str, factory: Callable[..., Executor]) -> None:
     """Make ``factory(processes=..., address=...)`` available as ``--executor NAME``."""
-    if name in EXECUTORS:
-        raise FootfallError(f"an executor named {name!r} is already registered")
-    EXECUTORS[name] = factory
+    EXECUTORS.register(name, factory)
 
 
 def make_executor(name: str = "local", processes: int | None = None,
@@ -85,12 +88,11 @@ def make_executor(name: str = "local", processes: int | None = None,
     FootfallError
         For an unknown executor, an address for the local pool or a bad count.
     """
-    if name not in EXECUTORS:
-        raise FootfallError(f"unknown executor {name!r}; known: {', '.join(sorted(EXECUTORS))}")
+    factory = EXECUTORS.get(name)
     if processes is not None and (isinstance(processes, bool) or not isinstance(processes, int)
                                   or processes < 1):
         raise FootfallError(f"processes must be an integer >= 1, got {processes!r}")
-    return EXECUTORS[name](processes=processes, address=address)
+    return factory(processes=processes, address=address)
 
 
 # -------------------------------------------------------------------- local
@@ -143,7 +145,7 @@ LOOPBACK_ENV = {
 
 def _import_ray() -> Any:
     try:
-        import ray
+        import ray  # an optional extra (footfall[ray]), and heavy
     except ImportError:
         raise FootfallError("the ray executor needs Ray: pip install 'footfall[ray]'") from None
     return ray
@@ -154,8 +156,6 @@ def shipped_file(data: bytes, suffix: str, folder: str | os.PathLike | None = No
 
     ``folder``: where such files are kept [default: footfall-ray in the temporary folder].
     """
-    from footfall.core.files import atomic_path
-
     base = Path(folder) if folder is not None else Path(tempfile.gettempdir()) / "footfall-ray"
     base.mkdir(parents=True, exist_ok=True)
     path = base / f"{hashlib.sha256(data).hexdigest()}{suffix}"
@@ -186,8 +186,6 @@ class RayCluster:
         if self._ray is not None:
             return self._ray
         ray = _import_ray()
-        import logging
-
         if not ray.is_initialized():
             options = dict(log_to_driver=False, logging_level=logging.ERROR,
                            configure_logging=True)
@@ -253,8 +251,6 @@ def _check_answers(address: str) -> None:
     A loopback address also keeps this driver on loopback (Ray would otherwise speak to
     the cluster through this machine's network address).
     """
-    import socket
-
     if address == "auto":
         return  # Ray finds the cluster this machine runs
     host, sep, port = address.removeprefix("ray://").rpartition(":")  # ray:// - Ray Client

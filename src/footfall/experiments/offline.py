@@ -20,8 +20,8 @@ from typing import Callable
 
 import numpy as np
 
+from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
-from footfall.core.files import write_text_atomic
 from footfall.core.params import Params, at_least, param
 from footfall.core.seeds import SeedStreams
 from footfall.core.stats import bootstrap_ci
@@ -37,12 +37,10 @@ from footfall.learning.ranker import BUILTIN_LEARNERS
 from footfall.learning.train import TrainingDemo, learn_model
 from footfall.plots.maps import save_kept_templates, save_score_maps
 from footfall.plots.relief import save_relief
-from footfall.terrain import make_board
+from footfall.terrain import KINDS, make_board
 
 
 def _kinds(value: object) -> bool:
-    from footfall.terrain import KINDS
-
     return isinstance(value, tuple) and len(value) > 0 and all(k in KINDS for k in value)
 
 
@@ -121,9 +119,12 @@ class OfflineConfig(Params):
         return {"train": train, "test-modules": test, "test-kind": kind}
 
 
-def run_offline(out: Path, config: OfflineConfig = OfflineConfig(),
+def run_offline(out: Path, config: OfflineConfig | None = None,
                 log: Callable[[str], None] = print) -> dict:
     """Run the experiment into ``out`` (a store, models, a report); return the results."""
+    # Built here, not at import: a config's checks ask the registries, which load the
+    # plugins (a broken plugin must fail as one line when the command runs, not on import).
+    config = OfflineConfig() if config is None else config
     if out.exists() and not out.is_dir():
         raise FootfallError(f"output path is not a directory: {out}")
     out.mkdir(parents=True, exist_ok=True)

@@ -13,7 +13,16 @@ import re
 from pathlib import Path
 from typing import Callable
 
-from footfall.core.files import atomic_path, plain_json, write_text_atomic
+import matplotlib
+from matplotlib.figure import Figure
+
+from footfall.core.atomic import atomic_path, write_text_atomic
+from footfall.core.files import plain_json
+from footfall.experiments.batch import reward_source, save_strip
+from footfall.features.dense import score_grid
+from footfall.plots.maps import save_kept_templates, save_score_maps
+from footfall.plots.relief import save_relief
+from footfall.sim.episode import Frames, walk
 
 PAPER_TABLE2 = {"terrain": (47.6, 24.8, 5.9), "templates": (76.2, 20.2, 5.1),
                 "both": (100.0, 17.3, 3.3), "flat": (100.0, 13.4, 0.4)}
@@ -28,15 +37,7 @@ NAMES = {"terrain": "Features only", "templates": "Templates only",
 
 def _figures(out: Path, results: dict, maps: dict, models: dict, config, log) -> list[tuple[str, str]]:
     """Draw the report's pictures; returns (file name, caption) pairs."""
-    import matplotlib
-
     matplotlib.use("Agg")
-    from matplotlib.figure import Figure
-
-    from footfall.features.dense import score_grid
-    from footfall.plots.maps import save_kept_templates, save_score_maps
-    from footfall.plots.relief import save_relief
-
     figs = []
     save_relief(maps["test0"], out / "test-board.png",
                 title="the first test board (never trained on)")
@@ -77,8 +78,6 @@ def _figures(out: Path, results: dict, maps: dict, models: dict, config, log) ->
 
 def _success_curves(out: Path, results: dict) -> tuple[str, str]:
     """Every method's success against the sweep boards' difficulty, with Wilson intervals."""
-    from matplotlib.figure import Figure
-
     fig = Figure(figsize=(6.5, 3.4), layout="constrained")
     ax = fig.subplots()
     levels = sorted(results["sweep"], key=float)
@@ -104,9 +103,6 @@ def _success_curves(out: Path, results: dict) -> tuple[str, str]:
 
 def _strip(board, model_path: Path, config, path: Path, seed: int) -> None:
     """Snapshots of the evaluation run of templates + features with ``seed`` (replayed: seeded)."""
-    from footfall.experiments.batch import reward_source, save_strip
-    from footfall.sim.episode import Frames, walk
-
     frames = Frames(snapshot_count=6, width=360, height=270)
     record = walk(board, reward_source(model_path, board), seed, config.walk, frames=frames)
     r = record.result

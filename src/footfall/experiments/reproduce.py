@@ -61,25 +61,36 @@ from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, above, at_least, param, within
 from footfall.core.robot import LITTLEDOG
-from footfall.core.seeds import SeedStreams
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor, LocalPool
-from footfall.experiments.runs import RunJob, Runner, board_files, claim_folder
-from footfall.expert.synthetic import ExpertConfig, walking_expert
+from footfall.experiments.report import write_report
+from footfall.experiments.runs import RunJob, Runner
+from footfall.experiments.unseen import FLAT, calibrate, evaluate, sweep
+from footfall.experiments.workspace import (
+    ROBOT_FEATURE_SET,
+    Spec,
+    Workspace,
+    boards,
+    correction_seeds,
+    open_workspace,
+    test_boards,
+)
+from footfall.expert.collect import collect_demonstrations
+from footfall.expert.corrections import step_verdicts
+from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
 from footfall.features.family import PAPER_FEATURE_SETS
+from footfall.learning.evaluation import expert_values, rank_scores
 from footfall.learning.model import LEG_GROUPS, FootholdModel
 from footfall.learning.ranker import SELECTIONS
+from footfall.learning.train import TrainingDemo, learn_model
 from footfall.sim.episode import WalkConfig
+from footfall.terrain import KINDS
 
 STORE_NAME = "reproduce.sqlite"
-ROBOT_FEATURE_SET = "both"  # the function the robot walks with between correction rounds
-Spec = tuple[tuple[str, float], ...]  # a board: (kind, difficulty) of each module
 
 
 def _is_spec(value: object) -> bool:
     """A board: a non-empty tuple of (kind, difficulty) with a known kind and 0 <= d <= 1."""
-    from footfall.terrain import KINDS
-
     return isinstance(value, tuple) and len(value) > 0 and all(
         isinstance(m, tuple) and len(m) == 2 and m[0] in KINDS
         and isinstance(m[1], (int, float)) and not isinstance(m[1], bool) and 0 <= m[1] <= 1
@@ -87,8 +98,6 @@ def _is_spec(value: object) -> bool:
 
 
 def _test_kinds(value: object) -> bool:
-    from footfall.terrain import KINDS
-
     return (isinstance(value, tuple) and "rocky" in value
             and all(isinstance(k, str) and k in KINDS and k != "flat" for k in value))
 
@@ -200,123 +209,6 @@ def reproduction_walk() -> WalkConfig:
     return replace(base, footstep=replace(base.footstep, search_radius=REPRODUCTION_SEARCH_RADIUS))
 
 
-# ------------------------------------------------------------------ boards
-def seed_streams(config: ReproduceConfig) -> SeedStreams:
-    """The reproduction's named seed streams (boards, runs, inspection, demonstrations, learning)."""
-    return SeedStreams("reproduce", config.seed)
-
-
-def boards(config: ReproduceConfig) -> dict[str, tuple[Spec, int]]:
-    """The boards known before any run: name -> (spec, board seed), from the "boards" stream.
-
-    Training boards, the flat board, one sweep board per grid difficulty and
-    ``calibration_boards`` per grid difficulty; the test boards' difficulty is
-    known only after the calibration (:func:`test_boards`).
-    """
-    streams = seed_streams(config)
-    out = {f"train{i:02d}": (spec, streams.seed_for("boards", 0, i))
-           for i, spec in enumerate(config.train_boards)}
-    out["flat"] = ((("flat", 0.0),) * 3, streams.seed_for("boards", 2))
-    for j, d in enumerate(config.difficulties):
-        out[f"sweep{d:g}"] = (_kinds_at(config, d), streams.seed_for("boards", 3, j))
-        for i in range(config.calibration_boards):
-            out[f"cal{d:g}-{i}"] = (_kinds_at(config, d), streams.seed_for("boards", 4, j, i))
-    return out
-
-
-def test_boards(config: ReproduceConfig, difficulty: float) -> dict[str, tuple[Spec, int]]:
-    """The unseen test boards at ``difficulty``: test0, test1, ... (fresh seeds)."""
-    streams = seed_streams(config)
-    return {f"test{b}": (_kinds_at(config, difficulty), streams.seed_for("boards", 1, b))
-            for b in range(config.test_boards)}
-
-
-def _kinds_at(config: ReproduceConfig, difficulty: float) -> Spec:
-    return tuple((kind, float(difficulty)) for kind in config.test_kinds)
-
-
-def correction_seeds(config: ReproduceConfig, r: int) -> list[tuple[int, int]]:
-    """Round ``r``'s (run seed, inspection seed) on each training board."""
-    streams = seed_streams(config)
-    return [(streams.seed_for("correction runs", r, i), streams.seed_for("inspection", r, i))
-            for i in range(len(config.train_boards))]
-
-
-def calibration_seeds(config: ReproduceConfig, level: int, board: int) -> list[int]:
-    """The expert's run seeds on calibration board ``board`` of grid level ``level``.
-
-    Every calibration board has run seeds of its own: with the same few seeds
-    on every board, the rule measured how those seeds fare rather than the
-    expert's success at a difficulty (reusing 2 seeds on all boards once chose
-    0.8, where the expert then crossed 39 of 63 test runs).
-    """
-    return seed_streams(config).seeds("calibration runs", config.calibration_runs, level, board)
-
-
-def evaluation_seeds(config: ReproduceConfig) -> list[int]:
-    """The run seeds of Table II: every method walks these on every test board (paired runs)."""
-    return seed_streams(config).seeds("evaluation runs", config.eval_runs)
-
-
-def sweep_seeds(config: ReproduceConfig) -> list[int]:
-    """The run seeds of the sweep: the same at every difficulty."""
-    return seed_streams(config).seeds("sweep runs", config.sweep_runs)
-
-
-def planned_seeds(config: ReproduceConfig) -> dict[str, list[int]]:
-    """Every seed the reproduction may use, by purpose (what the stages draw, listed up front)."""
-    streams = seed_streams(config)
-    rounds = range(config.rounds + config.extra_rounds)
-    return {"boards": [seed for _, seed in boards(config).values()]
-            + [seed for _, seed in test_boards(config, 0.0).values()],
-            "correction runs": [a for r in rounds for a, _ in correction_seeds(config, r)],
-            "inspection": [b for r in rounds for _, b in correction_seeds(config, r)],
-            "calibration runs": [s for j in range(len(config.difficulties))
-                                 for i in range(config.calibration_boards)
-                                 for s in calibration_seeds(config, j, i)],
-            "evaluation runs": evaluation_seeds(config), "sweep runs": sweep_seeds(config),
-            "demonstrations": [streams.seed_for("demonstrations", 0)],
-            "learning": [streams.seed_for("learning")]}
-
-
-@dataclass(frozen=True)
-class Workspace:
-    """A reproduction's folder: its settings, boards and seed streams (stage 1)."""
-
-    out: Path  # the report folder
-    config: ReproduceConfig
-    paths: dict[str, Path]  # board name -> height map file
-    maps: dict[str, HeightMap]  # board name -> height map
-    by_hash: dict[str, HeightMap]  # the boards by content hash (how runs and demonstrations
-    # name their terrain), hashed once
-    streams: SeedStreams
-
-    def model_path(self, name: str) -> Path:
-        """Where the model ``name`` (a round's or a final function's) is kept."""
-        return self.out / "models" / f"{name}.npz"
-
-    def add_boards(self, specs: dict[str, tuple[Spec, int]]) -> None:
-        """Boards made once a stage knows them (the test boards, after the calibration)."""
-        paths = board_files(self.out, {name: (spec, seed, True)
-                                       for name, (spec, seed) in specs.items()})
-        for name, path in paths.items():
-            self.paths[name] = path
-            self.maps[name] = HeightMap.load(path)
-            self.by_hash[self.maps[name].content_hash()] = self.maps[name]
-
-
-def open_workspace(out: str | os.PathLike, config: ReproduceConfig) -> Workspace:
-    """The folder ``out`` made ready: refused if it holds other settings; boards made once."""
-    out = Path(out)
-    claim_folder(out, config.to_dict(), "a reproduction")
-    (out / "models").mkdir(exist_ok=True)
-    paths = board_files(out, {name: (spec, seed, name != "flat")
-                              for name, (spec, seed) in boards(config).items()})
-    maps = {n: HeightMap.load(p) for n, p in paths.items()}
-    return Workspace(out, config, paths, maps, {m.content_hash(): m for m in maps.values()},
-                     seed_streams(config))
-
-
 # ---------------------------------------------------------------- learning
 def _training_key(demos: list, feature_set: str, settings: dict) -> str:
     h = hashlib.sha256()
@@ -329,8 +221,6 @@ def _training_key(demos: list, feature_set: str, settings: dict) -> str:
 def _learn(ws: Workspace, name: str, demos: list, feature_set: str, rms: float | None,
            log: Callable[[str], None]) -> FootholdModel:
     """The model learned from ``demos`` (ordered by source), reused from its file if it matches."""
-    from footfall.learning.train import TrainingDemo, learn_model
-
     config, path = ws.config, ws.model_path(name)
     seed = ws.streams.seed_for("learning")
     settings = {"library_size": config.library_size, "selection": config.selection,
@@ -461,7 +351,7 @@ def learn_functions(ws: Workspace, demos: list, log: Callable[[str], None]) -> F
 
 
 # ------------------------------------------------------------------ the job
-def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = ReproduceConfig(),
+def run_reproduction(out: str | os.PathLike, config: ReproduceConfig | None = None,
                      processes: int | None = None, log: Callable[[str], None] = print,
                      on_run: Callable[[str], None] | None = None,
                      executor: Executor | None = None) -> dict:
@@ -471,9 +361,9 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig = Reproduce
     is called after each run is stored (e.g. to show progress). The runs are
     walked on ``executor`` [default: a local pool of ``processes`` workers].
     """
-    from footfall.experiments.report import write_report
-    from footfall.experiments.unseen import FLAT, calibrate, evaluate, sweep
-
+    # Built here, not at import: a config's checks ask the registries, which load the
+    # plugins (a broken plugin must fail as one line when the command runs, not on import).
+    config = ReproduceConfig() if config is None else config
     started = time.perf_counter()
     ws = open_workspace(out, config)
     results: dict = {"config": config.to_dict(),
@@ -543,9 +433,6 @@ def _choice_quality(store: DemoStore, maps: dict[str, HeightMap], config: Reprod
     robot's choice against the expert's best in the same F, with the fractions
     of steps above the correction margin and above :data:`SEVERE_SHORTFALL`.
     """
-    from footfall.expert.corrections import step_verdicts
-    from footfall.expert.synthetic import SyntheticExpert
-
     expert = SyntheticExpert(config.expert)
     log("the expert's verdict on the choices of the test-board runs")
     out = {}
@@ -566,10 +453,6 @@ def _choice_quality(store: DemoStore, maps: dict[str, HeightMap], config: Reprod
 
 def _ranking(ws: Workspace, store: DemoStore, models: dict, log: Callable[[str], None]) -> dict:
     """Rank-eval of the three functions on the expert's demonstrations over the test board."""
-    from footfall.expert.collect import collect_demonstrations
-    from footfall.expert.synthetic import SyntheticExpert
-    from footfall.learning.evaluation import expert_values, rank_scores
-
     config, test = ws.config, ws.maps["test0"]
     expert = SyntheticExpert(config.expert)
     demos = store.demonstrations(source_prefix="walker:test")

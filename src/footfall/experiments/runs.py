@@ -23,12 +23,26 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
+from threadpoolctl import threadpool_limits
+
+from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
+from footfall.core.progress import BatchProgress
+from footfall.core.robot import LITTLEDOG
 from footfall.data.runlog import RunRecord
 from footfall.data.store import DemoStore
-from footfall.expert.synthetic import ExpertConfig
-from footfall.sim.episode import WalkConfig
+from footfall.expert.corrections import (
+    corrections_to_demonstrations,
+    inspect_run,
+    worst_corrections,
+)
+from footfall.expert.scorer import ExpertScorer
+from footfall.expert.synthetic import ExpertConfig, SyntheticExpert
+from footfall.features.reward import default_reward
+from footfall.learning.model import FootholdModel
+from footfall.sim.episode import WalkConfig, walk
+from footfall.terrain import make_board
 
 if TYPE_CHECKING:
     from footfall.experiments.executors import Executor
@@ -53,20 +67,24 @@ class RunJob:
     inspect_seed: int = 0  # the expert's randomness while it inspects the run
 
 
+def reward_source(model_path: str | os.PathLike | None, hmap: HeightMap):
+    """The reward ``reward_for(leg)`` of a model file, or the hand-tuned default (None).
+
+    Raises
+    ------
+    FootfallError
+        If the model is for another robot or another map resolution.
+    """
+    if model_path is None:
+        reward = default_reward()
+        return lambda leg: reward
+    model = FootholdModel.load(model_path)
+    model.check_compatible(robot=LITTLEDOG, map_resolution=hmap.resolution)
+    return model.reward_for
+
+
 def execute(job: RunJob) -> RunOutput:
     """One run (in a worker process): walk, and the expert's corrections if asked for."""
-    from threadpoolctl import threadpool_limits
-
-    from footfall.experiments.batch import reward_source
-    from footfall.expert.corrections import (
-        corrections_to_demonstrations,
-        inspect_run,
-        worst_corrections,
-    )
-    from footfall.expert.scorer import ExpertScorer
-    from footfall.expert.synthetic import SyntheticExpert
-    from footfall.sim.episode import walk
-
     hmap = _board(job.terrain)
     # One core per run: the stack's small matrix products only lose to BLAS threads
     # fighting over the cores the other runs use.
@@ -93,7 +111,7 @@ def _board(path: str) -> HeightMap:
     Runs of a batch on one board then share one map object, and with it what
     is computed once per map: the reward grids
     (:func:`footfall.control.body_path.terrain_grids`) and the expert's sphere
-    surface (:mod:`footfall.expert.synthetic`).
+    surface (:mod:`footfall.expert.surface`).
     """
     st = os.stat(path)
     key = (os.path.realpath(path), st.st_size, st.st_mtime_ns)
@@ -119,8 +137,6 @@ class Runner:
     def run(self, jobs: list[RunJob], desc: str) -> None:
         """Walk the jobs whose keys are not stored yet, their progress named ``desc`` (a bar on a
         terminal, a line every few runs in a log: :class:`footfall.core.progress.BatchProgress`)."""
-        from footfall.core.progress import BatchProgress
-
         done = {r["key"] for r in self.store.runs()}
         todo = [j for j in jobs if j.key not in done]
         if len(todo) < len(jobs):
@@ -152,8 +168,6 @@ def claim_folder(out: Path, settings: dict, what: str, free: tuple[str, ...] = (
     ``free`` may differ: they choose which runs are walked, not how (their run keys tell
     the runs apart).
     """
-    from footfall.core.files import write_text_atomic
-
     if out.exists() and not out.is_dir():
         raise FootfallError(f"output path is not a directory: {out}")
     out.mkdir(parents=True, exist_ok=True)
@@ -185,8 +199,6 @@ def board_files(out: Path, boards: dict[str, tuple[tuple, int, bool]]) -> dict[s
     ``boards``: name -> (modules as (kind, difficulty) pairs, board seed, flat ends). A board
     is saved atomically, so a file left by a stopped experiment is whole.
     """
-    from footfall.terrain import make_board
-
     folder = out / "terrain"
     folder.mkdir(parents=True, exist_ok=True)
     paths = {}

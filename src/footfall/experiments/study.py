@@ -31,20 +31,17 @@ from typing import Callable
 
 import numpy as np
 
+from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
-from footfall.core.files import plain_json, write_text_atomic
+from footfall.core.files import plain_json
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor
 from footfall.experiments.paired import compare
 from footfall.experiments.report import PAIR_COLUMNS, pair_cells
-from footfall.experiments.reproduce import (
-    STORE_NAME,
-    ReproduceConfig,
-    evaluation_seeds,
-    run_reproduction,
-)
+from footfall.experiments.reproduce import STORE_NAME, ReproduceConfig, run_reproduction
 from footfall.experiments.runs import claim_folder
 from footfall.experiments.unseen import METHODS, load_runs, test_outcomes
+from footfall.experiments.workspace import evaluation_seeds
 
 PAPER_ORDERINGS = (("both", "templates"), ("templates", "terrain"), ("both", "terrain"))
 # the paper's Table II: the first of each pair crossed more often and slipped less

@@ -30,7 +30,8 @@ from footfall.data.store import DemoStore
 from footfall.experiments.batch import summarise
 from footfall.experiments.difficulty import DifficultyChoice, choose_difficulty
 from footfall.experiments.paired import RunOutcome, compare_all, distance_summary
-from footfall.experiments.reproduce import (
+from footfall.experiments.runs import RunJob, Runner
+from footfall.experiments.workspace import (
     ROBOT_FEATURE_SET,
     Workspace,
     calibration_seeds,
@@ -38,7 +39,6 @@ from footfall.experiments.reproduce import (
     sweep_seeds,
     test_boards,
 )
-from footfall.experiments.runs import RunJob, Runner
 from footfall.features.family import PAPER_FEATURE_SETS
 
 REFERENCES = ("expert", "default")  # the synthetic expert choosing every foothold; the

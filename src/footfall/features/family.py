@@ -6,9 +6,10 @@ features, or one of your own. Everything downstream -- the reward, the
 learner, the model file, the dense scorer -- finds a family's columns by its
 name and its column names, never by position. To add a family, subclass
 :class:`FeatureFamily` in one module and decorate it with
-:func:`register_family`; a feature set (:data:`FEATURE_SETS`) is a named tuple
-of family names. The shared suite ``tests/test_feature_families.py`` checks
-every registered family.
+:func:`register_family` (the registry :data:`FAMILIES`); a feature set
+(:data:`FEATURE_SETS`) is a named tuple of family names. The built-in families
+register in their own modules, which :mod:`footfall.features` imports. The
+shared suite ``tests/test_feature_families.py`` checks every registered family.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ import numpy as np
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.core.plugins import load_plugins
+from footfall.core.registry import Registry
 from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState
 from footfall.features.config import FeatureConfig
@@ -209,9 +210,11 @@ def require_no_params(arrays: Mapping[str, np.ndarray], meta: Any) -> None:
 
 
 # ---------------------------------------------------------------- registries
-_FAMILIES: dict[str, type[FeatureFamily]] = {}  # every registered family, by name
+FAMILIES: Registry[type[FeatureFamily]] = Registry("feature family")
+"""Every registered feature family by name: the built-in ones (registered by their modules,
+which :mod:`footfall.features` imports), then those of plugins and of your own code."""
 
-FEATURE_SETS: dict[str, tuple[str, ...]] = {}
+FEATURE_SETS: Registry[tuple[str, ...]] = Registry("feature set")
 """Named feature sets: the families a ranking function is learned on, in column order."""
 
 
@@ -220,38 +223,36 @@ def register_family(cls: type[FeatureFamily]) -> type[FeatureFamily]:
     name = getattr(cls, "name", None)
     if not isinstance(name, str) or not name or "." in name:
         raise ValueError(f"a feature family needs a name without dots, got {name!r}")
-    if name in _FAMILIES and _FAMILIES[name] is not cls:
-        raise ValueError(f"feature family {name!r} is already registered")
-    _FAMILIES[name] = cls
-    return cls
+    return FAMILIES.register(name, cls)
 
 
 def unregister_family(name: str) -> None:
-    """Forget a family (for tests that register one of their own)."""
-    _FAMILIES.pop(name, None)
-    for key in [k for k, v in FEATURE_SETS.items() if name in v and k not in _BUILTIN_SETS]:
-        del FEATURE_SETS[key]
+    """Forget a family (for tests that register one of their own), and the sets that use it."""
+    FAMILIES.unregister(name)
+    for key, families_ in FEATURE_SETS.items():
+        if name in families_ and key not in _BUILTIN_SETS:
+            FEATURE_SETS.unregister(key)
 
 
 def families() -> dict[str, type[FeatureFamily]]:
     """Every registered feature family by name, the built-in ones first."""
-    _load_builtin()
-    return dict(_FAMILIES)
+    return dict(FAMILIES.items())
 
 
 def register_feature_set(name: str, families: tuple[str, ...]) -> None:
     """Name a feature set: the families it uses, in column order."""
     if not families or len(set(families)) != len(families):
         raise ValueError(f"feature set {name!r} needs distinct families, got {families!r}")
-    FEATURE_SETS[name] = tuple(families)
+    try:
+        FEATURE_SETS.register(name, tuple(families))
+    except ValueError:  # the name is taken: by the same set, named again, nothing changes
+        if FEATURE_SETS.get(name) != tuple(families):
+            raise
 
 
 def family_class(name: str) -> type[FeatureFamily]:
     """The registered family called ``name``."""
-    known = families()
-    if name not in known:
-        raise FootfallError(f"unknown feature family {name!r}; families are {', '.join(known)}")
-    return known[name]
+    return FAMILIES.get(name)
 
 
 def feature_set_families(feature_set: str) -> tuple[str, ...]:
@@ -260,9 +261,9 @@ def feature_set_families(feature_set: str) -> tuple[str, ...]:
     ``"both"`` is the paper's templates + terrain features + pose; ``"terrain+pose"`` spells
     a set out, so a newly registered family is usable without naming a set for it.
     """
-    known = families()
+    known = FAMILIES.names()
     if isinstance(feature_set, str) and feature_set in FEATURE_SETS:
-        return FEATURE_SETS[feature_set]
+        return FEATURE_SETS.get(feature_set)
     parts = tuple(str(feature_set).split("+"))
     if len(parts) > 1 and all(p in known for p in parts) and len(set(parts)) == len(parts):
         return parts
@@ -277,11 +278,3 @@ _BUILTIN_SETS = {"terrain": ("terrain", "pose"), "templates": ("templates", "pos
 for _name, _families in _BUILTIN_SETS.items():
     register_feature_set(_name, _families)
 PAPER_FEATURE_SETS = tuple(_BUILTIN_SETS)  # the sets the paper's tables compare: (a), (b), (c)
-
-
-def _load_builtin() -> None:
-    """Import the built-in families so that they register (they import this module), then
-    the plugins (:mod:`footfall.core.plugins`)."""
-    from footfall.features import terrain_features, templates, pose_features  # noqa: F401, I001
-
-    load_plugins()

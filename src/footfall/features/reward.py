@@ -22,7 +22,8 @@ import numpy as np
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.features.config import FeatureConfig
-from footfall.features.dense import ScoreGrid, dense_linear, linear_values
+from footfall.features.dense import ScoreGrid, linear_values
+from footfall.features.dense_linear import dense_linear
 from footfall.features.family import Candidates, FeatureFamily
 from footfall.features.scorer import FootholdScorer
 from footfall.features.templates import TemplateFeatures, TemplateLibrary

@@ -12,9 +12,10 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import matplotlib
 import numpy as np
 
-from footfall.core.files import atomic_path
+from footfall.core.atomic import atomic_path
 from footfall.core.robot import LEG_NAMES, RobotDescription
 from footfall.sim.explain import (
     SLIP_MOVED,
@@ -32,9 +33,7 @@ LEG_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red")
 def save_explain_plot(trace: TraceSeries, explanation: dict | None, robot: RobotDescription,
                       path: str | os.PathLike, title: str = "") -> None:
     """Write the figure of a run's last seconds to ``path`` (.png)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
+    matplotlib.use("Agg")  # headless: pyplot picks its backend when it is imported
     import matplotlib.pyplot as plt
 
     t = trace.time - trace.time[-1]  # [s] before the end

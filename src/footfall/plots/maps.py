@@ -14,7 +14,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from footfall.core.files import atomic_path
+from footfall.core.atomic import atomic_path
 from footfall.core.heightmap import PatchGrid
 from footfall.features.dense import ScoreGrid
 from footfall.learning.function import LinearFunction

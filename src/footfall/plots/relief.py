@@ -18,8 +18,9 @@ from matplotlib.colors import LightSource, ListedColormap, Normalize
 from matplotlib.figure import Figure
 from matplotlib.image import AxesImage
 
+from footfall.core.atomic import atomic_path
 from footfall.core.errors import FootfallError
-from footfall.core.files import atomic_path, writable_path
+from footfall.core.files import writable_path
 from footfall.core.heightmap import HeightMap
 
 # Land part of matplotlib's "terrain" map (its low end is sea blue).

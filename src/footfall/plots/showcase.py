@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
-from footfall.core.files import write_text_atomic
 from footfall.features.config import FeatureConfig
 from footfall.features.dense import score_grid
 from footfall.features.reward import LinearReward, analytic_templates, default_reward

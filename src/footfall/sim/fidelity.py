@@ -17,10 +17,14 @@ speed:
 
 from __future__ import annotations
 
+import mujoco
 import numpy as np
 
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LITTLEDOG, RobotDescription
+from footfall.core.state import nominal_state
+from footfall.sim.mjcf import compile_probe_model
+from footfall.sim.simulation import Simulation
 
 
 def ball_rest_height(hmap: HeightMap, xy: np.ndarray, radius: float) -> np.ndarray:
@@ -62,10 +66,6 @@ def ball_rest_errors(hmap: HeightMap, xy: np.ndarray, robot: RobotDescription = 
     the ball sinks in (the soft contact, or a height-field triangle below
     the map's surface). ``tune(model)``: changes to the physics under test.
     """
-    import mujoco
-
-    from footfall.sim.mjcf import compile_probe_model
-
     xy = np.atleast_2d(np.asarray(xy, dtype=np.float64))
     load = robot.total_mass / 3.0
     model = compile_probe_model(robot, hmap, xy, load)
@@ -89,9 +89,6 @@ def slope_creep(robot: RobotDescription = LITTLEDOG, gradient: float = 0.3,
     each foot's centre over that hold, shape (4,). ``tune(model)``: changes to
     the physics under test.
     """
-    from footfall.core.state import nominal_state
-    from footfall.sim.simulation import Simulation
-
     res = 0.002
     n = round(0.6 / res)
     x = np.arange(n) * res

@@ -11,10 +11,10 @@ exactly where a rigid ball at that (x, y) would touch the map, with the
 surface's slope there. One contact per foot, whatever the terrain. Shins,
 knees and the trunk still meet the height field. The pads follow the
 terrain's registration (the rigid move of
-:func:`footfall.sim.mjcf.terrain_layout`).
+:func:`footfall.sim.hfield.terrain_layout`).
 
 A variant under measurement (``footfall bench sim --foot-contact pads``,
-:func:`footfall.sim.mjcf.physics_variant`), not the walking runs' contact.
+:func:`footfall.sim.variants.physics_variant`), not the walking runs' contact.
 """
 
 from __future__ import annotations

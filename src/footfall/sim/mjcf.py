@@ -5,7 +5,8 @@ Every length, mass, limit and gain comes from a
 :mod:`footfall.core.kinematics` exactly, so MuJoCo's forward kinematics and the
 closed-form one agree to rounding. The terrain is made from a
 :class:`~footfall.core.heightmap.HeightMap`: MuJoCo height fields whose vertices
-are map cells, at most 2 mm apart (see :func:`terrain_layout`).
+are map cells, at most 2 mm apart (:mod:`footfall.sim.hfield`). A physics variant
+under measurement (:mod:`footfall.sim.variants`) changes the model while it lasts.
 
 Model layout (names are the API the simulation wrapper and tests rely on):
 
@@ -40,10 +41,7 @@ elliptic cones, see JACOBIAN).
 
 from __future__ import annotations
 
-import contextlib
 import math
-from collections.abc import Iterator, Mapping
-from itertools import pairwise
 
 import mujoco
 import numpy as np
@@ -51,12 +49,16 @@ import numpy as np
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LEG_NAMES, RobotDescription
+from footfall.sim.foot_pads import PAD_HALF_SIZE, PAD_HALF_THICKNESS, BallSurface, pad_pose
+from footfall.sim.hfield import (
+    MAX_HFIELD_SPACING,
+    registration_centre,
+    terrain_layout,
+    terrain_surface,
+)
+from footfall.sim.variants import VARIANT, pads_on
 
 JOINTS = ("hip_roll", "hip_pitch", "knee")  # joint name suffixes, in kinematics.py order
-TERRAIN_BASE = 0.02  # [m] thickness of the solid slab under the height field's lowest point
-MAX_HFIELD_SPACING = 0.002  # [m] coarsest height-field vertex spacing; finer maps are decimated
-# (MuJoCo tests every grid cell under a geom's bounding box against it: a 1 cm ball covers
-# 4x as many cells at 1 mm as at 2 mm, and collision is most of the cost of a step)
 CONTACT_TIMECONST_STEPS = 2.0  # [steps] contact time constant in physics steps: the stiffest
 # MuJoCo recommends, so that a foot sinks < 0.1 mm under the robot's weight
 IMPRATIO = 100.0  # [-] friction-to-normal impedance ratio of MuJoCo's elliptic friction cones:
@@ -67,8 +69,6 @@ JACOBIAN = "sparse"  # MuJoCo's constraint Jacobian storage. Its "auto" picks de
 # walking: 240 instead of 360 us per step over rocks (~14 contacts, ~8 iterations per step; the
 # same iterations, the same solution up to rounding). A robot standing still, where the warm-
 # started solver stops almost at once, steps ~5-10 % faster with dense
-TILE_CELLS = 32  # [cells] side of a terrain tile (64 mm at 2 mm): small enough that flat
-# stretches become boxes and a geom's bounding box meets few tiles' elevation ranges
 SHIN_PIECES = 3  # [-] the shin collides as this many collinear capsules: the same shape, but
 # each piece's bounding box covers fewer height-field cells than the whole slanted shin's
 FIXED_BASE_CLEARANCE = 0.5  # [m] test rig: trunk welded this far above the highest terrain point
@@ -78,6 +78,7 @@ CAMERA_OFFSET = (0.25, -0.6, 0.25)  # [m] tracking camera position from the robo
 TERRAIN_GEOM_GROUP = 2  # MuJoCo geom group of every terrain geom (robot geoms use 0, 1 and 3),
 # so rays and renders can pick the terrain alone
 _ROBOT_GROUP = 1  # collision bit of robot geoms; the terrain has the matching affinity
+_PAD_GROUP = 2  # collision bit of the feet and their pads in the "pads" foot contact
 _VISUAL_RGBA = "0.75 0.75 0.78 1"
 _FOOT_RGBA = "0.15 0.15 0.15 1"
 _TERRAIN_RGBA = "0.72 0.62 0.48 1"
@@ -86,154 +87,6 @@ _TERRAIN_RGBA = "0.72 0.62 0.48 1"
 def _f(*values: float) -> str:
     """Numbers for XML, written so that they read back bit for bit."""
     return " ".join(repr(float(v)) for v in values)
-
-
-# ----------------------------------------------------------------- height field
-def terrain_surface(hmap: HeightMap) -> np.ndarray:
-    """The heights [m] the simulator uses, shape (nx, ny): the map with its holes filled.
-
-    The planner sees the map with NaN cells (no data) and never steps on
-    them; the simulator needs a surface. A NaN cell becomes a hole down to
-    the map's lowest valid height -- what a missing scan of a terrain module
-    usually is (a shadow behind a step, a gap between modules) -- so that
-    nothing the robot might lean on appears where there is no data.
-    """
-    h = np.asarray(hmap.heights, dtype=np.float64)
-    return np.where(np.isnan(h), np.nanmin(h), h)
-
-
-def hfield_decimation(hmap: HeightMap, max_spacing: float | None = MAX_HFIELD_SPACING) -> int:
-    """Keep every k-th map cell as a height-field vertex: the largest k with k * resolution <= max_spacing.
-
-    1 (full resolution) for maps already that coarse, or with ``max_spacing`` None.
-    """
-    if max_spacing is None:
-        return 1
-    if not (isinstance(max_spacing, (int, float)) and math.isfinite(max_spacing)
-            and max_spacing > 0):
-        raise FootfallError(f"max_spacing must be a number > 0 [m] or None, got {max_spacing!r}")
-    k = max(1, math.floor(max_spacing / hmap.resolution + 1e-9))
-    return min(k, min(hmap.shape) - 1)  # keep at least 2 x 2 vertices
-
-
-def _finite(value, name: str, unit: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        v = math.nan
-    if not math.isfinite(v):
-        raise FootfallError(f"{name} must be a finite number [{unit}], got {value!r}")
-    return v
-
-
-def registration_centre(hmap: HeightMap, max_spacing: float | None = MAX_HFIELD_SPACING
-                        ) -> np.ndarray:
-    """The point (2,) [m] the terrain's registration turns about: the vertex grid's centre."""
-    if _VARIANT.get("max_spacing") is not None:
-        max_spacing = _VARIANT["max_spacing"]
-    k = hfield_decimation(hmap, max_spacing)
-    n = (np.array(hmap.shape) - 1) // k + 1  # vertices along x and y
-    step = k * hmap.resolution
-    return np.asarray(hmap.origin) + 0.5 * (n - 1) * step
-
-
-def terrain_layout(hmap: HeightMap, terrain_offset=(0.0, 0.0, 0.0), terrain_yaw: float = 0.0,
-                   max_spacing: float | None = MAX_HFIELD_SPACING) -> list[dict]:
-    """The simulated terrain as MuJoCo geoms: height-field tiles, and boxes where a tile is flat.
-
-    Vertices are map cells: with decimation k (see :func:`hfield_decimation`;
-    1 mm maps get k = 2), map cell (k i, k j) is a vertex at exactly that
-    cell's position and height, so the vertex spacing is k * resolution and
-    the terrain spans k * floor((n - 1) / k) cells along each axis (at most
-    k - 1 cells short of the map's last cell centre). Between vertices
-    MuJoCo's surface is two planar triangles per grid square. The vertex grid
-    is cut into tiles of TILE_CELLS squares that share their edge vertices,
-    so the surface is continuous. Tiles whose vertices all have one height
-    become boxes with their top at that height, neighbours of equal height
-    merged into one box (exactly the same surface, and MuJoCo collides a
-    ball with a box in closed form instead of testing every triangle under
-    it); every other tile is a height field whose vertex (row r, column c)
-    is the tile's vertex (i0 + c, j0 + r) -- MuJoCo's rows run along y.
-    Every tile is TERRAIN_BASE thick below its lowest point.
-
-    The registration moves the terrain rigidly: a map point p becomes the
-    world point ``c + Rz(terrain_yaw) (p - c) + terrain_offset``, where c is
-    the centre of the vertex grid (at height 0).
-
-    Returns
-    -------
-    list of dict
-        One per geom: ``kind`` ("box" or "hfield"), ``pos`` (3,) [m] and
-        ``quat`` (4,) (w, x, y, z) of the geom; a box has ``size`` (3,) [m]
-        half extents; a height field has ``nrow``, ``ncol``, ``size`` (4,)
-        MuJoCo's (x radius [m], y radius [m], elevation range [m], base
-        thickness [m]) and ``data`` (nrow * ncol,) float32 heights
-        normalised to [0, 1].
-    """
-    offset = np.asarray(terrain_offset, dtype=np.float64)
-    if offset.shape != (3,) or not np.isfinite(offset).all():
-        raise FootfallError(f"terrain_offset must be 3 finite numbers [m], got {terrain_offset!r}")
-    yaw = _finite(terrain_yaw, "terrain_yaw", "rad")
-    k = hfield_decimation(hmap, max_spacing)
-    h = terrain_surface(hmap)[::k, ::k]
-    nx, ny = h.shape
-    step = k * hmap.resolution
-    origin = np.asarray(hmap.origin)
-    centre = registration_centre(hmap, max_spacing)
-    rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
-    quat = np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
-    edges_i = np.append(np.arange(0, nx - 1, TILE_CELLS), nx - 1)  # tile corner vertices
-    edges_j = np.append(np.arange(0, ny - 1, TILE_CELLS), ny - 1)
-    blocks = [[h[i0:i1 + 1, j0:j1 + 1] for j0, j1 in pairwise(edges_j)]
-              for i0, i1 in pairwise(edges_i)]  # tiles, sharing their edge vertices
-    lo = np.array([[block.min() for block in row] for row in blocks])
-    hi = np.array([[block.max() for block in row] for row in blocks])
-    flat = lo == hi
-
-    def placed(i0: int, i1: int, j0: int, j1: int, z: float) -> tuple[np.ndarray, np.ndarray]:
-        """World pose centre (3,) [m] and half extents (2,) [m] of vertex block [i0, i1] x [j0, j1]."""
-        mid = origin + 0.5 * np.array([i0 + i1, j0 + j1]) * step
-        xy = centre + rot @ (mid - centre) + offset[:2]
-        return np.array([xy[0], xy[1], z + offset[2]]), 0.5 * np.array([i1 - i0, j1 - j0]) * step
-
-    tiles = []
-    for a, b in zip(*np.nonzero(~flat)):  # a loop over tiles (dozens), not over cells
-        i0, i1, j0, j1 = edges_i[a], edges_i[a + 1], edges_j[b], edges_j[b + 1]
-        t = blocks[a][b]
-        pos, half = placed(i0, i1, j0, j1, lo[a, b])
-        tiles.append({"kind": "hfield", "quat": quat, "pos": pos,
-                      "nrow": j1 - j0 + 1, "ncol": i1 - i0 + 1,
-                      "size": np.array([half[0], half[1], hi[a, b] - lo[a, b], TERRAIN_BASE]),
-                      "data": ((t.T - lo[a, b]) / (hi[a, b] - lo[a, b])).astype(np.float32).ravel()})
-    for a0, a1, b0, b1 in _merge_flat(flat, lo):
-        pos, half = placed(edges_i[a0], edges_i[a1], edges_j[b0], edges_j[b1],
-                           lo[a0, b0] - 0.5 * TERRAIN_BASE)
-        tiles.append({"kind": "box", "quat": quat, "pos": pos,
-                      "size": np.array([half[0], half[1], 0.5 * TERRAIN_BASE])})
-    return tiles
-
-
-def _merge_flat(flat: np.ndarray, height: np.ndarray) -> list[tuple[int, int, int, int]]:
-    """Greedy cover of the flat tiles by rectangles of equal height, as [a0, a1) x [b0, b1).
-
-    Fewer, larger boxes mean fewer seams under a foot (each seam a second
-    contact) and fewer geoms in MuJoCo's broad phase.
-    """
-    free = flat.copy()
-    rects = []
-    for a0, b0 in zip(*np.nonzero(flat)):  # tiles, not cells
-        if not free[a0, b0]:
-            continue
-        z = height[a0, b0]
-        b1 = b0 + 1
-        while b1 < flat.shape[1] and free[a0, b1] and height[a0, b1] == z:
-            b1 += 1
-        a1 = a0 + 1
-        while a1 < flat.shape[0] and free[a1, b0:b1].all() and (height[a1, b0:b1] == z).all():
-            a1 += 1
-        free[a0:a1, b0:b1] = False
-        rects.append((int(a0), int(a1), int(b0), int(b1)))
-    return rects
 
 
 # ------------------------------------------------------------------------ robot
@@ -332,62 +185,6 @@ def build_mjcf(robot: RobotDescription, hmap: HeightMap | None, *,
     return _mjcf(robot, tiles, terrain_offset, friction, fixed_base)
 
 
-# ------------------------------------------------------------- physics variants
-PHYSICS_OPTIONS = ("cone", "impratio", "tolerance", "iterations", "ls_iterations", "jacobian",
-                   "solver", "noslip_iterations", "timestep")  # <option> attributes a variant may set
-_VARIANT: dict = {}  # the physics variant in force (physics_variant); empty: the documented model
-
-
-FOOT_CONTACTS = ("terrain", "pads")  # the ball feet meet the height field, or their pads
-_PAD_GROUP = 2  # collision bit of the feet and their pads in the "pads" foot contact
-
-
-@contextlib.contextmanager
-def physics_variant(options: Mapping[str, str] | None = None,
-                    max_spacing: float | None = None,
-                    foot_contact: str = "terrain") -> Iterator[None]:
-    """Compile models with other physics while the context lasts: to measure what it costs.
-
-    ``options``: MuJoCo ``<option>`` attributes (of :data:`PHYSICS_OPTIONS`) as
-    MJCF text, e.g. ``{"cone": "pyramidal", "impratio": "10"}``;
-    ``max_spacing`` [m]: the height field's coarsest vertex spacing in place of
-    :data:`MAX_HFIELD_SPACING`; ``foot_contact`` "pads": each ball foot meets
-    only its own pad (:mod:`footfall.sim.foot_pads`). For ``footfall bench sim
-    --physics``: the walking runs of every experiment use the documented model.
-
-    Raises
-    ------
-    FootfallError
-        For an option not in :data:`PHYSICS_OPTIONS`, or a bad spacing.
-    """
-    options = dict(options or {})
-    unknown = sorted(set(options) - set(PHYSICS_OPTIONS))
-    if unknown:
-        raise FootfallError(f"unknown physics option(s) {', '.join(unknown)}; known: "
-                            f"{', '.join(PHYSICS_OPTIONS)}")
-    if foot_contact not in FOOT_CONTACTS:
-        raise FootfallError(f"unknown foot contact {foot_contact!r}; known: "
-                            f"{', '.join(FOOT_CONTACTS)}")
-    if max_spacing is not None and not (isinstance(max_spacing, (int, float))
-                                        and math.isfinite(max_spacing) and max_spacing > 0):
-        raise FootfallError(f"max_spacing must be a number > 0 [m], got {max_spacing!r}")
-    attributes = " ".join(f'{k}="{v}"' for k, v in options.items())
-    try:  # a value MuJoCo refuses is refused here, in one line
-        mujoco.MjModel.from_xml_string(f"<mujoco><option {attributes}/></mujoco>")
-    except ValueError as exc:
-        raise FootfallError(f"physics options {attributes}: "
-                            f"{str(exc).strip().splitlines()[0]}") from None
-    saved = dict(_VARIANT)
-    _VARIANT.clear()
-    _VARIANT.update({"options": {k: str(v) for k, v in options.items()},
-                     "max_spacing": max_spacing, "foot_contact": foot_contact})
-    try:
-        yield
-    finally:
-        _VARIANT.clear()
-        _VARIANT.update(saved)
-
-
 def _checked_layout(robot, hmap, terrain_offset, terrain_yaw, max_spacing) -> list | None:
     if not isinstance(robot, RobotDescription):
         raise FootfallError(f"robot must be a RobotDescription, got {type(robot).__name__}")
@@ -398,8 +195,8 @@ def _checked_layout(robot, hmap, terrain_offset, terrain_yaw, max_spacing) -> li
         return None
     if not isinstance(hmap, HeightMap):
         raise FootfallError(f"hmap must be a HeightMap or None, got {type(hmap).__name__}")
-    if _VARIANT.get("max_spacing") is not None:
-        max_spacing = _VARIANT["max_spacing"]
+    if VARIANT.get("max_spacing") is not None:
+        max_spacing = VARIANT["max_spacing"]
     return terrain_layout(hmap, terrain_offset, terrain_yaw, max_spacing)
 
 
@@ -431,7 +228,7 @@ def _mjcf(robot: RobotDescription, tiles: list[dict] | None, terrain_offset,
         raise FootfallError(f"friction must be a finite number > 0, got {friction!r}")
     timestep = 1.0 / robot.servo_rate
     option = {"timestep": _f(timestep), "integrator": "implicitfast", "cone": "elliptic",
-              "impratio": _f(IMPRATIO), "jacobian": JACOBIAN, **_VARIANT.get("options", {})}
+              "impratio": _f(IMPRATIO), "jacobian": JACOBIAN, **VARIANT.get("options", {})}
     option_xml = " ".join(f'{k}="{v}"' for k, v in option.items())
 
     if tiles is None:  # a plane is invariant under xy shifts and yaw: only the height offset counts
@@ -522,14 +319,7 @@ def _filled(model: mujoco.MjModel, tiles: list | None) -> mujoco.MjModel:
     return model
 
 
-def pads_on() -> bool:
-    """Whether the physics variant in force gives each ball foot its own pad."""
-    return _VARIANT.get("foot_contact") == "pads"
-
-
 def _pad_geom(name: str | None = None) -> str:
-    from footfall.sim.foot_pads import PAD_HALF_SIZE, PAD_HALF_THICKNESS
-
     named = "" if name is None else f'name="{name}" '
     return (f'<geom {named}type="box" '
             f'size="{_f(PAD_HALF_SIZE, PAD_HALF_SIZE, PAD_HALF_THICKNESS)}" '
@@ -564,8 +354,6 @@ def compile_probe_model(robot: RobotDescription, hmap: HeightMap, xy: np.ndarray
         for k, (x, y) in enumerate(xy))
     pairs = ""
     if pads_on():  # each probe over its own fixed pad, as a foot over its pad
-        from footfall.sim.foot_pads import BallSurface, pad_pose
-
         surface = BallSurface(terrain_surface(hmap), hmap, robot.foot_radius,
                               registration_centre(hmap, max_spacing), 0.0, np.zeros(3))
         pos, quat = pad_pose(*surface.contact(xy))

@@ -34,6 +34,7 @@ import secrets
 import socket
 from importlib import resources
 from typing import Annotated, Any, Literal
+from urllib.parse import parse_qs
 
 from fastapi import FastAPI, Path, Query, Request
 from fastapi.exceptions import RequestValidationError
@@ -189,8 +190,6 @@ class Guard:
 
 def _token_of(scope: dict) -> str | None:
     """The token a request carries: query ``token``, ``Authorization: token X``, or the cookie."""
-    from urllib.parse import parse_qs
-
     query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
     if query.get("token"):
         return query["token"][0]
@@ -269,7 +268,7 @@ def serve(service: TeachService, sock: socket.socket, token: str,
           log_level: str = "warning") -> None:
     """Serve until Ctrl-C or SIGTERM: uvicorn finishes the requests in flight (each label is
     one transaction: a label lands whole or not at all), then the store is closed."""
-    import uvicorn
+    import uvicorn  # the server itself: only `footfall teach` serves
 
     config = uvicorn.Config(create_app(service, token), log_level=log_level, access_log=False,
                             server_header=False, lifespan="off", ws="none")  # HTTP only

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from footfall.control.footstep import FootstepConfig
 from footfall.core.errors import FootfallError, NotFound
 from footfall.core.files import plain_json
 from footfall.core.robot import LITTLEDOG, RobotDescription
@@ -28,7 +29,7 @@ from footfall.data.label import check_labeler
 from footfall.data.runlog import RunRecord
 from footfall.data.store import DemoStore
 from footfall.expert.corrections import step_verdicts
-from footfall.expert.synthetic import ExpertConfig, SyntheticExpert
+from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
 from footfall.teach.review import (
     nearest_candidate,
     review_order,
@@ -43,9 +44,6 @@ JUDGED_RUNS = 32  # runs whose expert verdicts the service remembers (a few seco
 def default_expert() -> ExpertConfig:
     """The synthetic expert that orders the steps: the one that corrects the reproduction's runs
     (the walking expert at the default gait's foot lead, :func:`walking_expert`)."""
-    from footfall.control.footstep import FootstepConfig
-    from footfall.expert.synthetic import walking_expert
-
     return walking_expert(FootstepConfig().lead)
 
 

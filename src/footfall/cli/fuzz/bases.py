@@ -14,8 +14,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from PIL import Image
 
+from footfall.cli.entry import main
 from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
 
 
 @dataclass(frozen=True)
@@ -39,8 +42,6 @@ class Bases:
 
 
 def _cli(*argv: str) -> None:
-    from footfall.cli import main
-
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
         if main([str(a) for a in argv]) != 0:
             raise FootfallError(f"fuzz: could not make a base file: footfall {' '.join(argv)}")
@@ -48,10 +49,6 @@ def _cli(*argv: str) -> None:
 
 def make_bases(root: str | Path) -> Bases:
     """Make (or reuse) the base files in ``root``."""
-    from PIL import Image
-
-    from footfall.core.heightmap import HeightMap
-
     root = Path(root)
     root.mkdir(parents=True, exist_ok=True)
     paths = {name: root / name for name in ("map.npz", "small.npz", "store.sqlite", "model.npz")}

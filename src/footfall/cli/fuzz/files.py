@@ -19,6 +19,9 @@ from footfall.cli.fuzz.bases import Bases
 from footfall.cli.fuzz.harness import Garbage
 from footfall.cli.fuzz.oracles import check_map, check_model
 from footfall.cli.fuzz.targets import Target, register_target
+from footfall.core.heightmap import HeightMap
+from footfall.learning.model import FootholdModel
+from footfall.terrain.scans import import_terrain
 
 
 def _json_paths(value: Any, at: tuple = ()) -> list[tuple]:
@@ -131,8 +134,6 @@ def _no_pickle(scratch: Path) -> None:
 
 def _map_work(case: list, bases: Bases, scratch: Path) -> Callable[[], None]:
     def work() -> None:
-        from footfall.core.heightmap import HeightMap
-
         path = build_npz(bases.small_map, case, scratch)
         try:
             check_map(HeightMap.load(path))
@@ -143,8 +144,6 @@ def _map_work(case: list, bases: Bases, scratch: Path) -> Callable[[], None]:
 
 def _model_work(case: list, bases: Bases, scratch: Path) -> Callable[[], None]:
     def work() -> None:
-        from footfall.learning.model import FootholdModel
-
         path = build_npz(bases.model, case, scratch)
         try:
             check_model(FootholdModel.load(path), bases)
@@ -193,8 +192,6 @@ def _scan_work(case: tuple, bases: Bases, scratch: Path) -> Callable[[], None]:
     suffix, mutations, resolution, z_scale, nodata = case
 
     def work() -> None:
-        from footfall.terrain.scans import import_terrain
-
         path = scratch / f"scan{suffix}"
         _mutated_scan(bases.scans[suffix], mutations, path)
         if resolution is None and suffix in (".npy", ".png"):

@@ -19,6 +19,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
+from footfall.cli.entry import main
 from footfall.core.errors import FootfallError
 
 FAILURES = ("traceback", "hang", "memory", "garbage", "multiline")
@@ -152,8 +153,6 @@ def cli_work(argv: list[str], must_refuse: bool, cwd: Path | None = None
     refusal; any other status or an escaping exception is a failure.
     """
     def work() -> None:
-        from footfall.cli import main
-
         err = io.StringIO()
         with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()), \
                 contextlib.chdir(cwd if cwd is not None else Path.cwd()):

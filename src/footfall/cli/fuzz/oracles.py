@@ -11,6 +11,15 @@ import numpy as np
 
 from footfall.cli.fuzz.bases import Bases
 from footfall.cli.fuzz.harness import Garbage
+from footfall.core.files import checked_json
+from footfall.core.heightmap import HeightMap
+from footfall.core.state import nominal_state
+from footfall.data.store import DemoStore
+from footfall.expert.collect import rough_x_range
+from footfall.features.candidates import reachable_footholds
+from footfall.features.scoring import score_footholds
+from footfall.learning.train import store_demonstrations
+from footfall.terrain.saving import summarise_map
 
 HEIGHT_BOUND = 1e5  # [m] no height of an accepted map is this large
 ORIGIN_BOUND = 1e6  # [m] nor its origin this far from the frame's
@@ -18,11 +27,6 @@ ORIGIN_BOUND = 1e6  # [m] nor its origin this far from the frame's
 
 def check_map(hmap: Any) -> None:
     """An accepted height map must be one footfall can use: finite numbers, sane sizes."""
-    from footfall.core.files import checked_json
-    from footfall.core.heightmap import HeightMap
-    from footfall.expert.collect import rough_x_range
-    from footfall.terrain.saving import summarise_map
-
     if not isinstance(hmap, HeightMap):
         raise Garbage(f"not a HeightMap: {type(hmap).__name__}")
     h = hmap.heights
@@ -44,11 +48,6 @@ def check_map(hmap: Any) -> None:
 
 def check_model(model: Any, bases: Bases) -> None:
     """An accepted model must rank footholds with finite rewards on a valid map."""
-    from footfall.core.heightmap import HeightMap
-    from footfall.core.state import nominal_state
-    from footfall.features.candidates import reachable_footholds
-    from footfall.features.scoring import score_footholds
-
     hmap = HeightMap.load(bases.map)
     for leg in ("LF", "RH"):
         state = nominal_state(hmap, (0.3, 0.0), 0.0, leg)
@@ -61,8 +60,6 @@ def check_model(model: Any, bases: Bases) -> None:
 
 def check_demonstrations(path: Path) -> None:
     """Every demonstration read from an accepted store holds finite numbers of the right shape."""
-    from footfall.learning.train import store_demonstrations
-
     demos, terrains = store_demonstrations(path)
     for hmap in terrains.values():
         check_map(hmap)
@@ -83,8 +80,6 @@ def check_demonstrations(path: Path) -> None:
 def check_runs(path: Path) -> None:
     """Every run log read from an accepted store holds finite times, positions and candidates,
     rewards that are numbers or -inf (an invalid candidate), and a choice among them."""
-    from footfall.data.store import DemoStore
-
     with DemoStore(path, read_only=True) as store:
         records = [store.run(head["id"]) for head in store.runs()]
     for run in records:

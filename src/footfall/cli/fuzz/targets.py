@@ -19,6 +19,7 @@ from hypothesis import strategies as st
 
 from footfall.cli.fuzz.bases import Bases
 from footfall.cli.fuzz.harness import Outcome, guarded
+from footfall.core.registry import Registry
 
 
 @dataclass(frozen=True)
@@ -31,13 +32,13 @@ class Target:
     seconds: float = 10.0  # [s] the time limit of one input
 
 
-TARGETS: dict[str, Target] = {}
+TARGETS: Registry[Target] = Registry("fuzz target")
+"""Every loader and command under fuzz, by name."""
 
 
 def register_target(target: Target) -> Target:
     """Add ``target`` to :data:`TARGETS` (by its name)."""
-    TARGETS[target.name] = target
-    return target
+    return TARGETS.register(target.name, target)
 
 
 def run_case(target: Target, case: Any, bases: Bases, scratch: Path) -> Outcome:

@@ -1,0 +1,11 @@
+"""Benchmarks: figures printed, each against a baseline measured in the same process.
+
+One module per benchmark (``footfall bench ...``): dense scoring against a
+per-candidate loop (:mod:`~footfall.experiments.bench.scoring`), learning
+against scikit-learn (:mod:`~footfall.experiments.bench.learning`), the whole
+walking stack against bare MuJoCo stepping (:mod:`~footfall.experiments.bench.sim`),
+the walking expert with its placement error against without
+(:mod:`~footfall.experiments.bench.expert`), and a batch on a Ray cluster
+against the local process pool (:mod:`~footfall.experiments.bench.executors`).
+Tests never assert a time: these commands print them.
+"""

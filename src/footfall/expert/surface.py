@@ -1,0 +1,131 @@
+"""The ball-centre surface: how high a sphere's centre sits when it is lowered onto the map.
+
+``B(c) = max over cells c' within r of h(c') + sqrt(r^2 - |c - c'|^2)``, a
+grey-scale dilation of the heights by a sphere of radius r: for the ball foot
+(r the foot radius) its slopes are the ball's contact normals, for the shin
+(r the lower leg's radius) its height is the clearance the leg needs. The
+synthetic expert (:mod:`footfall.expert.synthetic`) reads every terrain term
+from it; a map's surface is dilated once per radius and sampled in windows.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+
+from footfall.core.ball import ball_centre_surface
+from footfall.core.heightmap import HeightMap
+
+
+# ----------------------------------------------------------------- geometry
+@dataclass(frozen=True, eq=False)
+class SphereSurface:
+    """A sphere's centre-height surface on a window of map cells (see :func:`sphere_surface`)."""
+
+    filled: np.ndarray  # (wx, wy) [m] centre heights, 0 where unknown
+    known: np.ndarray  # (wx, wy) 1.0 where the height is known, else 0.0
+    origin: np.ndarray  # (2,) [m] position of window cell (0, 0)
+    resolution: float  # [m/cell]
+    complete: bool  # every height in the window is known
+
+    def at(self, points: np.ndarray) -> np.ndarray:
+        """Bilinear height [m] at points (..., 2); NaN outside the window or where unknown.
+
+        The weights of corners with a known height are renormalised (as in
+        :meth:`HeightMap.height_at`), but a point whose nearest cell is unknown is NaN.
+        """
+        f = (points - self.origin) / self.resolution
+        wx, wy = self.filled.shape
+        fi, fj = f[..., 0], f[..., 1]
+        inside = (fi >= 0) & (fi <= wx - 1) & (fj >= 0) & (fj <= wy - 1)
+        fi = np.where(inside, fi, 0.0)
+        fj = np.where(inside, fj, 0.0)
+        i0 = np.minimum(fi.astype(np.intp), wx - 2)
+        j0 = np.minimum(fj.astype(np.intp), wy - 2)
+        ti, tj = fi - i0, fj - j0
+        flat = i0 * wy + j0
+        corners = ((0, (1 - ti) * (1 - tj)), (wy, ti * (1 - tj)), (1, (1 - ti) * tj),
+                   (wy + 1, ti * tj))
+        num = np.zeros(fi.shape)
+        for step, w in corners:
+            num += w * np.take(self.filled, flat + step)
+        out = np.full(fi.shape, np.nan)
+        if self.complete:  # the common case: every height in the window is known
+            return np.where(inside, num, out)
+        den = np.zeros(fi.shape)
+        for step, w in corners:
+            den += w * np.take(self.known, flat + step)
+        nearest = np.take(self.known,
+                          np.rint(fi).astype(np.intp) * wy + np.rint(fj).astype(np.intp))
+        good = inside & (nearest > 0) & (den > 0)
+        np.divide(num, den, out=out, where=good)
+        return out
+
+
+_BOARD_SURFACES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+# map -> {radius [m]: (filled, known)}: each map's sphere surface, dilated once over the whole map
+
+
+def board_surface(hmap: HeightMap, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """The sphere's centre-height surface over the whole map: (heights [m], 0 where unknown;
+    1.0 where known), computed once per map and radius (a map's heights are read-only)."""
+    per_map = _BOARD_SURFACES.setdefault(hmap, {})
+    if radius not in per_map:
+        surface = ball_centre_surface(hmap.heights, hmap.resolution, radius)
+        known = np.isfinite(surface)
+        filled = np.where(known, surface, 0.0)
+        filled.setflags(write=False)
+        per_map[radius] = (filled, known)
+    return per_map[radius]
+
+
+def sphere_surface(hmap: HeightMap, lo: np.ndarray, hi: np.ndarray, radius: float
+                    ) -> SphereSurface | None:
+    """Centre height [m] of a sphere of ``radius`` [m] lowered onto the map, on a window of cells.
+
+    ``B(c) = max over cells c' within radius of h(c') + sqrt(radius^2 - |c - c'|^2)``, a
+    grey-scale dilation of the heights by the sphere. Covers at least the positions
+    in [lo, hi] (x, y) [m] that lie on the map; the window is padded by the
+    sphere's reach, so every value sampled inside [lo, hi] is the whole map's
+    (:func:`board_surface`, dilated once per map: the maximum over the same cells,
+    bit for bit), and only the map's own border truncates (beyond it there is nothing
+    to touch). Cells are points at their centres; cells without data give no
+    support; where no cell with data lies within ``radius``, the height is
+    unknown. ``None`` if nothing in the window is known.
+    """
+    res = hmap.resolution
+    reach = int(math.ceil(radius / res))
+    nx, ny = hmap.shape
+    lo_idx = np.floor((np.asarray(lo) - hmap.origin) / res).astype(int) - reach - 1
+    hi_idx = np.ceil((np.asarray(hi) - hmap.origin) / res).astype(int) + reach + 2
+    i0, j0 = max(lo_idx[0], 0), max(lo_idx[1], 0)
+    i1, j1 = min(hi_idx[0], nx), min(hi_idx[1], ny)
+    if i1 - i0 < 2 or j1 - j0 < 2:
+        return None
+    filled, known = board_surface(hmap, radius)
+    known = known[i0:i1, j0:j1]
+    if not known.any():
+        return None
+    return SphereSurface(filled[i0:i1, j0:j1], known.astype(np.float64),
+                    np.array([hmap.origin[0] + i0 * res, hmap.origin[1] + j0 * res]), res,
+                    bool(known.all()))
+
+
+def sample_surface(surface: SphereSurface | None, points: np.ndarray) -> np.ndarray:
+    """Height [m] of a sphere surface at points (..., 2); NaN where unknown."""
+    if surface is None:
+        return np.full(points.shape[:-1], np.nan)
+    return surface.at(points)
+
+
+def no_data(hmap: HeightMap, points: np.ndarray) -> np.ndarray:
+    """Whether the map has no data at points (..., 2) [m]: off the map or a NaN cell."""
+    idx = hmap.position_to_index(points)
+    nx, ny = hmap.shape
+    inside = (idx[..., 0] >= 0) & (idx[..., 0] < nx) & (idx[..., 1] >= 0) & (idx[..., 1] < ny)
+    i = np.clip(idx[..., 0], 0, nx - 1)
+    j = np.clip(idx[..., 1], 0, ny - 1)
+    return ~inside | np.isnan(hmap.heights[i, j])

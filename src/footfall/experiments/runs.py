@@ -39,7 +39,7 @@ from footfall.expert.corrections import (
 )
 from footfall.expert.scorer import ExpertScorer
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert
-from footfall.features.reward import default_reward
+from footfall.features.scorer import SCORERS
 from footfall.learning.model import FootholdModel
 from footfall.sim.episode import WalkConfig, walk
 from footfall.terrain import make_board
@@ -76,7 +76,7 @@ def reward_source(model_path: str | os.PathLike | None, hmap: HeightMap):
         If the model is for another robot or another map resolution.
     """
     if model_path is None:
-        reward = default_reward()
+        reward = SCORERS.get("hand-tuned")(None)
         return lambda leg: reward
     model = FootholdModel.load(model_path)
     model.check_compatible(robot=LITTLEDOG, map_resolution=hmap.resolution)

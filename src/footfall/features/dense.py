@@ -138,7 +138,8 @@ def dense_general(hmap: HeightMap, values: Callable[[Candidates], np.ndarray],
         sl = slice(start, start + block)
         fp = (foothold_patches(hmap, pts[sl], yaw, mirror, config) if patches is None
               else patches(sl))
-        c = Candidates(hmap, pts[sl], yaw, mirror, config, given_patches=fp)
+        footholds = np.column_stack([pts[sl], fp.heights])  # contact points: x, y, map height
+        c = Candidates(hmap, footholds, yaw, mirror, config, given_patches=fp)
         out[sl] = values(c)
         valid[sl] = fp.valid
     return out, valid

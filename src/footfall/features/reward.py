@@ -25,7 +25,7 @@ from footfall.features.config import FeatureConfig
 from footfall.features.dense import ScoreGrid, linear_values
 from footfall.features.dense_linear import dense_linear
 from footfall.features.family import Candidates, FeatureFamily
-from footfall.features.scorer import FootholdScorer
+from footfall.features.scorer import SCORERS, FootholdScorer
 from footfall.features.templates import TemplateFeatures, TemplateLibrary
 from footfall.features.terrain_features import TerrainFeatures
 
@@ -233,3 +233,6 @@ def default_reward(config: FeatureConfig | None = None) -> LinearReward:
         weights=(np.concatenate([per_template for _ in config.scales]),
                  weights_from_names(_DEFAULT_TERRAIN_WEIGHTS, terrain.columns())),
         config=config, name="hand-tuned default")
+
+
+SCORERS.register("hand-tuned", default_reward)

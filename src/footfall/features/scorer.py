@@ -93,6 +93,6 @@ class FootholdScorer(ABC):
 
 RewardFor = Callable[[str], FootholdScorer]  # leg name -> the scorer its footholds are ranked by
 
-SCORERS: Registry[Callable[..., FootholdScorer]] = Registry("scorer")
-"""Named scorers that need no training (the hand-tuned reward, the synthetic expert's
-judgement): name -> factory ``(config) -> FootholdScorer``."""
+SCORERS: Registry[Callable[[FeatureConfig | None], FootholdScorer]] = Registry("scorer")
+"""Named scorers that need no training (the hand-tuned reward, ``"hand-tuned"``; a plugin's
+own): name -> factory ``(config or None for the default feature settings) -> FootholdScorer``."""

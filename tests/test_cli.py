@@ -129,16 +129,16 @@ def test_choices_come_from_the_registries(tmp_path, capsys, monkeypatch):
     from footfall.learning.learner import LEARNERS
     from footfall.terrain import KINDS
 
-    assert _choices(cli.commands["features"], "leg") == tuple(LEG_NAMES)
-    assert _choices(cli.commands["learn"], "learner") == LEARNERS.names()
-    assert _choices(cli.commands["learn"], "selection") == tuple(ranker.SELECTIONS)
-    assert _choices(cli.commands["terrain"].commands["make"], "kind") == tuple(KINDS)
+    assert _choices(cli.get_command(None, "features"), "leg") == tuple(LEG_NAMES)
+    assert _choices(cli.get_command(None, "learn"), "learner") == LEARNERS.names()
+    assert _choices(cli.get_command(None, "learn"), "selection") == tuple(ranker.SELECTIONS)
+    assert _choices(cli.get_command(None, "terrain").commands["make"], "kind") == tuple(KINDS)
     # Read when used: a learner registered after import is a choice at once.
     huber = ranker.LinearLearner("huber", "for this test", ranker.get_learner("l2").make,
                                  ranker.get_learner("l2").path)
     ranker.register_learner(huber)
     try:
-        assert _choices(cli.commands["learn"], "learner")[-1] == "huber"
+        assert _choices(cli.get_command(None, "learn"), "learner")[-1] == "huber"
     finally:
         LEARNERS.unregister("huber")
     # A feature set registered after import is accepted by --features and listed in --help;
@@ -157,3 +157,29 @@ def test_choices_come_from_the_registries(tmp_path, capsys, monkeypatch):
         assert code == 0 and "terrain|templates|both|edges" in out
     finally:
         FEATURE_SETS.unregister("edges")
+
+
+def test_the_command_table_matches_every_commands_own_help():
+    """``footfall --help`` prints the table without importing the commands: it must say what
+    each command says of itself, and name every command there is."""
+    import importlib
+
+    from footfall.cli.root import COMMANDS
+
+    for name, (module, attribute, short) in COMMANDS.items():
+        command = getattr(importlib.import_module(module), attribute)
+        assert command.name == name
+        assert command.get_short_help_str(limit=1000) == short, name
+
+
+def test_the_help_is_printed_without_importing_the_library(tmp_path):
+    """The command list comes from the table: no MuJoCo, scikit-learn or SciPy for --help."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom footfall.cli import main\nassert main(['--help']) == 0\n"
+            "heavy = [m for m in ('mujoco', 'sklearn', 'scipy', 'matplotlib') if m in sys.modules]"
+            "\nassert not heavy, heavy\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "walk-many" in done.stdout and "reproduce" in done.stdout

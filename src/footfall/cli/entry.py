@@ -1,17 +1,19 @@
 """The ``footfall`` command group and its entry point: user errors become one line and status 2.
 
-The group holds no commands itself: :mod:`footfall.cli.root` adds every command
-group's commands to it when :mod:`footfall.cli` is imported, so :func:`main` runs
-the whole command line (the fuzz suite, :mod:`footfall.cli.fuzz`, drives it
-through :func:`main` too).
+The group finds its commands in the table of :mod:`footfall.cli.root` and imports
+a command's module when the command is first asked for, so :func:`main` runs the
+whole command line (the fuzz suite, :mod:`footfall.cli.fuzz`, drives it through
+:func:`main` too) and ``footfall --help`` stays quick.
 """
 
 from __future__ import annotations
 
+import importlib
 import sys
 
 import click
 
+from footfall.cli.root import COMMANDS
 from footfall.core.errors import FootfallError, one_line
 from footfall.core.limits import apply_assignments, limits_of_one_command
 from footfall.core.plugins import load_plugins
@@ -20,7 +22,38 @@ EXIT_USER_ERROR = 2  # a bad file or argument
 EXIT_INTERRUPTED = 130  # Ctrl-C, as a shell reports SIGINT
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class LazyGroup(click.Group):
+    """A command group whose commands are imported by name from a table, when first used.
+
+    The one deliberate import by name in footfall: a command's module and its
+    dependencies load when that command runs, not for ``--help`` (which prints the
+    table's lines of help).
+    """
+
+    def __init__(self, *args, table: dict[str, tuple[str, str, str]], **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.table = table
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(set(self.table) | set(self.commands))
+
+    def get_command(self, ctx: click.Context | None, name: str) -> click.Command | None:
+        if name not in self.commands and name in self.table:
+            module, attribute, _ = self.table[name]
+            self.add_command(getattr(importlib.import_module(module), attribute), name)
+        return self.commands.get(name)
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        limit = formatter.width - 6 - max(len(name) for name in self.list_commands(ctx))
+        rows = [(name, (self.commands[name] if name in self.commands else
+                        click.Command(name, help=self.table[name][2])).get_short_help_str(limit))
+                for name in self.list_commands(ctx)]
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
+
+
+@click.group(cls=LazyGroup, table=COMMANDS,
+             context_settings={"help_option_names": ["-h", "--help"]})
 @click.option("--debug", is_flag=True, help="Show tracebacks for errors.")
 @click.option("--limit", "limits", multiple=True, metavar="NAME=VALUE",
               help="Raise (or lower) a size limit, e.g. max_map_cells=400000000; "

@@ -1,22 +1,47 @@
-"""Every command of the ``footfall`` command line, added to its group (:mod:`footfall.cli.entry`).
+"""Every command of the ``footfall`` command line: where it lives, and its line of help.
 
-Every command lives in the module of its group (terrain, features, demos, store, learning,
-walking, experiments, bench, teach) and is added here.
+Each command lives in the module of its group (terrain, features, demos, store, learning,
+walking, experiments, bench, teach). The group (:mod:`footfall.cli.entry`) imports a
+command's module only when that command runs or shows its help, so that ``footfall --help``
+does not import the whole library (MuJoCo, scikit-learn, SciPy: seconds) to print this table.
+``tests/test_cli.py`` checks every line here against its command's own help.
 """
 
 from __future__ import annotations
 
-from footfall.cli.bench import bench
-from footfall.cli.demos import demos
-from footfall.cli.entry import cli
-from footfall.cli.experiments import ablation, demo, offline, reproduce, study
-from footfall.cli.features import features
-from footfall.cli.learning import learn, rank_eval_cmd
-from footfall.cli.store import store
-from footfall.cli.teach import teach
-from footfall.cli.terrain import terrain
-from footfall.cli.walking import walk_cmd, walk_many_cmd
-
-for _command in (terrain, features, demos, store, learn, rank_eval_cmd, walk_cmd,
-                 walk_many_cmd, offline, reproduce, study, ablation, demo, bench, teach):
-    cli.add_command(_command)
+COMMANDS: dict[str, tuple[str, str, str]] = {
+    # name: (module, attribute, short help)
+    "terrain": ("footfall.cli.terrain", "terrain",
+                "Make, import and look at terrain height maps."),
+    "features": ("footfall.cli.features", "features",
+                 "The 27 terrain features and three template patches of a foothold."),
+    "demos": ("footfall.cli.demos", "demos",
+              "Collect and inspect demonstrated footholds (a demonstration store, .sqlite)."),
+    "store": ("footfall.cli.store", "store", "Inspect a demonstration store file (.sqlite)."),
+    "learn": ("footfall.cli.learning", "learn",
+              "Learn front- and hind-leg foothold ranking functions from demonstrations."),
+    "rank-eval": ("footfall.cli.learning", "rank_eval_cmd",
+                  "Top-1 agreement, mean percentile rank and mean reward loss of a model on "
+                  "demonstrations."),
+    "walk": ("footfall.cli.walking", "walk_cmd",
+             "One run of the simulated robot across a board (success, slip, speed)."),
+    "walk-many": ("footfall.cli.walking", "walk_many_cmd",
+                  "N runs in parallel: success rate (Wilson 95 % CI), slip, speed."),
+    "offline": ("footfall.cli.experiments", "offline",
+                "The offline experiment: learn from demonstrations, rank unseen terrain "
+                "(Table I)."),
+    "reproduce": ("footfall.cli.experiments", "reproduce",
+                  "The paper's walking experiment end to end: corrections, learning, Tables I "
+                  "and II."),
+    "study": ("footfall.cli.experiments", "study",
+              "Several whole reproductions and a verdict on each of the paper's orderings."),
+    "ablation": ("footfall.cli.experiments", "ablation",
+                 "The walking controller's ablation: each part switched off alone, paired runs."),
+    "demo": ("footfall.cli.experiments", "demo",
+             "Build a board, score it densely and draw the terrain, features and templates."),
+    "bench": ("footfall.cli.bench", "bench",
+              "Benchmarks: print figures, compared with a baseline run in the same process."),
+    "teach": ("footfall.cli.teach", "teach",
+              "Serve a store's runs for labelling: open the printed address, pick a run, step "
+              "through it, click the foothold the robot should have chosen."),
+}

@@ -18,10 +18,13 @@ period the stance watch (slip and tilt reflexes) looks at what was measured
 and may raise an alarm, on which the step is called off or its foot brought
 down, and the robot recovers before the next step.
 
-Each call is :meth:`Controller.sense` (this period's measurements; the stance
-watch) then :meth:`Controller.act` (the next period's targets). The phases are
-generators (see :mod:`footfall.control.phases` for why): ``act`` resumes the
-walk where the last period left it. What happens (steps planned and taken,
+Each period is :meth:`Controller.sense` (this period's measurements; the
+stance watch) then :meth:`Controller.act` (the next period's targets;
+:meth:`Controller.step` does both): two calls, so that whoever runs the robot
+may end the run between them, on what was just measured, before the
+controller plans on. The phases are generators (see
+:mod:`footfall.control.phases` for why): ``act`` resumes the walk where the
+last period left it. What happens (steps planned and taken,
 reflexes acting) is told to whoever records the run through :meth:`notes`.
 """
 

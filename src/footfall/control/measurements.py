@@ -10,7 +10,6 @@ the robot only through :class:`Measurements`, and the simulator
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,21 +17,19 @@ import numpy as np
 
 @dataclass(frozen=True, eq=False)
 class Measurements:
-    """One control period's readings of the robot's sensors.
+    """One control period's readings of the robot's sensors: what a LittleDog knows.
 
-    The foot positions, centre of mass and foot Jacobians are passed in as the
-    simulator computed them (stage 1 of the controller split: the same numbers
-    the controller has always read); the foot force sensors are read at each call.
+    Everything else the controller uses -- where its feet are, its centre of
+    mass, the forces in the world frame -- it works out from these with the
+    robot description (:class:`~footfall.control.estimate.BodyEstimate`).
     """
 
     time: float  # [s] since the run began
     joint_angles: np.ndarray  # (4, 3) [rad] encoders, LEG_NAMES x (hip roll, hip pitch, knee)
     body_position: np.ndarray  # (3,) [m] trunk origin, world frame (motion capture)
     body_rpy: np.ndarray  # (3,) [rad] trunk roll, pitch, yaw, Z-Y-X (motion capture)
-    read_forces: Callable[[], np.ndarray]  # () -> (4, 3) [N] foot force sensors, world frame
-    foot_positions: np.ndarray  # (4, 3) [m] ball-foot centres, world frame
-    centre_of_mass: np.ndarray  # (3,) [m] whole robot, world frame
-    foot_jacobians: Callable[[], np.ndarray]  # () -> (4, 3, 3) [m/rad] of the foot centres
+    foot_forces: np.ndarray  # (4, 3) [N] foot force sensors, each in its foot's frame (which
+    # turns with the shin): the force the foot passes into the lower leg
 
 
 @dataclass(frozen=True, eq=False)

@@ -197,8 +197,8 @@ class Walk:
         """What the robot's sensors read now."""
         sim = self.sim
         position, rpy = sim.body_pose()
-        return Measurements(sim.time, sim.joint_angles(), position, rpy, sim.foot_forces,
-                            sim.foot_positions(), sim.centre_of_mass(), sim.foot_jacobians)
+        return Measurements(sim.time, sim.joint_angles(), position, rpy,
+                            sim.foot_forces(frame="sensor"))
 
     def _actuate(self, targets: JointTargets) -> None:
         """The controller's set-points to the servos, held until the next control period."""

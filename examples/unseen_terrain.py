@@ -8,7 +8,7 @@
   (as a scan has where the sensor saw nothing), at 1 mm.
 
 Both are 0.61 m square, like a LittleDog module. Put them on boards with
-``footfall terrain board``; the README's "Terrain it has never seen" walks
+``footfall terrain board``; docs/robust-walking.md's "Terrain it has never seen" walks
 these boards::
 
     python examples/unseen_terrain.py out/unseen

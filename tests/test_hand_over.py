@@ -4,6 +4,7 @@
 import numpy as np
 import pytest
 
+from footfall.control.controller import Controller
 from footfall.control.lowlevel import (
     BodyCorrection,
     LowLevelConfig,
@@ -13,7 +14,6 @@ from footfall.control.lowlevel import (
 )
 from footfall.core.kinematics import body_to_world, forward_kinematics
 from footfall.core.robot import LITTLEDOG
-from footfall.sim.episode import Walk
 from scenes import staged
 
 R = LITTLEDOG
@@ -75,7 +75,7 @@ def test_stance_set_points_do_not_change_and_the_new_foot_enters_a_frame_without
 
 
 # ---------------------------------------------------------------- on the robot, standing
-class Stale(Walk):
+class Stale(Controller):
     """Stands 1.5 s with the front feet's anchors 15 mm to the left of where they stand (as if
     they had slid 15 mm right), so the body correction grows; then, if ``hand``, hands it over
     (as at a touch-down) and stands 0.5 s more. Records the correction [m] at the hand-over and
@@ -83,23 +83,23 @@ class Stale(Walk):
 
     hand = False
 
-    def _step(self, k):
-        self._anchor[:2, 1] += 0.015
+    def step_phases(self, k):
+        self.legs.anchor[:2, 1] += 0.015
         for _ in range(150):
-            self._tick(*self._desired, None)
-        self.before = self._correction.position.copy()
+            yield from self.tick(*self.desired, None)
+        self.before = self.legs.correction.position.copy()
         if self.hand:
-            self._hand_over()
+            self.legs.hand_over()
         for _ in range(50):
-            self._tick(*self._desired, None)
-        self.after = self._correction.position.copy()
-        self.feet, self.body = self.sim.foot_positions(), self._pose[0].copy()
+            yield from self.tick(*self.desired, None)
+        self.after = self.legs.correction.position.copy()
+        self.feet, self.body = self.est.feet.copy(), self.pose[0].copy()
         return True
 
 
 def _stand(hand: bool) -> Stale:
     return staged(type("Handed" if hand else "Kept", (Stale,), {"hand": hand}),
-                  lowlevel=LowLevelConfig(hand_over=True))
+                  lowlevel=LowLevelConfig(hand_over=True)).controller
 
 
 def test_on_the_robot_the_hand_over_moves_nothing_and_leaves_the_correction_small():

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
+from footfall.control.controller import Controller
 from footfall.control.load import load_offsets, load_shares
 from footfall.control.lowlevel import LowLevelConfig
-from footfall.sim.episode import Walk
 from scenes import staged
 
 FEET = np.array([[0.1, 0.08], [0.1, -0.08], [-0.1, 0.08], [-0.1, -0.08]])  # [m] LF RF LH RH
@@ -84,23 +84,24 @@ def test_a_negative_force_reading_counts_as_no_load():
 
 
 # ---------------------------------------------------------------- on the robot, standing
-class Wobbles(Walk):
+class Wobbles(Controller):
     """Stands on four feet after the left front foot's target was set 4 mm into the ground:
     the LF-RH diagonal would carry the robot and the other diagonal next to nothing, as on
-    uneven ground. Records the vertical foot forces [N] after ``STAND`` s."""
+    uneven ground, for ``STAND`` s."""
 
     STAND = 1.0  # [s]
 
-    def _step(self, k):
-        self._anchor[0, 2] -= 0.004
+    def step_phases(self, k):
+        self.legs.anchor[0, 2] -= 0.004
         for _ in range(round(self.STAND / self.period)):
-            self._tick(*self._desired, None)
-        self.loads = self.sim.foot_forces(noise=False)[:, 2]
+            yield from self.tick(*self.desired, None)
         return True
 
 
 def _stand(load_gain: float) -> np.ndarray:
-    return staged(Wobbles, lowlevel=LowLevelConfig(load_gain=load_gain)).loads
+    """The true vertical foot forces [N] at the end of the stand (the run ends there)."""
+    return staged(Wobbles, lowlevel=LowLevelConfig(load_gain=load_gain)).sim.foot_forces(
+        noise=False)[:, 2]
 
 
 def test_load_control_spreads_the_weight_over_a_wobbling_stance():

@@ -183,7 +183,7 @@ def fourier_registered():
     register_feature_set("roughness", ("terrain",))  # the terrain features alone, no pose
     yield
     LEARNERS.unregister("fourier")
-    FEATURE_SETS.pop("roughness")
+    FEATURE_SETS.unregister("roughness")
 
 
 def _demonstrations(n: int = 120) -> list[Demonstration]:

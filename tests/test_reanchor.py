@@ -5,8 +5,8 @@ on the standing robot."""
 import numpy as np
 import pytest
 
+from footfall.control.controller import Controller
 from footfall.control.lowlevel import BodyCorrection, LowLevelConfig, reanchor
-from footfall.sim.episode import Walk
 from scenes import staged
 
 ANCHORS = np.array([[0.1, 0.08, 0.01], [0.1, -0.08, 0.01], [-0.1, 0.08, 0.01],
@@ -48,24 +48,24 @@ def test_the_correction_shift_stays_within_its_bound():
 
 
 # ---------------------------------------------------------------- on the robot, standing
-class Slipped(Walk):
+class Slipped(Controller):
     """Stands on four feet after the front feet's anchors were put 15 mm to the left of where
     they stand -- their legs hold them as if they had slid 15 mm to the right. Records the body
     correction [m] and the front feet's gaps from their anchors [m] after ``STAND`` s."""
 
     STAND = 1.5  # [s]
 
-    def _step(self, k):
-        self._anchor[:2, 1] += 0.015
+    def step_phases(self, k):
+        self.legs.anchor[:2, 1] += 0.015
         for _ in range(round(self.STAND / self.period)):
-            self._tick(*self._desired, None)
-        self.correction = self._correction.position.copy()
-        self.gaps = np.hypot(*(self.sim.foot_positions()[:2, :2] - self._anchor[:2, :2]).T)
+            yield from self.tick(*self.desired, None)
+        self.correction = self.legs.correction.position.copy()
+        self.gaps = np.hypot(*(self.est.feet[:2, :2] - self.legs.anchor[:2, :2]).T)
         return True
 
 
 def _stand(follow_time: float | None) -> Slipped:
-    return staged(Slipped, lowlevel=LowLevelConfig(anchor_follow_time=follow_time))
+    return staged(Slipped, lowlevel=LowLevelConfig(anchor_follow_time=follow_time)).controller
 
 
 def test_re_anchored_feet_stop_pulling_and_the_body_correction_stays_small():

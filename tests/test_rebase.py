@@ -1,36 +1,37 @@
 """Re-basing the stance after a recovery that leaves the body far from where it is wanted
-(ReflexConfig.rebase_distance, Walk._rebase)."""
+(ReflexConfig.rebase_distance, footfall.control.reflexes.rebase.Rebase)."""
 
 import numpy as np
 
+from footfall.control.controller import Controller
 from footfall.control.reflexes import ReflexConfig
-from footfall.sim.episode import Walk
+from footfall.control.reflexes.recovery import recover
 from scenes import staged
 
 
-class Slid(Walk):
+class Slid(Controller):
     """Stands 0.3 s with its anchors 10 mm to the left of its feet, then finds itself 60 mm
     behind where it is wanted (as when the whole robot has slid back off a step) and recovers
     as after an alarm. Records the body [m], the wanted body [m], the horizontal correction
     [m], the stance anchors and the feet [m] just after the recovery, and its events."""
 
-    def _step(self, k):
-        self._anchor[:, 1] += 0.01
+    def step_phases(self, k):
+        self.legs.anchor[:, 1] += 0.01
         for _ in range(30):
-            self._tick(*self._desired, None)
-        self._desired[0][0] += 0.06
-        self._recover()
-        self.body, self.wanted = self._pose[0].copy(), self._desired[0].copy()
-        self.correction = self._correction.position.copy()
-        self.anchors_after = self._anchor.copy()
-        self.feet_after = self.sim.foot_positions()
+            yield from self.tick(*self.desired, None)
+        self.desired[0][0] += 0.06
+        yield from recover(self)
+        self.body, self.wanted = self.pose[0].copy(), self.desired[0].copy()
+        self.correction = self.legs.correction.position.copy()
+        self.anchors_after = self.legs.anchor.copy()
+        self.feet_after = self.est.feet.copy()
         return True
 
 
 def _slide(rebase: float | None) -> Slid:
     run = staged(Slid, reflexes=ReflexConfig(rebase_distance=rebase))
-    run.events = run.record.result["events"]
-    return run
+    run.controller.events = run.record.result["events"]
+    return run.controller
 
 
 def test_a_body_far_from_where_it_is_wanted_is_taken_where_it_stands():

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from footfall.control.cog import support_margin
+from footfall.control.controller import Controller
 from footfall.control.reflexes import ReflexConfig
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LITTLEDOG
@@ -33,42 +34,49 @@ def _events(record, kind: str) -> list[dict]:
     return [e for e in record.result["events"] if e["event"] == kind]
 
 
-class NoShift(Walk):
+def _walk(controller_class: type[Controller], seed: int, config: WalkConfig) -> Walk:
+    """A walk on the short flat board with the hand-tuned reward, driving ``controller_class``."""
+    scene = type(f"Walks{controller_class.__name__}", (Walk,),
+                 {"controller_class": controller_class})
+    return scene(short_flat_board(), lambda leg: REWARD, seed, config)
+
+
+class NoShift(Controller):
     """The planned body does not shift toward the swing triangle: the centre of mass stays
-    between the four feet, on the diagonal of the three that stay down."""
+    between the four feet, on the diagonal of the three that stay down. Records the margin [m]
+    of the centre of mass inside the swing triangle at each lift-off."""
 
-    def _body_motion(self, feet, s, plan):
-        traj, times, positions, attitudes = super()._body_motion(feet, s, plan)
-        positions[:, :2] = self._desired[0][:2]
-        return traj, times, positions, attitudes
+    def body_motion(self, feet, s, plan):
+        motion = super().body_motion(feet, s, plan)
+        motion.positions[:, :2] = self.desired[0][:2]
+        return motion
 
-    def _lift_off(self, s, above, reach, after_lift, record):
-        com = self.sim.centre_of_mass()[:2]
-        tri = self.sim.foot_positions()[[j for j in range(4) if j != s], :2]
+    def lift_off(self, k, s, above, reach, after_lift):
+        com = self.est.com[:2]
+        tri = self.est.feet[[j for j in range(4) if j != s], :2]
         self.margins_at_lift_off.append(float(support_margin(tri, com)))
-        return super()._lift_off(s, above, reach, after_lift, record)
+        return super().lift_off(k, s, above, reach, after_lift)
 
 
 def test_the_lift_off_gate_holds_a_leg_until_the_centre_of_mass_is_inside_its_triangle():
-    gated = NoShift(short_flat_board(), lambda leg: REWARD, 3, _config(ReflexConfig(), 1))
-    gated.margins_at_lift_off = []
+    gated = _walk(NoShift, 3, _config(ReflexConfig(), 1))
+    gated.controller.margins_at_lift_off = []
     record = gated.run()
     waits = _events(record, "lift-off gate")
     assert len(waits) == 1 and waits[0]["waited_s"] > 0.05
-    assert gated.margins_at_lift_off[0] >= ReflexConfig().gate_margin
-    ungated = NoShift(short_flat_board(), lambda leg: REWARD, 3,
-                      _config(replace(ReflexConfig(), lift_off_gate=False), 1))
-    ungated.margins_at_lift_off = []
+    assert gated.controller.margins_at_lift_off[0] >= ReflexConfig().gate_margin
+    ungated = _walk(NoShift, 3, _config(replace(ReflexConfig(), lift_off_gate=False), 1))
+    ungated.controller.margins_at_lift_off = []
     ungated.run()
-    assert ungated.margins_at_lift_off[0] < 0.005  # it would have lifted on the diagonal
+    assert ungated.controller.margins_at_lift_off[0] < 0.005  # it would have lifted on the diagonal
 
 
-class LandsOff(Walk):
+class LandsOff(Controller):
     """The first swing foot is steered 30 mm to the side of its foothold, as a foot that
     glances off a rock would land."""
 
-    def _swing_path(self, centre, above, reach, after_lift):
-        path = super()._swing_path(centre, above, reach, after_lift)
+    def swing_path(self, centre, above, reach, after_lift):
+        path = super().swing_path(centre, above, reach, after_lift)
         if not getattr(self, "steered", False):
             self.steered = True
             path[:, 1] += 0.03 * np.minimum(after_lift / reach, 1.0)
@@ -77,7 +85,7 @@ class LandsOff(Walk):
 
 def test_a_foot_that_lands_far_off_its_foothold_is_re_placed():
     config = _config(ReflexConfig(), 1)
-    record = LandsOff(short_flat_board(), lambda leg: REWARD, 5, config).run()
+    record = _walk(LandsOff, 5, config).run()
     moves = _events(record, "touch-down re-placed")
     assert len(moves) == 1 and moves[0]["off_mm"] > 20.0
     step = record.steps[0]
@@ -85,24 +93,24 @@ def test_a_foot_that_lands_far_off_its_foothold_is_re_placed():
     gaps = np.hypot(*(step.candidates[:, :2] - step.touchdown[:2]).T)
     assert gaps.min() < ReflexConfig().touchdown_tolerance
     assert step.placement_error > ReflexConfig().replace_separation - 0.005
-    unchecked = LandsOff(short_flat_board(), lambda leg: REWARD, 5,
-                         _config(replace(ReflexConfig(), touchdown_check=False), 1)).run()
+    unchecked = _walk(LandsOff, 5,
+                      _config(replace(ReflexConfig(), touchdown_check=False), 1)).run()
     assert not _events(unchecked, "touch-down re-placed")
     assert unchecked.steps[0].placement_error > 0.02
 
 
 class Pushed(Walk):
     """A force and torque (6,) [N, N m] on one body for a while: a stance foot shoved off its
-    spot, or the trunk twisted."""
+    spot, or the trunk twisted (on the simulated robot, unknown to its controller)."""
 
     body, wrench, start, duration = "LF_foot", (0.0,) * 6, 0.0, 0.0
 
-    def _tick(self, position, rpy, swing):
+    def _actuate(self, targets):
         t = self.sim.time
         i = mujoco.mj_name2id(self.sim.model, mujoco.mjtObj.mjOBJ_BODY, self.body)
         on = self.start <= t < self.start + self.duration
         self.sim.data.xfrc_applied[i] = self.wrench if on else 0.0
-        super()._tick(position, rpy, swing)
+        super()._actuate(targets)
 
 
 def _pushed(reflexes: ReflexConfig, body: str, wrench, start: float, duration: float,
@@ -143,9 +151,9 @@ def _slab_board() -> HeightMap:
 class PushedOffSlab(Pushed):
     """A shove outward on the right front foot; the foot's ball-centre heights [m] recorded."""
 
-    def _tick(self, position, rpy, swing):
+    def _actuate(self, targets):
         self.rf_heights.append(float(self.sim.foot_positions()[1, 2]))
-        super()._tick(position, rpy, swing)
+        super()._actuate(targets)
 
 
 def _off_the_slab(reflexes: ReflexConfig, force: float):
@@ -178,7 +186,7 @@ def test_a_shoved_trunk_sets_off_the_tilt_reflex_and_the_robot_recovers():
     assert tilts and tilts[0]["error_rad"] > ReflexConfig().tilt_threshold
     assert record.result["reason"] == "step limit"  # no fall
     # (Before the stance load control, 2.5 N m felled the robot without the reflex and not with
-    # it; with load control the two fall and stand alike over 1.5-2.5 N m: README, issue 18.)
+    # it; with load control the two fall and stand alike over 1.5-2.5 N m: docs/robust-walking.md.)
     without = _pushed(replace(ALL_ON, tilt_reflex=False), "trunk",
                       (0.0, 0.0, 0.0, TWIST, 0.0, 0.0), 0.5, 0.1)
     assert not _events(without, "tilt")

@@ -5,6 +5,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from footfall.control.controller import Controller
 from footfall.control.load import support_torques
 from footfall.control.lowlevel import LowLevelConfig
 from footfall.core.robot import LITTLEDOG
@@ -43,20 +44,26 @@ def test_foot_jacobians_match_finite_differences_of_the_foot_positions():
             np.testing.assert_allclose(jac[leg, :, j], (plus - minus) / (2 * eps), atol=1e-7)
 
 
+class Stands(Controller):
+    """Stands 1 s on flat ground."""
+
+    def step_phases(self, k):
+        for _ in range(100):
+            yield from self.tick(*self.desired, None)
+        return True
+
+
 def _standing(feedforward: float) -> Walk:
-    """A walk that stands 1 s on flat ground and keeps its simulation open."""
-
-    class Stands(Walk):
-        def _step(self, k):
-            for _ in range(100):
-                self._tick(*self._desired, None)
-            self.sag = np.abs(self._q - self.sim.joint_angles())  # [rad] the servos' errors
-            self.torques = self.sim.joint_torques().copy()
-            self.forces = self.sim.foot_forces(noise=False)
-            self.jac = self.sim.foot_jacobians()
-            return True
-
-    return staged(Stands, lowlevel=LowLevelConfig(support_feedforward=feedforward))
+    """A walk that stood 1 s on flat ground, with what its servos and feet did at the end (the
+    run ends there): ``sag`` (4, 3) [rad] the servos' errors, ``torques`` (4, 3) [N m], the true
+    foot ``forces`` (4, 3) [N] and the foot Jacobians ``jac`` (4, 3, 3) [m/rad]."""
+    run = staged(Stands, lowlevel=LowLevelConfig(support_feedforward=feedforward))
+    sim = run.sim
+    run.sag = np.abs(run.controller.legs.q - sim.joint_angles())
+    run.torques = sim.joint_torques().copy()
+    run.forces = sim.foot_forces(noise=False)
+    run.jac = sim.foot_jacobians()
+    return run
 
 
 def test_the_servos_of_a_standing_robot_carry_minus_j_transpose_of_the_foot_forces():

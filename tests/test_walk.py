@@ -99,6 +99,20 @@ def test_body_rotation_is_the_kinematics_rotation():
                                    atol=1e-14)
 
 
+def test_body_rotation_is_mujocos_to_the_last_bit():
+    # the controller turns attitudes into matrices without the simulator, by MuJoCo's own
+    # operations: the same matrices, so a run is the same run whichever computes them
+    import mujoco
+
+    rng = np.random.default_rng(5)
+    scales = rng.choice([1e-3, 0.1, 1.0, 3.1], (2000, 1))
+    for rpy in np.vstack([rng.uniform(-1.0, 1.0, (2000, 3)) * scales, np.zeros((1, 3))]):
+        quat, mat = np.empty(4), np.empty(9)
+        mujoco.mju_euler2Quat(quat, rpy[::-1].copy(), "zyx")
+        mujoco.mju_quat2Mat(mat, quat)
+        np.testing.assert_array_equal(body_rotation(rpy), mat.reshape(3, 3))
+
+
 def test_body_correction_integrates_height_roll_pitch_and_horizontal_error():
     cfg = LowLevelConfig(position_gain=0.1, horizontal_gain=0.2, attitude_gain=0.5,
                          max_position_correction=0.03, max_attitude_correction=0.2)

@@ -123,7 +123,7 @@ def _variant_names() -> list[str]:
                    "or the hand-tuned reward.")
 @click.option("--hard/--no-hard", default=True, show_default=True,
               help="Walk the four hard boards too (rocky:0.85 steps:0.85, 64 runs per variant "
-                   "and chooser); --no-hard walks issue 18's boards only. A folder keeps its "
+                   "and chooser); --no-hard walks the test and calibration boards only. A folder keeps its "
                    "choice.")
 @click.option("--quick", is_flag=True, help="A small version (about a minute) for a smoke test.")
 @executor_options

@@ -25,7 +25,7 @@ sway": the body never has to stop, and how far it sways follows from the
 least-acceleration trade-off at the pace the phase durations and foothold
 spacing set.
 
-Reach (``CogConfig.reach``, issue 18): the support triangles alone let the
+Reach (``CogConfig.reach``): the support triangles alone let the
 COG run far past the feet -- after a long stride onto a rock the body
 lunged 13 cm in half a second and the hind legs met their joint limits. With
 a reach, the COG's Bezier points (hence the whole cubic) stay, in every

@@ -43,7 +43,7 @@ true body pose (motion capture on the real robot, the simulator here):
   on the test board's seed 5000 with the expert, 29 mm sideways off the
   rock rim it was put on, 40 ms after touch-down. Letting go of slipped
   feet this way breaks that loop but loses more runs than it wins (the
-  ablation variant ``with-re-anchoring``, README): the feet drift to where
+  ablation variant ``with-re-anchoring``, docs/robust-walking.md): the feet drift to where
   the legs' reach ends.
 
 Poses here are (position (3,) [m], rotation matrix (3, 3)) pairs, the
@@ -56,7 +56,6 @@ import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
 
-import mujoco
 import numpy as np
 
 from footfall.core.errors import FootfallError
@@ -407,14 +406,28 @@ def body_rotation(rpy: np.ndarray) -> np.ndarray:
     """Rotation matrix (3, 3) of one body attitude: roll, pitch, yaw (3,) [rad], Z-Y-X.
 
     The same matrix as :func:`footfall.core.kinematics.rotation_matrix`, by
-    MuJoCo's C routines: a single pose at control rate, where the
-    vectorised NumPy version's overhead would dominate.
+    way of a quaternion on Python floats: a single pose at control rate,
+    where the vectorised NumPy version's overhead would dominate. The
+    operations are MuJoCo's ``mju_euler2Quat`` (intrinsic z, y, x) and
+    ``mju_quat2Mat``, one for one, so the matrix is the simulator's to the
+    last bit (``tests/test_walk.py``) without the controller calling it.
     """
-    quat = np.empty(4)
-    mujoco.mju_euler2Quat(quat, np.asarray(rpy, dtype=np.float64)[::-1].copy(), "zyx")
-    mat = np.empty(9)
-    mujoco.mju_quat2Mat(mat, quat)
-    return mat.reshape(3, 3)
+    roll, pitch, yaw = (float(a) for a in rpy)
+    w, x, y, z = 1.0, 0.0, 0.0, 0.0
+    for angle, axis in ((yaw, 3), (pitch, 2), (roll, 1)):  # each turn about a moving axis
+        c, s = math.cos(angle / 2), math.sin(angle / 2)
+        b = (c, s if axis == 1 else 0.0, s if axis == 2 else 0.0, s if axis == 3 else 0.0)
+        w, x, y, z = (w * b[0] - x * b[1] - y * b[2] - z * b[3],
+                      w * b[1] + x * b[0] + y * b[3] - z * b[2],
+                      w * b[2] - x * b[3] + y * b[0] + z * b[1],
+                      w * b[3] + x * b[2] - y * b[1] + z * b[0])
+    if w == 1 and x == 0 and y == 0 and z == 0:
+        return np.eye(3)
+    ww, wx, wy, wz = w * w, w * x, w * y, w * z
+    xx, xy, xz, yy, yz, zz = x * x, x * y, x * z, y * y, y * z, z * z
+    return np.array([[ww + xx - yy - zz, 2 * (xy - wz), 2 * (xz + wy)],
+                     [2 * (xy + wz), ww - xx + yy - zz, 2 * (yz - wx)],
+                     [2 * (xz - wy), 2 * (yz + wx), ww - xx - yy + zz]])
 
 
 def joint_targets(robot: RobotDescription, feet_world: np.ndarray, commanded: Pose,

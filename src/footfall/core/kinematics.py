@@ -190,3 +190,41 @@ def legs_joint_limit_margin(robot: RobotDescription, q: np.ndarray) -> np.ndarra
     _, _, _, lo, hi = _leg_arrays(robot)
     q = np.asarray(q, dtype=np.float64)
     return np.min(np.minimum(q - lo, hi - q), axis=-1)
+
+
+def legs_forward_kinematics(robot: RobotDescription, q: np.ndarray) -> np.ndarray:
+    """:func:`forward_kinematics` of every leg at once: angles (..., 4, 3) [rad] -> foot centres
+    (..., 4, 3) [m], body frame, ``robot.legs`` order."""
+    hips, side, _, _, _ = _leg_arrays(robot)
+    q = np.asarray(q, dtype=np.float64)
+    _, _, fx, fz = _planar(q[..., 1], q[..., 2], robot)
+    return _roll(q[..., 0], fx, np.broadcast_to(side, fx.shape), fz,
+                 (hips[:, 0], hips[:, 1], hips[:, 2]))
+
+
+def legs_jacobians(robot: RobotDescription, q: np.ndarray) -> np.ndarray:
+    """Jacobians (..., 4, 3, 3) [m/rad] of the foot centres (body frame) in their own legs'
+    joint angles (..., 4, 3) [rad]: ``J[..., i, :, j]`` is how far foot i moves per radian of
+    its joint j (hip roll, hip pitch, knee).
+
+    Analytic: hip pitch and knee move the foot in the leg's plane, ``d(x, z)/dq2 = (z, -x)``
+    of the foot from the hip pitch axis and ``d(x, z)/dq3 = (z, -x)`` of the foot from the
+    knee; the hip roll turns the rolled plane about the body's x axis.
+    """
+    _, side, _, _, _ = _leg_arrays(robot)
+    q = np.asarray(q, dtype=np.float64)
+    l1, l2 = robot.upper_leg, robot.lower_leg
+    q1, q2, q23 = q[..., 0], q[..., 1], q[..., 1] + q[..., 2]
+    c1, s1 = np.cos(q1), np.sin(q1)
+    below_x, below_z = -l2 * np.sin(q23), -l2 * np.cos(q23)  # the foot from the knee
+    fx, fz = -l1 * np.sin(q2) + below_x, -l1 * np.cos(q2) + below_z  # from the hip pitch axis
+    y = np.broadcast_to(side, fx.shape)
+    jac = np.empty(q.shape + (3,))
+    jac[..., 0, 0] = 0.0
+    jac[..., 1, 0] = -s1 * y - c1 * fz
+    jac[..., 2, 0] = c1 * y - s1 * fz
+    for j, (dx, dz) in ((1, (fz, -fx)), (2, (below_z, -below_x))):
+        jac[..., 0, j] = dx
+        jac[..., 1, j] = -s1 * dz
+        jac[..., 2, j] = c1 * dz
+    return jac

@@ -9,12 +9,12 @@ the default :class:`~footfall.sim.episode.WalkConfig` with one change
 with :func:`register_variant`). Each variant walks, with the walking expert
 choosing every foothold and with the hand-tuned reward, over
 
-* the test board of issue 18 -- ``rocky:0.7 steps:0.7``, board seed 500,
+* the controller's test board -- ``rocky:0.7 steps:0.7``, board seed 500,
   the board ``make run`` makes for seed 0 -- with run seeds 5000-5020, and
 * the six calibration boards ``rocky:D steps:D``, D = 0.5, 0.6, 0.7, board
   seeds 800 and 801, with run seeds 0-7, and
 * four hard boards ``rocky:0.85 steps:0.85``, board seeds 900-903, with run
-  seeds 0-15: on issue 18's boards the defaults fail about one run in
+  seeds 0-15: on the test and calibration boards the defaults fail about one run in
   fifteen, too few for 69 paired runs to tell a part's worth from the luck
   of the seeds; on these about two in five, so their 64 paired runs can,
 
@@ -116,7 +116,7 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
     register_variant("no-support-feedforward", "without the support torques fed forward",
                      lambda w: _lowlevel(w, support_feedforward=0.0)),
     register_variant("none", "no reflexes, no load control, no reach, no hand-over, no support "
-                     "torques (the controller before issue 18)",
+                     "torques (the controller before the reflexes)",
                      lambda w: _no_reach(_lowlevel(_reflexes(
                          w, lift_off_gate=False, touchdown_check=False, tilt_reflex=False,
                          slip_reflex=False, rebase_distance=None),
@@ -157,7 +157,7 @@ class AblationConfig(Params):
                                  doc="who chooses the footholds")
     test_board: Spec = param((("rocky", 0.7), ("steps", 0.7)), check=_is_spec,
                              must="a tuple of (kind, difficulty in [0, 1])",
-                             doc="the test board's modules (issue 18's board)")
+                             doc="the test board's modules")
     test_board_seed: int = param(500, range=at_least(0), doc="the test board's seed")
     test_runs: int = param(21, range=at_least(0), doc="runs on the test board")
     test_seed: int = param(5000, range=at_least(0), doc="first run seed on the test board")
@@ -240,7 +240,7 @@ def _outcomes(store: DemoStore) -> dict[str, dict]:
 
 def _row(config: AblationConfig, results: dict[str, dict], v: str, who: str) -> dict:
     """One variant's runs by one chooser, against the defaults' on the same boards and seeds:
-    won / lost over issue 18's boards (test and calibration), and apart over the hard ones."""
+    won / lost over the test and calibration boards, and apart over the hard ones."""
     row: dict = {"boards": {}, "causes": {}, "won": 0, "lost": 0, "hard_won": 0, "hard_lost": 0}
     speeds = []
     for name, (_, _, runs, seed) in config.boards().items():

@@ -1,4 +1,4 @@
-"""The test difficulty chosen by a rule, not by hand (issue 20).
+"""The test difficulty chosen by a rule, not by hand.
 
 The paper's Table II compares ranking functions on one test terrain; whether
 10 against 13 crossings out of 21 is a difference depends on how hard that
@@ -19,7 +19,7 @@ difficulty (scikit-learn's ``IsotonicRegression``, decreasing, each level
 weighted by its runs): levels that break the order are pooled. With ten runs
 a level, one level's luck decides less this way: read raw, 8 / 10 at 0.6
 between 10 / 10 at 0.5 and 10 / 10 at 0.8 would stop the climb at 0.5 (the
-first rule footfall tried; the README has that run), and a lucky 10 / 10 at
+first rule footfall tried; docs/reproduce-history.md has that run), and a lucky 10 / 10 at
 one hard level would alone set the test difficulty; fitted, each level borrows
 strength from its neighbours. If even the easiest level's fit misses the
 threshold, the easiest level is used and the rule is reported as not met.
@@ -30,8 +30,8 @@ Boards differ more than runs on one board do (the expert crossed 10, 15 and
 difficulty's two calibration boards), so the reproduction spends its
 calibration runs on many boards with few runs each (5 boards x 2 runs a
 level by default; the first default run used 2 x 5, and its test boards
-came out far harder for the expert than its calibration boards -- the
-README has the numbers).
+came out far harder for the expert than its calibration boards -- docs/reproduce-history.md
+has the numbers).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Several whole reproductions, and what they say together: ``footfall study`` (issue 20).
+"""Several whole reproductions, and what they say together: ``footfall study``.
 
 One reproduction learns from one set of demonstrations and tests on one
 draw of boards; another seed draws other training boards, other

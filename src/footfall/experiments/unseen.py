@@ -1,4 +1,4 @@
-"""Stage 4 of the reproduction: walking terrain never trained on (paper §V, Table II; issue 20).
+"""Stage 4 of the reproduction: walking terrain never trained on (paper §V, Table II).
 
 1. **The test difficulty by a rule** (:func:`calibrate`): the synthetic expert
    choosing every foothold walks ``calibration_boards`` boards of the test

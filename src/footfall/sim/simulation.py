@@ -30,7 +30,14 @@ from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import inverse_kinematics, rotation_matrix, world_to_body
 from footfall.core.params import Params, at_least, param, within
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
-from footfall.sim.mjcf import JOINTS, MAX_HFIELD_SPACING, compile_model
+from footfall.sim.foot_pads import BallSurface, FootPads
+from footfall.sim.mjcf import (
+    JOINTS,
+    MAX_HFIELD_SPACING,
+    compile_model,
+    registration_centre,
+    terrain_surface,
+)
 from footfall.sim.sensors import LEG_PARTS, Sensors, model_ids
 
 __all__ = ["LEG_PARTS", "PerturbationConfig", "SimPerturbation", "Simulation", "bench_stepping"]
@@ -142,6 +149,22 @@ def _array(value, shape: tuple[int, ...], name: str) -> np.ndarray:
 
 
 # ------------------------------------------------------------------- simulation
+def foot_pads(model: mujoco.MjModel, hmap: HeightMap | None, robot: RobotDescription,
+              perturbation: SimPerturbation, max_spacing: float | None) -> FootPads | None:
+    """The feet's pads if ``model`` has them (the "pads" physics variant), else None.
+
+    ``max_spacing`` [m] is the height field's largest cell, as the model was compiled with.
+    """
+    if hmap is None or mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY,
+                                         f"{LEG_NAMES[0]}_pad") < 0:
+        return None
+    p = perturbation
+    surface = BallSurface(terrain_surface(hmap), hmap, robot.foot_radius,
+                          registration_centre(hmap, max_spacing), p.terrain_yaw,
+                          np.asarray(p.terrain_offset, dtype=np.float64))
+    return FootPads(model, surface, [f"{leg}_pad" for leg in LEG_NAMES])
+
+
 class Simulation:
     """The robot on a terrain in MuJoCo, seen and driven as the real robot is.
 
@@ -206,22 +229,8 @@ class Simulation:
         self._qd_gain = robot.joint_kd / robot.joint_kp  # [s] see set_targets
         self._jac = np.zeros((3, m.nv))  # foot_jacobians' work array
         self.physics_cpu = 0.0  # [s] CPU time spent in MuJoCo's steps (for benchmarks)
-        self._pads = self._foot_pads(hmap, max_spacing)  # None: the feet meet the terrain
+        self._pads = foot_pads(self.model, hmap, robot, self.perturbation, max_spacing)  # None: the feet meet the terrain
         mujoco.mj_forward(self.model, self.data)
-
-    def _foot_pads(self, hmap: HeightMap | None, max_spacing: float | None):
-        """The feet's pads if the model has them (the "pads" physics variant), else None."""
-        if hmap is None or mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY,
-                                             f"{LEG_NAMES[0]}_pad") < 0:
-            return None
-        from footfall.sim.foot_pads import BallSurface, FootPads
-        from footfall.sim.mjcf import registration_centre, terrain_surface
-
-        p = self.perturbation
-        surface = BallSurface(terrain_surface(hmap), hmap, self.robot.foot_radius,
-                              registration_centre(hmap, max_spacing), p.terrain_yaw,
-                              np.asarray(p.terrain_offset, dtype=np.float64))
-        return FootPads(self.model, surface, [f"{leg}_pad" for leg in LEG_NAMES])
 
     @classmethod
     def from_seed(cls, robot: RobotDescription, hmap: HeightMap | None, seed: int,

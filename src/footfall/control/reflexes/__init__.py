@@ -5,16 +5,17 @@ is put. On rough terrain it does not always: a stance foot slides off a
 rock rim, a foot lands on a steep face, the trunk tips. As the LittleDog
 teams did (CMU: "re-planning of the full trajectory, augmented by reflexes
 and feedback control"; slip detection and recovery after Focchi et al.),
-the walk watches the measured state every control period and reacts. Each
-reflex is a switch of :class:`ReflexConfig` (``WalkConfig.reflexes``) and
-logs an event in the run log when it acts:
+the controller watches the measured state every control period and reacts.
+Each reflex is a part of the controller in a module of this package, with
+its own settings (fields of :class:`ReflexConfig`, ``WalkConfig.reflexes``)
+and its own test, and logs an event in the run log when it acts:
 
-* **lift-off gate** (``lift_off_gate``): a leg lifts only when the measured
+* **lift-off gate** (``lift_off_gate``, :mod:`~footfall.control.reflexes.gate`): a leg lifts only when the measured
   centre of mass lies inside the triangle of the other three feet, where
   they actually stand, by ``gate_margin``; until then the body keeps moving
   toward the triangle's incentre, for at most ``gate_timeout``, after which
   the step is planned anew from where the feet stand;
-* **stance slip reflex** (``slip_reflex``): a loaded stance foot (its force
+* **stance slip reflex** (``slip_reflex``, :mod:`~footfall.control.reflexes.slip`): a loaded stance foot (its force
   sensor reads more than the walk's ``touchdown_force``) more than
   ``slip_distance`` (horizontally) from where it was put down, the ball's
   rolling allowed for, and moving faster than ``slip_speed``, is sliding.
@@ -24,23 +25,26 @@ logs an event in the run log when it acts:
   step is planned anew from the feet as they stand; if the slipped foot is
   more than ``replace_distance`` from where it was put, it steps first, to a
   new foothold;
-* **touch-down check** (``touchdown_check``): a foot that lands more than
+* **touch-down check** (``touchdown_check``,
+  :mod:`~footfall.control.reflexes.touchdown`): a foot that lands more than
   ``touchdown_tolerance`` from its foothold, or finds no ground within
   reach, is lifted again and put on the next-best candidate of F at least
   ``replace_separation`` away (at most ``max_replacements`` times a step);
-* **tilt reflex** (``tilt_reflex``): trunk roll or pitch more than
+* **tilt reflex** (``tilt_reflex``, :mod:`~footfall.control.reflexes.tilt`): trunk roll or pitch more than
   ``tilt_threshold`` from the planned attitude stops the body and brings a
   swinging foot down at once; the gait goes on once the error is below
-  ``tilt_recovered`` (or after ``recover_timeout``);
-* **re-basing** (``rebase_distance``): a recovery after which the body is
+  ``tilt_recovered`` (or after ``recover_timeout``; the recovery after
+  either alarm is :mod:`~footfall.control.reflexes.recovery`);
+* **re-basing** (``rebase_distance``, :mod:`~footfall.control.reflexes.rebase`): a recovery after which the body is
   still more than ``rebase_distance`` from where it is wanted -- the whole
   robot has slid, and the legs push on feet that are no longer where they
   were put -- takes the stance as it now is: every stance foot is
   re-anchored where it stands, the body is wanted where it is, and the next
   step is planned from there.
 
-Everything here is a pure function of measured arrays; the walk
-(:mod:`footfall.sim.episode`) calls them and acts.
+This module holds the settings and the numerics every part uses, pure
+functions of measured arrays; the parts act through the controller
+(:mod:`footfall.control.controller`), which wires them in.
 """
 
 from __future__ import annotations

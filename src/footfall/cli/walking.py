@@ -8,8 +8,7 @@ import click
 from footfall.cli.choices import SEED, count_range
 from footfall.cli.executors import executor_options, opened_executor
 from footfall.cli.output import emit, json_option, progress_bar
-from footfall.core.files import writable_path
-from footfall.experiments.batch import SNAPSHOT_SUFFIXES, VIDEO_SUFFIXES, walk_batch, walk_once
+from footfall.experiments.batch import check_picture_outputs, walk_batch, walk_once
 from footfall.sim.explain import explanation_lines
 
 TERRAIN_OPTION = click.option("--terrain", "terrain_path", required=True,
@@ -40,17 +39,6 @@ def _run_text(result: dict) -> str:
             f"{result['real_time_factor']:.1f}")
 
 
-def _check_picture_outputs(snapshots: str | None, video: str | None,
-                           explain_plot: str | None = None) -> None:
-    """Refuse a --snapshots, --video or --explain-plot path that could not be written, first."""
-    if snapshots is not None:
-        writable_path(snapshots, SNAPSHOT_SUFFIXES, what="--snapshots", kind="picture")
-    if explain_plot is not None:
-        writable_path(explain_plot, SNAPSHOT_SUFFIXES, what="--explain-plot", kind="picture")
-    if video is not None:
-        writable_path(video, VIDEO_SUFFIXES, what="--video", kind="video")
-
-
 @click.command("walk")
 @TERRAIN_OPTION
 @MODEL_OPTION
@@ -73,7 +61,7 @@ def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: st
              explain_plot: str | None, expert: bool, search_radius: float | None,
              as_json: bool) -> None:
     """One run of the simulated robot across a board (success, slip, speed)."""
-    _check_picture_outputs(snapshots, video, explain_plot)
+    check_picture_outputs(snapshots, video, explain_plot, as_options=True)
     outcome = walk_once(terrain_path, seed, model_path=model_path, expert=expert,
                         search_radius=search_radius, snapshots=snapshots, frames=frames,
                         video=video, log_path=log_path, explain_plot=explain_plot)

@@ -176,13 +176,19 @@ def legs_inverse_kinematics(robot: RobotDescription, foot: np.ndarray
     return q, ok
 
 
-def legs_knee_position(robot: RobotDescription, q: np.ndarray) -> np.ndarray:
-    """:func:`knee_position` of every leg at once: angles (..., 4, 3) [rad] -> (..., 4, 3) [m]."""
+def _legs_point(robot: RobotDescription, q: np.ndarray, knee: bool) -> np.ndarray:
+    """Knees (``knee``) or foot centres (..., 4, 3) [m], body frame, of angles (..., 4, 3) [rad]."""
     hips, side, _, _, _ = _leg_arrays(robot)
     q = np.asarray(q, dtype=np.float64)
-    kx, kz, _, _ = _planar(q[..., 1], q[..., 2], robot)
-    return _roll(q[..., 0], kx, np.broadcast_to(side, kx.shape), kz,
+    kx, kz, fx, fz = _planar(q[..., 1], q[..., 2], robot)
+    x, z = (kx, kz) if knee else (fx, fz)
+    return _roll(q[..., 0], x, np.broadcast_to(side, x.shape), z,
                  (hips[:, 0], hips[:, 1], hips[:, 2]))
+
+
+def legs_knee_position(robot: RobotDescription, q: np.ndarray) -> np.ndarray:
+    """:func:`knee_position` of every leg at once: angles (..., 4, 3) [rad] -> (..., 4, 3) [m]."""
+    return _legs_point(robot, q, knee=True)
 
 
 def legs_joint_limit_margin(robot: RobotDescription, q: np.ndarray) -> np.ndarray:
@@ -195,11 +201,7 @@ def legs_joint_limit_margin(robot: RobotDescription, q: np.ndarray) -> np.ndarra
 def legs_forward_kinematics(robot: RobotDescription, q: np.ndarray) -> np.ndarray:
     """:func:`forward_kinematics` of every leg at once: angles (..., 4, 3) [rad] -> foot centres
     (..., 4, 3) [m], body frame, ``robot.legs`` order."""
-    hips, side, _, _, _ = _leg_arrays(robot)
-    q = np.asarray(q, dtype=np.float64)
-    _, _, fx, fz = _planar(q[..., 1], q[..., 2], robot)
-    return _roll(q[..., 0], fx, np.broadcast_to(side, fx.shape), fz,
-                 (hips[:, 0], hips[:, 1], hips[:, 2]))
+    return _legs_point(robot, q, knee=False)
 
 
 def legs_jacobians(robot: RobotDescription, q: np.ndarray) -> np.ndarray:

@@ -258,6 +258,21 @@ def _path_or_none(path: str | os.PathLike | None) -> str | None:
     return None if path is None else str(path)
 
 
+def check_picture_outputs(snapshots: str | os.PathLike | None, video: str | os.PathLike | None,
+                          explain_plot: str | os.PathLike | None = None, *,
+                          as_options: bool = False) -> None:
+    """Refuse a snapshots, video or explain-plot path that could not be written, before a run.
+
+    With ``as_options`` the error names them as the command line does (``--snapshots``).
+    """
+    for path, suffixes, option, name, kind in (
+            (snapshots, SNAPSHOT_SUFFIXES, "--snapshots", "snapshots", "picture"),
+            (video, VIDEO_SUFFIXES, "--video", "video", "video"),
+            (explain_plot, SNAPSHOT_SUFFIXES, "--explain-plot", "explain plot", "picture")):
+        if path is not None:
+            writable_path(path, suffixes, what=option if as_options else name, kind=kind)
+
+
 def walk_once(terrain_path: str | os.PathLike, seed: int, *,
               model_path: str | os.PathLike | None = None, expert: bool = False,
               search_radius: float | None = None, snapshots: str | os.PathLike | None = None,
@@ -283,12 +298,7 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
     config = walk_config(model_path, expert, search_radius)
     hmap = load_board(terrain_path)
     reward_for = reward_source(model_path, hmap)
-    if snapshots is not None:
-        writable_path(snapshots, SNAPSHOT_SUFFIXES, what="snapshots", kind="picture")
-    if video is not None:
-        writable_path(video, VIDEO_SUFFIXES, what="video", kind="video")
-    if explain_plot is not None:
-        writable_path(explain_plot, SNAPSHOT_SUFFIXES, what="explain plot", kind="picture")
+    check_picture_outputs(snapshots, video, explain_plot)
     store = _open_log(log_path)
     pictures = None
     if snapshots or video:

@@ -181,3 +181,26 @@ def test_servo_gains_do_not_make_a_model_incompatible():
     assert "joint_kp" in SERVO_FIELDS
     with pytest.raises(FootfallError, match="lower_leg"):
         model.check_compatible(robot=dataclasses.replace(LITTLEDOG, lower_leg=0.12))
+
+
+def test_family_options_reach_only_their_family_and_unknown_ones_are_refused(demos_and_maps):
+    demos, maps = demos_and_maps
+    with pytest.raises(FootfallError, match=r"'templates' has no option 'library_sise'; "
+                                            r"its options: library_size, bandwidth_rms"):
+        small("both", demos, maps, family_options={"templates": {"library_sise": 30}})
+    with pytest.raises(FootfallError, match=r"'terrain' has no option 'library_size'; "
+                                            r"its options: none"):
+        small("both", demos, maps, family_options={"terrain": {"library_size": 30}})
+    with pytest.raises(FootfallError, match=r"family 'templates', which is not in the feature "
+                                            r"set \(terrain, pose\)"):
+        small("terrain", demos, maps, family_options={"templates": {"library_size": 30}})
+    # A family's own option reaches it, over the argument of the same name.
+    rms = (0.002, 0.003, 0.006)  # [m]
+    given = small("templates", demos, maps, family_options={"templates": {"bandwidth_rms": rms}})
+    direct = learn_model(training(demos, maps), "templates", "l1", library_size=60,
+                         training_candidates=30, cv=3, Cs=5, bandwidth_rms=rms)
+    default = small("templates", demos, maps)
+    for group, f in given.functions.items():
+        bandwidths = f.family("templates").bandwidths
+        assert bandwidths == direct.functions[group].family("templates").bandwidths
+        assert bandwidths != default.functions[group].family("templates").bandwidths

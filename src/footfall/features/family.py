@@ -17,7 +17,7 @@ from __future__ import annotations
 import hashlib
 import json
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, ClassVar
@@ -111,6 +111,7 @@ class FeatureFamily(ABC):
 
     name: ClassVar[str]  # registry key; prefixes the family's columns in a reward ("pose.progress")
     needs_state: ClassVar[bool] = False  # True: a function of the robot's state, not only the terrain
+    fit_options: ClassVar[tuple[str, ...]] = ()  # the options :meth:`fit` takes, by keyword
 
     # ------------------------------------------------------------ required
     @classmethod
@@ -161,11 +162,13 @@ class FeatureFamily(ABC):
         return h.hexdigest()
 
     def fit(self, maps: list[HeightMap], states: list[RobotState], candidates: list[np.ndarray],
-            chosen: list[int], rng: np.random.Generator, **options: Any) -> FeatureFamily:
+            chosen: list[int], rng: np.random.Generator, *, robot: RobotDescription = LITTLEDOG,
+            log: Callable[[str], None] = lambda s: None, **options: Any) -> FeatureFamily:
         """The family with parameters built from training demonstrations (default: itself).
 
-        ``options`` are the family's own settings (e.g. ``library_size``);
-        a family ignores options it does not know.
+        ``options`` are the family's own settings, those named in
+        :attr:`fit_options` (e.g. the templates' ``library_size``); training
+        refuses any other (:func:`check_family_options`) before it fits.
         """
         return self
 
@@ -207,6 +210,22 @@ def require_no_params(arrays: Mapping[str, np.ndarray], meta: Any) -> None:
         raise FootfallError(f"has unexpected array(s) {', '.join(sorted(arrays))}")
     if meta != {}:
         raise FootfallError(f"params must be empty ({{}}), got {str(meta)[:60]}")
+
+
+def check_family_options(families: Sequence[FeatureFamily],
+                         options: Mapping[str, Mapping[str, Any]]) -> None:
+    """Refuse options for a family not among ``families``, or that its :meth:`fit` does not
+    take (:attr:`FeatureFamily.fit_options`): a misspelt option would otherwise do nothing."""
+    by_name = {f.name: f for f in families}
+    for name, opts in options.items():
+        if name not in by_name:
+            raise FootfallError(f"options for feature family {name!r}, which is not in the "
+                                f"feature set ({', '.join(by_name)})")
+        unknown = sorted(set(opts) - set(by_name[name].fit_options))
+        if unknown:
+            takes = ", ".join(by_name[name].fit_options) or "none"
+            raise FootfallError(f"feature family {name!r} has no option "
+                                f"{', '.join(map(repr, unknown))}; its options: {takes}")
 
 
 # ---------------------------------------------------------------- registries

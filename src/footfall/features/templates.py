@@ -302,6 +302,7 @@ class TemplateFeatures(FeatureFamily):
     """
 
     name: ClassVar[str] = "templates"
+    fit_options: ClassVar[tuple[str, ...]] = ("library_size", "bandwidth_rms")
     config: FeatureConfig = field(default_factory=FeatureConfig)
     library: TemplateLibrary | None = None  # None until fitted
     bandwidths: tuple[float, ...] = ()  # [1/m^2] per scale; () until chosen
@@ -390,8 +391,8 @@ class TemplateFeatures(FeatureFamily):
     # ---------------------------------------------------------------- learning
     def fit(self, maps, states, candidates, chosen, rng: np.random.Generator, *,
             library_size: int = DEFAULT_LIBRARY_SIZE, bandwidth_rms: Sequence[float] | None = None,
-            robot: RobotDescription = LITTLEDOG, log: Callable[[str], None] = lambda s: None,
-            **_: Any) -> TemplateFeatures:
+            robot: RobotDescription = LITTLEDOG, log: Callable[[str], None] = lambda s: None
+            ) -> TemplateFeatures:
         """A library from the training demonstrations; bandwidths fixed if ``bandwidth_rms``."""
         library = library_from_demonstrations(maps, states, candidates, chosen, self.config, rng,
                                               size=library_size, robot=robot)

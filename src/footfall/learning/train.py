@@ -29,7 +29,7 @@ from footfall.core.state import RobotState
 from footfall.core.validate import require_int
 from footfall.data.store import Demonstration, DemoStore
 from footfall.features.config import FeatureConfig
-from footfall.features.family import FeatureFamily
+from footfall.features.family import FeatureFamily, check_family_options
 from footfall.features.templates import DEFAULT_LIBRARY_SIZE
 from footfall.learning.dataset import (
     DEFAULT_TRAINING_CANDIDATES,
@@ -102,13 +102,16 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     resolutions = {d.hmap.resolution for d in demos}
     started = time.perf_counter()
     rng = np.random.default_rng(seed)
-    options = {"templates": {"library_size": library_size, "bandwidth_rms": bandwidth_rms}}
-    for name, opts in (family_options or {}).items():
-        options[name] = {**options.get(name, {}), **opts}
+    unfitted = create_families(feature_set, config, robot)
+    check_family_options(unfitted, family_options or {})
+    options = {name: dict(opts) for name, opts in (family_options or {}).items()}
+    if any(f.name == "templates" for f in unfitted):
+        options["templates"] = {"library_size": library_size, "bandwidth_rms": bandwidth_rms,
+                                **options.get("templates", {})}
     families = tuple(
         f.fit([d.hmap for d in demos], [d.state for d in demos], [d.candidates for d in demos],
               [d.chosen for d in demos], rng, robot=robot, log=log, **options.get(f.name, {}))
-        for f in create_families(feature_set, config, robot))
+        for f in unfitted)
     examples = []
     for d in demos:  # one demonstration at a time: each is vectorised over its candidates
         rows = training_rows(d.candidates.shape[0], d.chosen, training_candidates, rng)

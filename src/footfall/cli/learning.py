@@ -1,5 +1,5 @@
-"""``footfall learn`` and ``footfall rank-eval``: a foothold model from a store, and its agreement
-with the expert on demonstrations."""
+"""``footfall learn`` and ``footfall rank-eval``: a foothold model from a store, and how any
+scorer agrees with the expert on a store's decisions."""
 
 from __future__ import annotations
 
@@ -87,22 +87,41 @@ def learn(store_path: str, feature_set: str, learner: str, library_size: int,
 
 
 @click.command("rank-eval")
-@click.argument("model_path", metavar="MODEL.npz")
-@click.argument("store_path", metavar="DEMOS.sqlite")
-@click.option("--no-expert", is_flag=True, help="Skip the reward loss (needs the expert).")
+@click.argument("paths", nargs=-1, required=True, metavar="[MODEL.npz] STORE.sqlite")
+@click.option("--reward", default=None, metavar="NAME",
+              help="Rank with a named scorer instead of a model file: hand-tuned (the reward "
+                   "learning starts from) or expert (the expert's own value, the ceiling).")
+@click.option("--decisions", type=click.Choice(["demonstrations", "runs"]),
+              default="demonstrations", show_default=True,
+              help="What to rank: the store's demonstrations (the expert's choices), or the "
+                   "steps of its run logs -- the states the robot visited -- against the "
+                   "expert's best of each step.")
+@click.option("--run-key", default=None, metavar="PREFIX",
+              help="With --decisions runs: only the runs whose key starts with this.")
+@click.option("--no-expert", is_flag=True,
+              help="Skip the reward loss and its shares (they need the expert).")
 @click.option("--source", multiple=True, help=SOURCE_HELP)
 @json_option
-def rank_eval_cmd(model_path: str, store_path: str, no_expert: bool, source: tuple[str, ...],
+def rank_eval_cmd(paths: tuple[str, ...], reward: str | None, decisions: str,
+                  run_key: str | None, no_expert: bool, source: tuple[str, ...],
                   as_json: bool) -> None:
-    """Top-1 agreement, mean percentile rank and mean reward loss of a model on demonstrations."""
-    agreement = rank_eval(model_path, store_path, with_expert=not no_expert,
-                          source=source or None)
+    """How a scorer ranks a store's decisions against the expert: top-1, within 1 cm,
+    percentile, the expert's shortfall of its pick and the shares above the correction margin
+    and the severe threshold."""
+    if len(paths) != (1 if reward is not None else 2):
+        raise FootfallError("give MODEL.npz STORE.sqlite, or --reward NAME STORE.sqlite")
+    agreement = rank_eval(None if reward is not None else paths[0], paths[-1], reward=reward,
+                          with_expert=not no_expert, source=source or None,
+                          decisions=decisions, run_key=run_key)
     s = agreement.scores
+    who = (agreement.model if reward is not None
+           else f"{agreement.feature_set}/{agreement.learner}")
     emit(as_json, agreement.as_dict(),
-         f"{agreement.feature_set}/{agreement.learner} on {s.n} demonstrations: "
+         f"{who} on {s.n} {agreement.decisions}: "
          f"top-1 {s.top1:.3f}, within 1 cm {_number(s.top1_near)}, "
          f"percentile {s.percentile:.3f}, reward loss {_number(s.reward_loss)} "
-         f"(95 % CI {_number(s.reward_loss_ci[0])} to {_number(s.reward_loss_ci[1])})")
+         f"(95 % CI {_number(s.reward_loss_ci[0])} to {_number(s.reward_loss_ci[1])}), "
+         f"above the margin {_number(s.above_margin)}, severe {_number(s.severe)}")
 
 
 def _number(value: float) -> str:

@@ -21,8 +21,9 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "learn": ("footfall.cli.learning", "learn",
               "Learn front- and hind-leg foothold ranking functions from demonstrations."),
     "rank-eval": ("footfall.cli.learning", "rank_eval_cmd",
-                  "Top-1 agreement, mean percentile rank and mean reward loss of a model on "
-                  "demonstrations."),
+                  "How a scorer ranks a store's decisions against the expert: top-1, within 1 "
+                  "cm, percentile, the expert's shortfall of its pick and the shares above "
+                  "the correction margin and the severe threshold."),
     "walk": ("footfall.cli.walking", "walk_cmd",
              "One run of the simulated robot across a board (success, slip, speed)."),
     "walk-many": ("footfall.cli.walking", "walk_many_cmd",

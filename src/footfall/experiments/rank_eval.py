@@ -1,7 +1,12 @@
-"""A learned model's agreement with the expert on a store's demonstrations (``footfall rank-eval``).
+"""Any scorer's agreement with the expert on a store's decisions (``footfall rank-eval``).
 
-Here, above both, because the measure needs the learner's model and the expert's judgement
-(:mod:`footfall.learning.evaluation` explains the measures).
+Here, above both, because the measure needs the scorer and the expert's judgement
+(:mod:`footfall.learning.evaluation` explains the measures). The scorer is a learned model
+file, or a named scorer that needs no training (:data:`footfall.features.scorer.SCORERS`: the
+hand-tuned reward ``"hand-tuned"``, the expert's own value ``"expert"``, the ceiling). The
+decisions are the store's demonstrations -- each with the expert's choice -- or the steps of
+its run logs, the states the robot itself visited, where the expert's best of each step's
+candidate set is the choice to rank.
 """
 
 from __future__ import annotations
@@ -11,46 +16,117 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
+from footfall.core.errors import FootfallError
 from footfall.core.robot import LITTLEDOG
+from footfall.data.store import Demonstration, DemoStore
+from footfall.expert.corrections import DEFAULT_MARGIN, SEVERE_SHORTFALL
+from footfall.expert.protocol import expert_settings
 from footfall.expert.synthetic import SyntheticExpert
-from footfall.learning.evaluation import RankScores, rank_scores
+from footfall.features.scorer import SCORERS
+from footfall.learning.evaluation import EveryLeg, RankScores, expert_values, rank_scores
 from footfall.learning.model import FootholdModel
 from footfall.learning.train import store_demonstrations
+
+DECISIONS = ("demonstrations", "runs")  # where the decisions to rank come from
 
 
 @dataclass(frozen=True)
 class ModelAgreement:
-    """How well a model file ranks a store's demonstrations like the expert."""
+    """How well a scorer ranks a store's decisions like the expert."""
 
-    model: str  # the model file, as given
-    feature_set: str
-    learner: str
-    scores: RankScores  # top-1, percentile, reward loss, ...
+    model: str  # the model file as given, or the scorer's registered name
+    feature_set: str  # the model's feature set ("-" for a named scorer)
+    learner: str  # the model's learner ("-" for a named scorer)
+    scores: RankScores  # top-1, percentile, reward loss, shares above the margin ...
+    decisions: str = "demonstrations"  # one of DECISIONS
 
     def as_dict(self) -> dict[str, Any]:
-        """Plain data for JSON: the model, then the scores' keys."""
+        """Plain data for JSON: the scorer, then the scores' keys."""
         return {"model": self.model, "feature_set": self.feature_set, "learner": self.learner,
-                **self.scores.as_dict()}
+                "decisions": self.decisions, **self.scores.as_dict()}
 
 
-def rank_eval(model_path: str | os.PathLike, store_path: str | os.PathLike, *,
-              with_expert: bool = True, source: str | Sequence[str] | None = None
-              ) -> ModelAgreement:
-    """Score the model at ``model_path`` on the store's demonstrations.
+def rank_eval(model_path: str | os.PathLike | None, store_path: str | os.PathLike, *,
+              reward: str | None = None, with_expert: bool = True,
+              source: str | Sequence[str] | None = None, decisions: str = "demonstrations",
+              run_key: str | None = None) -> ModelAgreement:
+    """Score the model at ``model_path`` -- or the named scorer ``reward`` -- on the store's
+    decisions.
 
-    ``with_expert`` False skips the reward loss (it needs the expert's values;
-    it is NaN then, null in ``as_dict``). ``source`` keeps only demonstrations whose source
-    starts with it.
+    ``decisions`` "demonstrations" ranks the store's demonstrations (``source``
+    keeps those whose source starts with it); "runs" ranks the steps of its run
+    logs (``run_key`` keeps the runs whose key starts with it), whose choice is
+    the expert's best of the step's candidates. ``with_expert`` False skips the
+    reward loss and its shares (they need the expert's values; NaN then, null
+    in ``as_dict``); run decisions need the expert.
 
     Raises
     ------
     FootfallError
-        For an unreadable model or one for another robot (checked first), or a
-        store without such demonstrations.
+        For both or neither of a model and a named scorer, an unreadable model
+        or one for another robot (checked first), an unknown scorer name, or a
+        store without such decisions.
     """
-    model = FootholdModel.load(model_path)
-    model.check_compatible(robot=LITTLEDOG)  # the robot whose states the store holds
-    demos, maps = store_demonstrations(store_path, source=source)
-    expert = SyntheticExpert(robot=model.robot) if with_expert else None
-    scores = rank_scores(model, demos, maps.__getitem__, expert)
-    return ModelAgreement(str(model_path), model.feature_set, model.learner, scores)
+    if (model_path is None) == (reward is None):
+        raise FootfallError("give a model file or --reward NAME, not both and not neither")
+    if decisions not in DECISIONS:
+        raise FootfallError(f"decisions must be one of {', '.join(DECISIONS)}, got {decisions!r}")
+    if decisions == "runs" and not with_expert:
+        raise FootfallError("run decisions are ranked against the expert's best: they need "
+                            "the expert")
+    if model_path is not None:
+        model = FootholdModel.load(model_path)
+        model.check_compatible(robot=LITTLEDOG)  # the robot whose states the store holds
+        scorer, name, feature_set, learner = model, str(model_path), model.feature_set, \
+            model.learner
+    else:
+        scorer = EveryLeg(SCORERS.get(reward)(None))
+        name, feature_set, learner = reward, "-", "-"
+    expert = SyntheticExpert(robot=scorer.robot) if with_expert else None
+    if decisions == "demonstrations":
+        demos, maps = store_demonstrations(store_path, source=source)
+        values = expert_values(demos, maps.__getitem__, expert) if expert else None
+    else:
+        demos, maps, values = run_decisions(store_path, expert, run_key)
+    scores = rank_scores(scorer, demos, maps.__getitem__, values=values,
+                         margin=DEFAULT_MARGIN, severe_above=SEVERE_SHORTFALL)
+    return ModelAgreement(name, feature_set, learner, scores, decisions)
+
+
+def run_decisions(store_path: str | os.PathLike, expert: SyntheticExpert,
+                  run_key: str | None = None) -> tuple[list[Demonstration], dict, list]:
+    """The steps of a store's run logs as decisions the expert makes.
+
+    Each step of each run (those whose key starts with ``run_key``) with at
+    least two candidates becomes a demonstration whose choice is the expert's
+    best of the step's candidates (source ``run:<id>:step:<k>``).
+
+    Returns
+    -------
+    (list of Demonstration, dict, list of arrays)
+        The decisions in run and step order, {terrain hash: HeightMap}, and the
+        expert's values of each decision's candidates.
+    """
+    with DemoStore(store_path, read_only=True) as store:  # evaluation only reads
+        heads = store.runs(key_prefix=run_key)
+        if not heads:
+            which = "" if run_key is None else f" with a key starting {run_key!r}"
+            raise FootfallError(f"{store_path}: no run logs{which} to take decisions from")
+        maps = {h: store.terrain(h) for h in {head["terrain_hash"] for head in heads}}
+        demos, values = [], []
+        for head in heads:
+            run = store.run(head["id"])
+            hmap = maps[run.terrain_hash]
+            for step in run.steps:
+                if step.candidates.shape[0] < 2:
+                    continue
+                v = np.asarray(expert.values(hmap, step.state, step.candidates))
+                demos.append(Demonstration(run.terrain_hash, step.state, step.candidates,
+                                           int(np.argmax(v)), f"run:{run.id}:step:{step.k}",
+                                           expert_settings(expert)))
+                values.append(v)
+    if not demos:
+        raise FootfallError(f"{store_path}: the run logs hold no step with two candidates")
+    return demos, maps, values

@@ -76,7 +76,7 @@ from footfall.experiments.workspace import (
     test_boards,
 )
 from footfall.expert.collect import collect_demonstrations
-from footfall.expert.corrections import step_verdicts
+from footfall.expert.corrections import SEVERE_SHORTFALL, step_verdicts
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
 from footfall.features.family import PAPER_FEATURE_SETS
 from footfall.learning.evaluation import expert_values, rank_scores
@@ -418,10 +418,6 @@ def _demo_summary(demos: list, maps: dict[str, HeightMap]) -> dict:
         kinds[kind] = kinds.get(kind, 0) + 1
         legs[d.swing_leg] = legs.get(d.swing_leg, 0) + 1
     return {"n": len(demos), "by_module": dict(sorted(kinds.items())), "by_leg": legs}
-
-
-SEVERE_SHORTFALL = 10.0  # [value units; 1 cm off the gait-nominal foothold] a choice this much
-# worse than the expert's best: a foothold on a slanted face, a pit's rim or a riser's edge
 
 
 def _choice_quality(store: DemoStore, maps: dict[str, HeightMap], config: ReproduceConfig,

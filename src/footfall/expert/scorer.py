@@ -23,11 +23,12 @@ import numpy as np
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.expert.protocol import Expert, expert_settings
+from footfall.expert.synthetic import SyntheticExpert
 from footfall.features.config import FeatureConfig
 from footfall.features.dense import ScoreGrid
 from footfall.features.family import Candidates
 from footfall.features.reward import LinearReward, default_reward
-from footfall.features.scorer import FootholdScorer
+from footfall.features.scorer import SCORERS, FootholdScorer
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,3 +83,12 @@ class ExpertScorer(FootholdScorer):
         else:
             text = "usable:" + self._usable.key(state=False)
         return hashlib.sha256(f"expert-scorer:{text}".encode()).hexdigest()
+
+
+def synthetic_expert_scorer(config: FeatureConfig | None = None) -> ExpertScorer:
+    """The synthetic expert's own value as a scorer (``"expert"`` in :data:`SCORERS`): the
+    ceiling of an offline evaluation, where its loss against itself is zero."""
+    return ExpertScorer(SyntheticExpert(), config or FeatureConfig())
+
+
+SCORERS.register("expert", synthetic_expert_scorer)

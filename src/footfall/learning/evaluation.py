@@ -9,7 +9,14 @@ reward loss: the expert's own value of its best candidate minus its value
 of the candidate the model picks (in the expert's value units, 1 unit = 1 cm
 of progress), with a bootstrap confidence interval over demonstrations. The
 loss needs the expert's judgement: evaluation may ask the expert, the learner
-never does.
+never does. With it come the shares of decisions whose loss is above the
+correction margin and above the severe threshold (the numbers the walking
+experiment's verdict on the robot's own choices reports).
+
+Any scorer is measured the same way: a learned model (one scorer per leg
+group), the hand-tuned reward or the expert's own value (the ceiling; its
+loss is zero by construction) -- :class:`EveryLeg` gives a single scorer a
+model's shape.
 """
 
 from __future__ import annotations
@@ -21,7 +28,9 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from footfall.core.errors import FootfallError
+from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.core.stats import bootstrap_ci
+from footfall.features.scorer import FootholdScorer
 from footfall.features.scoring import score_footholds
 
 NEAR = 0.01  # [m] a pick this close (horizontally) to the expert's choice counts as "near"
@@ -39,6 +48,10 @@ class RankScores:
     top1_near: float = float("nan")  # fraction of picks within NEAR [m] of the expert's choice
     reward_loss_ci: tuple[float, float] = (float("nan"), float("nan"))  # 95 % bootstrap CI
     losses: tuple[float, ...] = ()  # per-demonstration reward loss, in demonstration order
+    above_margin: float = float("nan")  # fraction of decisions whose loss is above ``margin``
+    severe: float = float("nan")  # fraction of decisions whose loss is above ``severe_above``
+    margin: float = float("nan")  # [value units] the correction margin the shares count above
+    severe_above: float = float("nan")  # [value units] the severe threshold
 
     def as_dict(self) -> dict:
         """Plain data for JSON (the per-demonstration losses included).
@@ -62,12 +75,34 @@ def expert_values(demos: Sequence, terrain: Callable[[str], object], expert) -> 
     return [expert.values(terrain(d.terrain_hash), d.state, d.candidates) for d in demos]
 
 
+@dataclass(frozen=True)
+class EveryLeg:
+    """One scorer for every leg, in the shape of a model (``reward_for(leg)``, ``robot``): how
+    the hand-tuned reward or the expert's value is ranked against a learned model."""
+
+    scorer: FootholdScorer
+    robot: RobotDescription = LITTLEDOG
+
+    def reward_for(self, leg: str) -> FootholdScorer:
+        """The scorer, whichever leg swings."""
+        return self.scorer
+
+    def check_compatible(self, **_: Any) -> None:
+        """A single scorer reads any map (its features are computed at the map's resolution)."""
+
+
 def rank_scores(model, demos: Sequence, terrain: Callable[[str], object],
-                expert=None, values: Sequence[np.ndarray] | None = None) -> RankScores:
+                expert=None, values: Sequence[np.ndarray] | None = None, *,
+                margin: float = float("nan"), severe_above: float = float("nan")) -> RankScores:
     """Score ``model`` on demonstrations; ``terrain(hash)`` returns each map.
 
+    ``model`` is anything with ``reward_for(leg)`` (a scorer per leg),
+    ``robot`` and ``check_compatible(map_resolution=...)``: a
+    :class:`~footfall.learning.model.FootholdModel`, or :class:`EveryLeg`.
     The reward loss uses the expert's ``values`` of each demonstration's
-    candidates (computed with ``expert`` when not given; NaN without either).
+    candidates (computed with ``expert`` when not given; NaN without either);
+    ``above_margin`` and ``severe`` count the losses above ``margin`` and
+    ``severe_above`` [value units] (NaN where those are not given).
     """
     if values is None and expert is not None:
         values = expert_values(demos, terrain, expert)
@@ -89,9 +124,19 @@ def rank_scores(model, demos: Sequence, terrain: Callable[[str], object],
         pct.append(float(np.mean(others < r[d.chosen])) if others.size else 1.0)
         if values is not None:
             loss.append(float(values[k].max() - values[k][pick]))
+    losses = np.array(loss)
     return RankScores(len(demos), float(np.mean(top1)), float(np.mean(pct)),
                       float(np.mean(loss)) if loss else float("nan"),
                       float(np.std(loss)) if loss else float("nan"),
                       top1_near=float(np.mean(near)),
-                      reward_loss_ci=bootstrap_ci(np.array(loss)) if loss else (float("nan"),) * 2,
-                      losses=tuple(loss))
+                      reward_loss_ci=bootstrap_ci(losses) if loss else (float("nan"),) * 2,
+                      losses=tuple(loss), above_margin=_share_above(losses, margin),
+                      severe=_share_above(losses, severe_above), margin=float(margin),
+                      severe_above=float(severe_above))
+
+
+def _share_above(losses: np.ndarray, threshold: float) -> float:
+    """The fraction of ``losses`` above ``threshold`` (NaN without losses or a threshold)."""
+    if losses.size == 0 or not math.isfinite(threshold):
+        return float("nan")
+    return float(np.mean(losses > threshold))

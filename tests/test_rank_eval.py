@@ -1,0 +1,80 @@
+"""``footfall rank-eval``: any scorer -- a model file, the hand-tuned reward, the expert's own
+value -- measured by the same numbers, on demonstrations and on the steps of run logs."""
+
+import json
+import math
+
+import pytest
+
+from cli_helpers import assert_user_error, run
+from footfall.core.errors import FootfallError
+from footfall.data.store import DemoStore
+from footfall.experiments.batch import walk_once
+from footfall.experiments.rank_eval import rank_eval
+from footfall.expert.collect import collect_into_store
+from footfall.learning.train import learn_from_store
+from footfall.terrain.saving import save_board
+
+
+@pytest.fixture(scope="module")
+def store(tmp_path_factory):
+    """A store with 12 of the expert's demonstrations and one run walked with the hand-tuned
+    reward on a rocky board; and a model learned from the demonstrations."""
+    folder = tmp_path_factory.mktemp("rank_eval")
+    board = folder / "board.npz"
+    save_board(["rocky:0.5"], seed=3, path=board)
+    path = folder / "store.sqlite"
+    collect_into_store([board], path, n=12, seed=0)
+    walk_once(board, 2, search_radius=0.03, log_path=path)
+    model = folder / "model.npz"
+    learn_from_store(path, model, "terrain", library_size=30, cv=3, Cs=4)
+    return path, model
+
+
+def test_the_expert_is_its_own_ceiling_and_the_hand_tuned_reward_falls_short(store):
+    path, _ = store
+    ceiling = rank_eval(None, path, reward="expert").scores
+    assert ceiling.n == 12
+    assert ceiling.reward_loss == 0 and ceiling.above_margin == 0 and ceiling.severe == 0
+    assert (ceiling.margin, ceiling.severe_above) == (1.0, 10.0)  # [value units]
+    hand = rank_eval(None, path, reward="hand-tuned").scores
+    assert hand.n == 12 and hand.reward_loss > 0
+    assert hand.above_margin == pytest.approx(sum(x > 1.0 for x in hand.losses) / 12)
+    assert 0 <= hand.severe <= hand.above_margin <= 1
+
+
+def test_run_decisions_are_the_steps_the_robot_took_ranked_against_the_experts_best(store):
+    path, model = store
+    with DemoStore(path, read_only=True) as s:
+        steps = [st for st in s.run(s.runs()[0]["id"]).steps if st.candidates.shape[0] >= 2]
+    ceiling = rank_eval(None, path, reward="expert", decisions="runs")
+    assert ceiling.decisions == "runs" and ceiling.scores.n == len(steps) > 5
+    assert ceiling.scores.top1 == 1 and ceiling.scores.reward_loss == 0
+    learned = rank_eval(model, path, decisions="runs").scores
+    assert learned.n == len(steps) and learned.reward_loss >= 0
+    assert math.isfinite(learned.above_margin)
+    with pytest.raises(FootfallError, match="no run logs with a key starting 'nothing/'"):
+        rank_eval(None, path, reward="expert", decisions="runs", run_key="nothing/")
+
+
+def test_the_command_ranks_a_model_or_a_named_scorer_and_refuses_bad_use(store, capsys):
+    path, model = store
+    # (the expert's values are the slow part: the library tests above measure with them)
+    code, out, _ = run(capsys, "rank-eval", model, path, "--no-expert", "--json")
+    assert code == 0
+    result = json.loads(out)
+    assert (result["feature_set"], result["decisions"], result["n"]) == \
+        ("terrain", "demonstrations", 12)
+    assert result["above_margin"] is None and result["severe_above"] == 10.0
+    code, out, _ = run(capsys, "rank-eval", "--reward", "hand-tuned", path, "--no-expert")
+    assert code == 0 and out.startswith("hand-tuned on 12 demonstrations: top-1 ")
+    assert out.rstrip().endswith("above the margin n/a, severe n/a")
+    for args, message in [
+            (["--reward", "hand-tuned", str(model), str(path)], "give MODEL.npz STORE.sqlite"),
+            ([str(path)], "give MODEL.npz STORE.sqlite"),
+            (["--reward", "hand-tunde", str(path)], "unknown scorer 'hand-tunde'"),
+            (["--reward", "expert", "--decisions", "runs", "--no-expert", str(path)],
+             "run decisions are ranked against the expert's best")]:
+        code, out, err = run(capsys, "rank-eval", *args)
+        assert out == ""
+        assert_user_error(code, err, message)

@@ -33,7 +33,7 @@ smoke: $(STAMP)
 	test -s out/smoke/report.html
 
 test: $(STAMP) chromium
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n auto --dist loadfile
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n auto
 
 # The teaching page's browser tests drive Debian's Chromium (Playwright cannot download its own
 # browsers here): installed with apt where it is missing and this user may (root, or sudo

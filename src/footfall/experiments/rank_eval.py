@@ -43,9 +43,10 @@ class ModelAgreement:
     decisions: str = "demonstrations"  # one of DECISIONS
 
     def as_dict(self) -> dict[str, Any]:
-        """Plain data for JSON: the scorer, then the scores' keys."""
+        """Plain data for JSON: the scorer, the scores' keys, then where the decisions came
+        from."""
         return {"model": self.model, "feature_set": self.feature_set, "learner": self.learner,
-                "decisions": self.decisions, **self.scores.as_dict()}
+                **self.scores.as_dict(), "decisions": self.decisions}
 
 
 def rank_eval(model_path: str | os.PathLike | None, store_path: str | os.PathLike, *,

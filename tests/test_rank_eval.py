@@ -41,6 +41,11 @@ def test_the_expert_is_its_own_ceiling_and_the_hand_tuned_reward_falls_short(sto
     assert hand.n == 12 and hand.reward_loss > 0
     assert hand.above_margin == pytest.approx(sum(x > 1.0 for x in hand.losses) / 12)
     assert 0 <= hand.severe <= hand.above_margin <= 1
+    two = rank_eval(None, path, reward="hand-tuned", margin=2.0).scores  # the reproduction's
+    assert two.margin == 2.0 and two.losses == hand.losses
+    assert two.above_margin == pytest.approx(sum(x > 2.0 for x in hand.losses) / 12)
+    with pytest.raises(FootfallError, match="the correction margin must be a number >= 0"):
+        rank_eval(None, path, reward="hand-tuned", margin=-1.0)
 
 
 def test_run_decisions_are_the_steps_the_robot_took_ranked_against_the_experts_best(store):

@@ -98,13 +98,16 @@ def learn(store_path: str, feature_set: str, learner: str, library_size: int,
                    "expert's best of each step.")
 @click.option("--run-key", default=None, metavar="PREFIX",
               help="With --decisions runs: only the runs whose key starts with this.")
+@click.option("--margin", type=Finite(min=0.0), default=1.0, show_default=True,
+              help="The correction margin [value units] whose share of decisions above it is "
+                   "reported (the reproduction's own is 2).")
 @click.option("--no-expert", is_flag=True,
               help="Skip the reward loss and its shares (they need the expert).")
 @click.option("--source", multiple=True, help=SOURCE_HELP)
 @json_option
 def rank_eval_cmd(paths: tuple[str, ...], reward: str | None, decisions: str,
-                  run_key: str | None, no_expert: bool, source: tuple[str, ...],
-                  as_json: bool) -> None:
+                  run_key: str | None, margin: float, no_expert: bool,
+                  source: tuple[str, ...], as_json: bool) -> None:
     """How a scorer ranks a store's decisions against the expert: top-1, within 1 cm,
     percentile, the expert's shortfall of its pick and the shares above the correction margin
     and the severe threshold."""
@@ -112,7 +115,7 @@ def rank_eval_cmd(paths: tuple[str, ...], reward: str | None, decisions: str,
         raise FootfallError("give MODEL.npz STORE.sqlite, or --reward NAME STORE.sqlite")
     agreement = rank_eval(None if reward is not None else paths[0], paths[-1], reward=reward,
                           with_expert=not no_expert, source=source or None,
-                          decisions=decisions, run_key=run_key)
+                          decisions=decisions, run_key=run_key, margin=margin)
     s = agreement.scores
     who = (agreement.model if reward is not None
            else f"{agreement.feature_set}/{agreement.learner}")

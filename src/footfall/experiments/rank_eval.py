@@ -11,6 +11,7 @@ candidate set is the choice to rank.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -52,7 +53,7 @@ class ModelAgreement:
 def rank_eval(model_path: str | os.PathLike | None, store_path: str | os.PathLike, *,
               reward: str | None = None, with_expert: bool = True,
               source: str | Sequence[str] | None = None, decisions: str = "demonstrations",
-              run_key: str | None = None) -> ModelAgreement:
+              run_key: str | None = None, margin: float = DEFAULT_MARGIN) -> ModelAgreement:
     """Score the model at ``model_path`` -- or the named scorer ``reward`` -- on the store's
     decisions.
 
@@ -61,7 +62,9 @@ def rank_eval(model_path: str | os.PathLike | None, store_path: str | os.PathLik
     logs (``run_key`` keeps the runs whose key starts with it), whose choice is
     the expert's best of the step's candidates. ``with_expert`` False skips the
     reward loss and its shares (they need the expert's values; NaN then, null
-    in ``as_dict``); run decisions need the expert.
+    in ``as_dict``); run decisions need the expert. ``margin`` [value units] is
+    the correction margin the share above it counts (the reproduction corrects
+    above its own, ``ReproduceConfig.margin``).
 
     Raises
     ------
@@ -72,6 +75,8 @@ def rank_eval(model_path: str | os.PathLike | None, store_path: str | os.PathLik
     """
     if (model_path is None) == (reward is None):
         raise FootfallError("give a model file or --reward NAME, not both and not neither")
+    if not (isinstance(margin, (int, float)) and math.isfinite(margin) and margin >= 0):
+        raise FootfallError(f"the correction margin must be a number >= 0, got {margin!r}")
     if decisions not in DECISIONS:
         raise FootfallError(f"decisions must be one of {', '.join(DECISIONS)}, got {decisions!r}")
     if decisions == "runs" and not with_expert:
@@ -92,7 +97,7 @@ def rank_eval(model_path: str | os.PathLike | None, store_path: str | os.PathLik
     else:
         demos, maps, values = run_decisions(store_path, expert, run_key)
     scores = rank_scores(scorer, demos, maps.__getitem__, values=values,
-                         margin=DEFAULT_MARGIN, severe_above=SEVERE_SHORTFALL)
+                         margin=float(margin), severe_above=SEVERE_SHORTFALL)
     return ModelAgreement(name, feature_set, learner, scores, decisions)
 
 

@@ -31,7 +31,7 @@ reflexes acting) is told to whoever records the run through :meth:`notes`.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Generator
+from collections.abc import Generator
 from typing import Protocol
 
 import numpy as np

@@ -20,7 +20,8 @@ RES = 0.001  # [m] the scan resolution
 SHAPE = (600, 600)
 ORIGIN = (-0.3, -0.3)  # cell (300, 300) is at (0, 0)
 EXPERT = SyntheticExpert()
-TERRAIN_TERMS = ("slip_margin", "pinch", "trap_depth", "drop_off", "leg_clearance", "unknown")
+TERRAIN_TERMS = ("slip_margin", "pinch", "trap_depth", "drop_off", "riser_ahead", "leg_clearance",
+                 "unknown")
 
 
 def grid():
@@ -394,3 +395,24 @@ def test_the_expert_judges_a_candidate_set_again_exactly_as_the_first_time():
     assert np.array_equal(again, fresh)
     other = nominal_state(board, (0.9, 0.0), 0.3, "LF")  # another heading: judged anew
     assert not np.array_equal(expert.values(board, other, cand), fresh)
+
+
+def test_a_riser_ahead_counts_nearer_more_and_behind_or_beside_not_at_all():
+    """riser_ahead: the ball-centre surface's rise along the heading, weighted (1 - s / D)."""
+    x, y = grid()
+    r = LITTLEDOG.foot_radius
+    rise = {}
+    for name, wall in [("near", x > P[0] + r + 0.005), ("far", x > P[0] + 0.03),
+                       ("beyond", x > P[0] + 0.04 + r), ("behind", x < P[0] - 0.01),
+                       ("beside", y > P[1] + 0.01)]:
+        rise[name] = judge(hmap(np.where(wall, 0.05, 0.0)))[1]["riser_ahead"]
+    assert rise["near"] > rise["far"] > 0  # the ball centre meets the riser at s = face - r
+    assert max(rise["beyond"], rise["behind"], rise["beside"]) < 1e-12
+    # the ball centre meets the face 5 mm ahead and has risen 5 cm by s = 5 mm + r: weight >= 0.6
+    assert 0.6 * 0.05 <= rise["near"] <= 0.05
+    # weighted at 0 by default: the value does not change until w_riser is set
+    steep = hmap(np.where(x > P[0] + r + 0.005, 0.05, 0.0))
+    cand = np.array([[P[0], P[1], 0.0]])
+    cautious = SyntheticExpert(ExpertConfig(w_riser=100.0))
+    assert (EXPERT.values(steep, STATE, cand)[0] - cautious.values(steep, STATE, cand)[0]
+            == pytest.approx(100.0 * rise["near"]))

@@ -8,6 +8,7 @@ from footfall.core.errors import FootfallError
 from footfall.data.store import DemoStore
 from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
 from footfall.experiments.workspace import planned_seeds
+from footfall.expert.scorer import judge_name
 from footfall.expert.synthetic import ExpertConfig
 from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig
 
@@ -77,7 +78,7 @@ def test_the_reproduction_has_every_table(uninterrupted):
     with DemoStore(uninterrupted / "reproduce.sqlite") as store:  # the expert chose its own
         judged = [store.run(x["id"]) for x in store.runs(key_prefix="eval/test0/expert/")]
         plain = [store.run(x["id"]) for x in store.runs(key_prefix="eval/test0/default/")]
-    assert judged and all(run.settings["judge"] == "synthetic expert" for run in judged)
+    assert judged and all(run.settings["judge"] == judge_name(TINY.expert) for run in judged)
     planned = planned_seeds(TINY)  # every run drew its seed from the stream of its purpose
     with DemoStore(uninterrupted / "reproduce.sqlite") as store:
         for prefix, purpose in (("correct/", "correction runs"), ("eval/", "evaluation runs"),

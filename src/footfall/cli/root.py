@@ -24,6 +24,10 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
                   "How a scorer ranks a store's decisions against the expert: top-1, within 1 "
                   "cm, percentile, the expert's shortfall of its pick and the shares above "
                   "the correction margin and the severe threshold."),
+    "outcomes": ("footfall.cli.outcomes", "outcomes_cmd",
+                 "What followed the footholds of logged runs -- slid, missed, a fall -- and how "
+                 "well the expert's value and each of its terms predict it; with --fit, an "
+                 "expert grounded in it."),
     "walk": ("footfall.cli.walking", "walk_cmd",
              "One run of the simulated robot across a board (success, slip, speed)."),
     "walk-many": ("footfall.cli.walking", "walk_many_cmd",

@@ -9,6 +9,7 @@ from footfall.cli.choices import SEED, count_range
 from footfall.cli.executors import executor_options, opened_executor
 from footfall.cli.output import emit, json_option, progress_bar
 from footfall.experiments.batch import check_picture_outputs, walk_batch, walk_once
+from footfall.expert.settings_file import load_expert
 from footfall.sim.explain import explanation_lines
 
 TERRAIN_OPTION = click.option("--terrain", "terrain_path", required=True,
@@ -23,9 +24,19 @@ def _chooser_options(f):
                      help="Candidate set F of a step: the footholds within this many metres of "
                           "the gait-nominal position (the reproduction uses 0.03); "
                           "default: every reachable one.")(f)
+    f = click.option("--expert-config", "expert_config", default=None, metavar="EXPERT.json",
+                     help="With --expert: the expert of these settings chooses (e.g. the one "
+                          "`footfall outcomes --fit` grounded); default: the walking expert.")(f)
     return click.option("--expert", is_flag=True,
                         help="The synthetic walking expert chooses every foothold (no --model): "
                              "what learning from its demonstrations can reach at best.")(f)
+
+
+def _expert_settings(path: str | None):
+    """The expert settings of ``--expert-config``, or None."""
+    if path is None:
+        return None
+    return load_expert(path)
 
 
 def _run_text(result: dict) -> str:
@@ -58,13 +69,14 @@ def _run_text(result: dict) -> str:
 @json_option
 def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: str | None,
              frames: int, video: str | None, log_path: str | None, explain: bool,
-             explain_plot: str | None, expert: bool, search_radius: float | None,
-             as_json: bool) -> None:
+             explain_plot: str | None, expert: bool, expert_config: str | None,
+             search_radius: float | None, as_json: bool) -> None:
     """One run of the simulated robot across a board (success, slip, speed)."""
     check_picture_outputs(snapshots, video, explain_plot, as_options=True)
     outcome = walk_once(terrain_path, seed, model_path=model_path, expert=expert,
                         search_radius=search_radius, snapshots=snapshots, frames=frames,
-                        video=video, log_path=log_path, explain_plot=explain_plot)
+                        video=video, log_path=log_path, explain_plot=explain_plot,
+                        expert_config=_expert_settings(expert_config))
     text = _run_text(outcome.record.result)
     explanation = outcome.record.result.get("explanation")
     if explain and explanation is not None:
@@ -85,8 +97,8 @@ def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: st
 @executor_options
 @json_option
 def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: int,
-                  log_path: str | None, expert: bool, search_radius: float | None,
-                  processes: int | None, executor_name: str, ray_address: str | None,
+                  log_path: str | None, expert: bool, expert_config: str | None,
+                  search_radius: float | None, processes: int | None, executor_name: str, ray_address: str | None,
                   as_json: bool) -> None:
     """N runs in parallel: success rate (Wilson 95 % CI), slip, speed."""
     todo = {"runs": runs}
@@ -102,7 +114,8 @@ def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: in
                        log_lines=True) as step):
         batch = walk_batch(terrain_path, runs, seed, model_path=model_path, expert=expert,
                            search_radius=search_radius, log_path=log_path, progress=step,
-                           executor=executor, reused=reused)
+                           executor=executor, reused=reused,
+                           expert_config=_expert_settings(expert_config))
     s = batch.summary
     slip = ("no successful run" if s.slip_mean_mm is None else
             f"slip {s.slip_mean_mm:.1f} +- {s.slip_std_mm:.1f} mm over "

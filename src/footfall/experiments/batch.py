@@ -30,30 +30,35 @@ from footfall.data.schema import SUFFIXES as STORE_SUFFIXES
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor, LocalPool
 from footfall.experiments.runs import RunJob, reward_source
-from footfall.expert.scorer import ExpertScorer
-from footfall.expert.synthetic import SyntheticExpert, walking_expert
+from footfall.expert.scorer import ExpertScorer, judge_name
+from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
 from footfall.plots.explain import save_explain_plot
 from footfall.sim.episode import Frames, Walk, WalkConfig
 
 
-def expert_judge(config: WalkConfig):
-    """The walking expert (:func:`footfall.expert.synthetic.walking_expert`) as a foothold judge."""
-    return ExpertScorer(SyntheticExpert(walking_expert(config.footstep.lead)))
+def expert_judge(config: WalkConfig, expert_config: ExpertConfig | None = None):
+    """The walking expert (:func:`footfall.expert.synthetic.walking_expert`), or the expert of
+    ``expert_config``, as a foothold judge."""
+    settings = expert_config or walking_expert(config.footstep.lead)
+    return ExpertScorer(SyntheticExpert(settings), name=judge_name(settings))
 
 
 def walk_many(terrain_path: str | os.PathLike, model_path: str | os.PathLike | None, runs: int,
               seed: int, config: WalkConfig = WalkConfig(), processes: int | None = None,
               progress: Callable[[RunRecord], None] | None = None,
-              expert: bool = False, executor: Executor | None = None) -> list[RunRecord]:
+              expert: bool = False, executor: Executor | None = None,
+              expert_config: ExpertConfig | None = None) -> list[RunRecord]:
     """``runs`` runs with seeds ``seed .. seed + runs - 1``, in parallel; returned in seed order.
 
     Each worker loads the terrain and the model itself (nothing is shipped
     but paths or file bytes, seeds and the frozen config). ``expert``: the
     walking expert chooses the footholds (:func:`expert_judge`), not a reward.
     The runs are walked on ``executor`` [default: a local pool of
-    ``processes`` workers, one per run at most].
+    ``processes`` workers, one per run at most]. ``expert_config``: the settings of the
+    expert that chooses [default: the walking expert].
     """
-    jobs = batch_jobs(terrain_path, model_path, runs, seed, config, expert)
+    jobs = batch_jobs(terrain_path, model_path, runs, seed, config, expert,
+                      expert_config=expert_config)
     executor = executor or LocalPool(min(processes or usable_cores(), runs))
     out = {job.seed: record for job, record in _walked(executor, jobs, progress)}
     return [out[job.seed] for job in jobs]
@@ -61,11 +66,13 @@ def walk_many(terrain_path: str | os.PathLike, model_path: str | os.PathLike | N
 
 def batch_jobs(terrain_path: str | os.PathLike, model_path: str | os.PathLike | None, runs: int,
                seed: int, config: WalkConfig = WalkConfig(), expert: bool = False,
-               hmap: HeightMap | None = None) -> list[RunJob]:
+               hmap: HeightMap | None = None, expert_config: ExpertConfig | None = None
+               ) -> list[RunJob]:
     """The jobs of :func:`walk_many`, in seed order, without run keys.
 
     ``hmap``: the board at ``terrain_path`` if already loaded (it is read otherwise, to
-    check the model against it).
+    check the model against it). ``expert_config``: the judging expert's settings
+    [default: the walking expert's].
 
     Raises
     ------
@@ -79,7 +86,9 @@ def batch_jobs(terrain_path: str | os.PathLike, model_path: str | os.PathLike | 
     hmap = HeightMap.load(terrain_path) if hmap is None else hmap
     reward_source(model_path, hmap)  # fail early, in this process, on a bad model
     model = None if model_path is None else str(model_path)
-    judge = walking_expert(config.footstep.lead)  # what expert_judge(config) judges with
+    if expert_config is not None and not expert:
+        raise FootfallError("expert settings are for runs the expert chooses (--expert)")
+    judge = expert_config or walking_expert(config.footstep.lead)  # what expert_judge judges with
     return [RunJob(None, str(terrain_path), model, s, config, expert=judge, judge=expert)
             for s in range(seed, seed + runs)]
 
@@ -98,14 +107,18 @@ def _walked(executor: Executor, jobs: list[RunJob],
 
 
 def batch_run_keys(hmap: HeightMap, model_path: str | os.PathLike | None, expert: bool,
-                   config: WalkConfig, seeds: list[int]) -> dict[int, str]:
+                   config: WalkConfig, seeds: list[int],
+                   expert_config: ExpertConfig | None = None) -> dict[int, str]:
     """Each seed's run key in a log store: board, chooser, settings and seed decide a run.
 
     ``walk-many/<board hash>/<hand | expert | model-<file hash>>/<settings hash>/s<seed>``:
     the same run walked again has the same key, so a batch logged to a store and
     interrupted walks only what is missing when run again.
     """
-    if expert:
+    if expert and expert_config is not None and expert_config != walking_expert(
+            config.footstep.lead):
+        chooser = "expert-" + judge_name(expert_config).rsplit(" ", 1)[-1]
+    elif expert:
         chooser = "expert"
     elif model_path is None:
         chooser = "hand"
@@ -278,12 +291,13 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
               search_radius: float | None = None, snapshots: str | os.PathLike | None = None,
               frames: int = 6, video: str | os.PathLike | None = None,
               log_path: str | os.PathLike | None = None,
-              explain_plot: str | os.PathLike | None = None) -> WalkOutcome:
+              explain_plot: str | os.PathLike | None = None,
+              expert_config: ExpertConfig | None = None) -> WalkOutcome:
     """One run across the board at ``terrain_path`` with the reward of ``model_path``.
 
     Without a model the hand-tuned reward chooses the footholds; with
-    ``expert`` the walking expert does (:func:`expert_judge`).
-    ``search_radius`` [m] limits the candidate set F (:func:`walk_config`).
+    ``expert`` the walking expert does (:func:`expert_judge`), or the expert of
+    ``expert_config`` if given. ``search_radius`` [m] limits the candidate set F (:func:`walk_config`).
     ``snapshots`` writes a strip of ``frames`` pictures (.png), ``video`` an
     .mp4 at 25 frames/s, ``log_path`` appends the run to a store,
     ``explain_plot`` draws the run's last seconds (.png,
@@ -296,6 +310,8 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
         or a bad output path: all before the run.
     """
     config = walk_config(model_path, expert, search_radius)
+    if expert_config is not None and not expert:
+        raise FootfallError("expert settings are for runs the expert chooses (--expert)")
     hmap = load_board(terrain_path)
     reward_for = reward_source(model_path, hmap)
     check_picture_outputs(snapshots, video, explain_plot)
@@ -305,7 +321,7 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
         pictures = Frames(snapshot_count=frames if snapshots else 0,
                           video_fps=25.0 if video else 0.0)
     run = Walk(hmap, reward_for, seed, config, frames=pictures,
-               judge=expert_judge(config) if expert else None)
+               judge=expert_judge(config, expert_config) if expert else None)
     record = run.run()
     if explain_plot is not None:
         save_explain_plot(run.trace.series(), record.result.get("explanation"), run.robot,
@@ -346,7 +362,8 @@ def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
                search_radius: float | None = None, log_path: str | os.PathLike | None = None,
                progress: Callable[[RunRecord], None] | None = None,
                executor: Executor | None = None,
-               reused: Callable[[int], None] | None = None) -> BatchOutcome:
+               reused: Callable[[int], None] | None = None,
+               expert_config: ExpertConfig | None = None) -> BatchOutcome:
     """``runs`` runs in parallel (:func:`walk_many`), each logged to ``log_path`` as it ends.
 
     Settings as for :func:`walk_once`; ``progress`` is called with each
@@ -365,10 +382,12 @@ def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
     hmap = load_board(terrain_path)
     store = _open_log(log_path)
     try:
-        jobs = batch_jobs(terrain_path, model_path, runs, seed, config, expert, hmap)
+        jobs = batch_jobs(terrain_path, model_path, runs, seed, config, expert, hmap,
+                          expert_config=expert_config)
         records: dict[int, RunRecord] = {}
         if store is not None:
-            keys = batch_run_keys(hmap, model_path, expert, config, [j.seed for j in jobs])
+            keys = batch_run_keys(hmap, model_path, expert, config, [j.seed for j in jobs],
+                                  expert_config)
             jobs = [replace(j, key=keys[j.seed]) for j in jobs]
             held = {r["key"]: r["id"] for r in store.runs(key_prefix="walk-many/")}
             records = {j.seed: store.run(held[j.key]) for j in jobs if j.key in held}

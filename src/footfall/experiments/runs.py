@@ -37,7 +37,7 @@ from footfall.expert.corrections import (
     inspect_run,
     worst_corrections,
 )
-from footfall.expert.scorer import ExpertScorer
+from footfall.expert.scorer import ExpertScorer, judge_name
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert
 from footfall.features.scorer import SCORERS
 from footfall.learning.model import FootholdModel
@@ -89,7 +89,8 @@ def execute(job: RunJob) -> RunOutput:
     # One core per run: the stack's small matrix products only lose to BLAS threads
     # fighting over the cores the other runs use.
     with threadpool_limits(limits=1):
-        judge = ExpertScorer(SyntheticExpert(job.expert)) if job.judge else None
+        judge = (ExpertScorer(SyntheticExpert(job.expert), name=judge_name(job.expert))
+                 if job.judge else None)
         record = walk(hmap, reward_source(job.model, hmap), job.seed, job.walk, judge=judge)
         record = replace(record, key=job.key)
         demos = []

@@ -23,7 +23,7 @@ import numpy as np
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.expert.protocol import Expert, expert_settings
-from footfall.expert.synthetic import SyntheticExpert
+from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
 from footfall.features.config import FeatureConfig
 from footfall.features.dense import ScoreGrid
 from footfall.features.family import Candidates
@@ -83,6 +83,16 @@ class ExpertScorer(FootholdScorer):
         else:
             text = "usable:" + self._usable.key(state=False)
         return hashlib.sha256(f"expert-scorer:{text}".encode()).hexdigest()
+
+
+def judge_name(config: ExpertConfig) -> str:
+    """How a run log names the expert that chose its footholds: "synthetic expert" for the
+    walking expert (:func:`~footfall.expert.synthetic.walking_expert` at the config's stance
+    lead), else that followed by the first 8 hex digits of a hash of the settings."""
+    if config == walking_expert(config.stance_lead):
+        return "synthetic expert"
+    text = json.dumps(config.to_dict(), sort_keys=True)
+    return f"synthetic expert {hashlib.sha256(text.encode()).hexdigest()[:8]}"
 
 
 def synthetic_expert_scorer(config: FeatureConfig | None = None) -> ExpertScorer:

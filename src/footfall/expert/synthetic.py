@@ -124,6 +124,13 @@ class ExpertConfig(Params):
                           doc="penalty per metre of drop-off depth above drop_free")
     drop_free: float = param(0.005, unit="m", range=_NONNEGATIVE,
                              doc="drop-off depth that does no harm (ball compliance, texture)")
+    riser_distance: float = param(0.04, unit="m", range=_NONNEGATIVE,
+                                  doc="a riser farther ahead of the foothold than this does not "
+                                      "catch the swing leaving it")
+    w_riser: float = param(0.0, unit="value/m", range=_NONNEGATIVE,
+                           doc="penalty per metre of (weighted) riser ahead above riser_free")
+    riser_free: float = param(0.0, unit="m", range=_NONNEGATIVE,
+                              doc="riser ahead that the swing's lift clears without catching")
     w_leg: float = param(300.0, unit="value/m", range=_NONNEGATIVE,
                          doc="penalty per metre of leg clearance below leg_safe")
     leg_safe: float = param(0.01, unit="m", range=_NONNEGATIVE,
@@ -279,7 +286,7 @@ class SyntheticExpert:
         * slip_margin: ``w_hold * clip(m - phi, 0, hold_cap) - w_slope * clip(phi - m, 0, phi)
           - w_cone * max(-m, 0)``: concave -- a hollow earns a capped bonus, a slanted face
           a penalty, a face beyond the friction cone a much steeper one.
-        * pinch, trap_depth, drop_off: ``-w * max(term - free, 0)`` (harmless up to ``free``;
+        * pinch, trap_depth, drop_off, riser_ahead: ``-w * max(term - free, 0)`` (harmless up to ``free``;
           pinch counted up to ``pinch_cap``).
         * leg_clearance: ``-w_leg * max(leg_safe - c, 0) - w_leg_collision * max(-c, 0)``.
         * unknown: ``-w_unknown * fraction``.

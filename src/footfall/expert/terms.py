@@ -47,6 +47,10 @@ EXPERT_TERMS: dict[str, str] = {
     "drop_off": "[m] worst drop-off near the foot: largest fall of the ball-centre surface below "
                 "a cone falling at walkable_slope from the ball centre, at slip distance s along "
                 "any ray, weighted by (1 - s / edge_radius)",
+    "riser_ahead": "[m] the riser the swing leaving the foothold must climb at once: largest "
+                   "rise of the ball-centre surface ahead along the heading at distance s up to "
+                   "riser_distance, weighted by (1 - s / riser_distance) (the swing lifts "
+                   "nearly straight up, and a ball beside a wall catches its edge)",
     "leg_clearance": "[m] least vertical clearance of the knee and lower leg (spheres of "
                      "lower_leg_radius along the leg, inverse kinematics at the state's body pose, "
                      "foot seated at the ball-centre height) above the terrain, capped at "
@@ -71,16 +75,17 @@ EXPERT_TERMS: dict[str, str] = {
 EXPERT_TERM_NAMES: tuple[str, ...] = tuple(EXPERT_TERMS)
 
 
-def terrain_terms(hmap: HeightMap, f: np.ndarray, cfg: ExpertConfig, robot: RobotDescription
-                   ) -> tuple[dict[str, np.ndarray], np.ndarray]:
-    """The ball-foot terms of candidates f (n, 3) and the seated ball-centre heights (n,) [m]."""
+def terrain_terms(hmap: HeightMap, f: np.ndarray, cfg: ExpertConfig, robot: RobotDescription,
+                  yaw: float = 0.0) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """The ball-foot terms of candidates f (n, 3) and the seated ball-centre heights (n,) [m];
+    ``yaw`` [rad] is the heading the swing leaving a foothold takes (the riser term)."""
     n = f.shape[0]
     r = robot.foot_radius
     k = int(cfg.directions)
     angles = 2 * np.pi * np.arange(k) / k
     dirs = np.column_stack([np.cos(angles), np.sin(angles)])  # (K, 2); dirs[k + K/2] = -dirs[k]
     longest = max(cfg.slip_distance, cfg.pinch_distance, cfg.trap_radius, cfg.edge_radius,
-                  cfg.unknown_radius)
+                  cfg.unknown_radius, cfg.riser_distance)
     near_reach = max(cfg.slip_distance, cfg.pinch_distance)
     s_near = cfg.ray_step * np.arange(1, int(math.floor(near_reach / cfg.ray_step + 1e-9)) + 1)
     s_far = np.arange(s_near[-1] + cfg.far_step, longest + cfg.far_step - 1e-12, cfg.far_step)
@@ -122,13 +127,23 @@ def terrain_terms(hmap: HeightMap, f: np.ndarray, cfg: ExpertConfig, robot: Robo
     fall = -rise[:, :, in_edge] - cfg.walkable_slope * s[in_edge]
     drop_off = np.clip((fall * (1.0 - s[in_edge] / cfg.edge_radius)).max(axis=(1, 2)), 0.0, None)
 
+    # Riser ahead: the ball-centre surface rising along the heading, nearer counting more.
+    ahead = np.arange(1, int(math.floor(cfg.riser_distance / cfg.far_step + 1e-9)) + 1) * cfg.far_step
+    if ahead.size:
+        heading = np.array([math.cos(yaw), math.sin(yaw)])
+        up = sample_surface(ball, xy[:, None, :] + ahead[None, :, None] * heading) - seat[:, None]
+        riser_ahead = np.clip((np.nan_to_num(up, nan=0.0)
+                               * (1.0 - ahead / cfg.riser_distance)).max(axis=1), 0.0, None)
+    else:
+        riser_ahead = np.zeros(n)
+
     # Missing data around the foothold (its own cell included).
     in_unknown = s <= cfg.unknown_radius + 1e-12
     probe = np.concatenate([xy[:, None, :], rays[:, :, in_unknown].reshape(n, -1, 2)], axis=1)
     unknown = no_data(hmap, probe).mean(axis=1)
 
     terms = {"slip_margin": slip_margin, "pinch": pinch, "trap_depth": trap_depth,
-             "drop_off": drop_off, "unknown": unknown}
+             "drop_off": drop_off, "riser_ahead": riser_ahead, "unknown": unknown}
     return terms, seat
 
 
@@ -212,6 +227,7 @@ def terrain_utilities(terms: dict[str, np.ndarray], cfg: ExpertConfig, robot: Ro
                                         0.0, None),
         "trap_depth": -cfg.w_trap * np.clip(terms["trap_depth"] - cfg.trap_free, 0.0, None),
         "drop_off": -cfg.w_drop * np.clip(terms["drop_off"] - cfg.drop_free, 0.0, None),
+        "riser_ahead": -cfg.w_riser * np.clip(terms["riser_ahead"] - cfg.riser_free, 0.0, None),
         "unknown": -cfg.w_unknown * terms["unknown"],
     }
 
@@ -244,10 +260,10 @@ def worst_placement(hmap: HeightMap, f: np.ndarray, yaw: float, cfg: ExpertConfi
     """
     n = f.shape[0]
     if cfg.placement_error == 0:
-        return terrain_terms(hmap, f, cfg, robot)
+        return terrain_terms(hmap, f, cfg, robot, yaw)
     shift = cfg.placement_error * np.array([math.cos(yaw), math.sin(yaw), 0.0])
     # A shifted ball without data under it falls back to the candidate's own height.
-    terms, seat = terrain_terms(hmap, np.concatenate([f, f + shift, f - shift]), cfg, robot)
+    terms, seat = terrain_terms(hmap, np.concatenate([f, f + shift, f - shift]), cfg, robot, yaw)
     score = sum(terrain_utilities(terms, cfg, robot).values()).reshape(3, n)
     worst = np.argmin(score, axis=0)  # first minimum: the foothold itself on ties
     cols = np.arange(n)

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from footfall.core.robot import LEG_NAMES, RobotDescription
+from footfall.data.outcomes import STANCE_SLID
 from footfall.sim.trace import TraceSeries
 
 # What a failed run is put down to, in the order the rules are tried.
@@ -35,8 +36,8 @@ CAUSES = {
     "no progress": "the robot stood still (stuck, no foothold, or out of time)",
     "other": "none of the above",
 }
-SLIP_MOVED = 0.015  # [m] a stance foot this far from its touch-down point has slipped (the ball
-# rolls a few mm as the body passes over it)
+SLIP_MOVED = STANCE_SLID  # [m] a stance foot this far from its touch-down point has slipped (the
+# ball rolls a few mm as the body passes over it); the run's outcome labels use the same distance
 TILT_BEGUN = 0.15  # [rad] roll or pitch beyond this: the trunk has started to tip
 OUTSIDE_TIME = 0.1  # [s]
 SATURATION_TIME = 0.2  # [s] of the last second

@@ -8,6 +8,7 @@ import pytest
 
 from cli_helpers import assert_user_error, run
 from footfall.core.errors import FootfallError
+from footfall.data.outcomes import OUTCOME_LABELS, step_outcomes
 from footfall.data.store import DemoStore
 from footfall.experiments.batch import walk_once
 from footfall.experiments.rank_eval import rank_eval
@@ -55,9 +56,19 @@ def test_run_decisions_are_the_steps_the_robot_took_ranked_against_the_experts_b
     ceiling = rank_eval(None, path, reward="expert", decisions="runs")
     assert ceiling.decisions == "runs" and ceiling.scores.n == len(steps) > 5
     assert ceiling.scores.top1 == 1 and ceiling.scores.reward_loss == 0
-    learned = rank_eval(model, path, decisions="runs").scores
+    learned_eval = rank_eval(model, path, decisions="runs")
+    learned = learned_eval.scores
     assert learned.n == len(steps) and learned.reward_loss >= 0
     assert math.isfinite(learned.above_margin)
+    # what followed the footholds stood on: the run's own outcome labels, counted
+    with DemoStore(path, read_only=True) as s:
+        labels = step_outcomes(s.run(s.runs()[0]["id"]))
+    assert set(learned_eval.outcomes) == set(OUTCOME_LABELS)
+    for lab in OUTCOME_LABELS:
+        o, y = learned_eval.outcomes[lab], getattr(labels, lab)[labels.used]
+        assert (o["positives"], o["negatives"]) == (int(y.sum()), int((~y).sum()))
+        assert (o["auc"] is None) == (y.all() or not y.any())
+    assert rank_eval(model, path).outcomes is None  # demonstrations have no outcome
     with pytest.raises(FootfallError, match="no run logs with a key starting 'nothing/'"):
         rank_eval(None, path, reward="expert", decisions="runs", run_key="nothing/")
 

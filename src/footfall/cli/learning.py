@@ -19,6 +19,7 @@ from footfall.learning.train import learn_from_store
 
 SOURCE_HELP = ("Only demonstrations whose source starts with this: walker:train, human (people's "
                "labels), run: (the synthetic expert's corrections); repeat for several.")
+DECISION_NOUN = {"demonstrations": "demonstrations", "runs": "run steps"}  # rank-eval's text
 RMS_RANGE = (1e-5, 1.0)  # [m] = footfall.features.templates.RMS_RANGE (not imported: --help stays light)
 
 
@@ -120,11 +121,25 @@ def rank_eval_cmd(paths: tuple[str, ...], reward: str | None, decisions: str,
     who = (agreement.model if reward is not None
            else f"{agreement.feature_set}/{agreement.learner}")
     emit(as_json, agreement.as_dict(),
-         f"{who} on {s.n} {agreement.decisions}: "
+         f"{who} on {s.n} {DECISION_NOUN[agreement.decisions]}: "
          f"top-1 {s.top1:.3f}, within 1 cm {_number(s.top1_near)}, "
          f"percentile {s.percentile:.3f}, reward loss {_number(s.reward_loss)} "
          f"(95 % CI {_number(s.reward_loss_ci[0])} to {_number(s.reward_loss_ci[1])}), "
-         f"above the margin {_number(s.above_margin)}, severe {_number(s.severe)}")
+         f"above the margin {_number(s.above_margin)}, severe {_number(s.severe)}"
+         + _outcome_text(agreement.outcomes))
+
+
+def _outcome_text(outcomes: dict | None) -> str:
+    """Run decisions: the AUC of the scorer's value for a fall and a slide, with their CIs."""
+    if outcomes is None:
+        return ""
+    parts = []
+    for lab in ("fall", "slid"):
+        o = outcomes[lab]
+        auc = "n/a" if o["auc"] is None else f"{o['auc']:.2f}"
+        ci = "" if o["ci"][0] is None else f" [{o['ci'][0]:.2f}, {o['ci'][1]:.2f}]"
+        parts.append(f"{lab} {auc}{ci} ({o['positives']} footholds)")
+    return "\nAUC of its value for what followed the footholds stood on: " + "; ".join(parts)
 
 
 def _number(value: float) -> str:

@@ -21,11 +21,14 @@ import numpy as np
 
 from footfall.core.errors import FootfallError
 from footfall.core.robot import LITTLEDOG
+from footfall.data.outcomes import FALL_HORIZON, OUTCOME_LABELS, step_outcomes
 from footfall.data.store import Demonstration, DemoStore
 from footfall.expert.corrections import DEFAULT_MARGIN, SEVERE_SHORTFALL
+from footfall.expert.grounding import outcome_auc
 from footfall.expert.protocol import expert_settings
 from footfall.expert.synthetic import SyntheticExpert
 from footfall.features.scorer import SCORERS
+from footfall.features.scoring import score_footholds
 from footfall.learning.evaluation import EveryLeg, RankScores, expert_values, rank_scores
 from footfall.learning.model import FootholdModel
 from footfall.learning.train import store_demonstrations
@@ -42,12 +45,14 @@ class ModelAgreement:
     learner: str  # the model's learner ("-" for a named scorer)
     scores: RankScores  # top-1, percentile, reward loss, shares above the margin ...
     decisions: str = "demonstrations"  # one of DECISIONS
+    outcomes: dict | None = None  # run decisions: outcome label -> AUC of the scorer's value
+    # of the footholds the robot stood on (outcome_power)
 
     def as_dict(self) -> dict[str, Any]:
-        """Plain data for JSON: the scorer, the scores' keys, then where the decisions came
-        from."""
+        """Plain data for JSON: the scorer, the scores' keys, the outcome AUCs (run decisions;
+        else null), then where the decisions came from."""
         return {"model": self.model, "feature_set": self.feature_set, "learner": self.learner,
-                **self.scores.as_dict(), "decisions": self.decisions}
+                **self.scores.as_dict(), "outcomes": self.outcomes, "decisions": self.decisions}
 
 
 def rank_eval(model_path: str | os.PathLike | None, store_path: str | os.PathLike, *,
@@ -98,7 +103,49 @@ def rank_eval(model_path: str | os.PathLike | None, store_path: str | os.PathLik
         demos, maps, values = run_decisions(store_path, expert, run_key)
     scores = rank_scores(scorer, demos, maps.__getitem__, values=values,
                          margin=float(margin), severe_above=SEVERE_SHORTFALL)
-    return ModelAgreement(name, feature_set, learner, scores, decisions)
+    outcomes = (outcome_power(scorer, store_path, run_key) if decisions == "runs" else None)
+    return ModelAgreement(name, feature_set, learner, scores, decisions, outcomes)
+
+
+def outcome_power(model, store_path: str | os.PathLike, run_key: str | None = None,
+                  horizon: int = FALL_HORIZON) -> dict[str, dict]:
+    """How well ``model``'s value of each foothold the robot stood on predicts what followed.
+
+    ``model`` as for :func:`~footfall.learning.evaluation.rank_scores`. For every
+    outcome label (:mod:`footfall.data.outcomes`): the AUC of minus the value, with a
+    95 % interval over boards (:func:`~footfall.expert.grounding.outcome_auc`), and how
+    many footholds had the outcome. Runs whose key starts with ``run_key``.
+    """
+    values: list[float] = []
+    boards: list[str] = []
+    labels: dict[str, list] = {lab: [] for lab in OUTCOME_LABELS}
+    with DemoStore(store_path, read_only=True) as store:
+        maps: dict = {}
+        for head in store.runs(key_prefix=run_key):
+            run = store.run(head["id"])
+            hmap = maps.get(run.terrain_hash) or maps.setdefault(run.terrain_hash,
+                                                                 store.terrain(run.terrain_hash))
+            outcome = step_outcomes(run, horizon)
+            for k in np.flatnonzero(outcome.used):  # one foothold per step: its own state
+                step = run.steps[k]
+                values.append(float(score_footholds(hmap, step.state, step.foothold[None, :],
+                                                    model.reward_for(step.swing_leg),
+                                                    model.robot)[0]))
+                boards.append(run.terrain_hash)
+            for lab in OUTCOME_LABELS:
+                labels[lab] += getattr(outcome, lab)[outcome.used].tolist()
+    bad = -np.asarray(values, dtype=np.float64)
+    out = {}
+    for lab in OUTCOME_LABELS:
+        a = outcome_auc(bad, np.asarray(labels[lab], dtype=bool), np.asarray(boards))
+        out[lab] = {"auc": _number_or_none(a.auc), "ci": [_number_or_none(a.low),
+                                                          _number_or_none(a.high)],
+                    "positives": a.positives, "negatives": a.negatives}
+    return out
+
+
+def _number_or_none(v: float) -> float | None:
+    return v if math.isfinite(v) else None
 
 
 def run_decisions(store_path: str | os.PathLike, expert: SyntheticExpert,

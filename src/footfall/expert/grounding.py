@@ -10,8 +10,11 @@ area under the ROC curve of a score for a label (1: every bad foothold scored
 worse than every good one; 0.5: no better than chance; below 0.5: the score
 prefers the footholds that went wrong), with a 95 % interval from resampling
 whole boards (the footholds of one board share its few hard places and are
-not independent). :func:`failure_causes` tallies how each method's runs
-failed (the flight recorder's taxonomy, :data:`footfall.sim.explain.CAUSES`).
+not independent). :func:`fit_outcomes` grounds the expert's risk weights in
+one outcome (a constrained logistic fit on the weights' features: the value is
+linear in its weights, :func:`weight_features`). :func:`failure_causes`
+tallies how each method's runs failed (the flight recorder's taxonomy,
+:data:`footfall.sim.explain.CAUSES`).
 """
 
 from __future__ import annotations

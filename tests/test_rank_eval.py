@@ -3,16 +3,20 @@ value -- measured by the same numbers, on demonstrations and on the steps of run
 
 import json
 import math
+from dataclasses import replace
 
 import pytest
 
 from cli_helpers import assert_user_error, run
+from footfall.control.footstep import FootstepConfig
 from footfall.core.errors import FootfallError
 from footfall.data.outcomes import OUTCOME_LABELS, step_outcomes
 from footfall.data.store import DemoStore
 from footfall.experiments.batch import walk_once
-from footfall.experiments.rank_eval import rank_eval
+from footfall.experiments.rank_eval import judging_expert, rank_eval
 from footfall.expert.collect import collect_into_store
+from footfall.expert.scorer import judge_name
+from footfall.expert.synthetic import ExpertConfig, walking_expert
 from footfall.learning.train import learn_from_store
 from footfall.terrain.saving import save_board
 
@@ -55,6 +59,7 @@ def test_run_decisions_are_the_steps_the_robot_took_ranked_against_the_experts_b
         steps = [st for st in s.run(s.runs()[0]["id"]).steps if st.candidates.shape[0] >= 2]
     ceiling = rank_eval(None, path, reward="expert", decisions="runs")
     assert ceiling.decisions == "runs" and ceiling.scores.n == len(steps) > 5
+    assert ceiling.expert == "synthetic expert"  # runs are judged by the walking expert
     assert ceiling.scores.top1 == 1 and ceiling.scores.reward_loss == 0
     learned_eval = rank_eval(model, path, decisions="runs")
     learned = learned_eval.scores
@@ -94,3 +99,17 @@ def test_the_command_ranks_a_model_or_a_named_scorer_and_refuses_bad_use(store, 
         code, out, err = run(capsys, "rank-eval", *args)
         assert out == ""
         assert_user_error(code, err, message)
+
+
+def test_the_judge_is_the_expert_that_demonstrated_else_the_walking_expert(store):
+    path, _ = store
+    with DemoStore(path, read_only=True) as s:
+        demos = s.demonstrations()
+    made_by = ExpertConfig(**demos[0].expert["config"])
+    assert judging_expert(demos) == made_by  # collect's expert
+    assert rank_eval(None, path, reward="expert").expert == judge_name(made_by)
+    someone = replace(demos[0], expert={"class": "people", "labeler": "ada"})
+    assert judging_expert([*demos, someone]) == walking_expert(FootstepConfig().lead)
+    assert judging_expert(None) == walking_expert(FootstepConfig().lead)
+    other = replace(made_by, w_riser=50.0)
+    assert rank_eval(None, path, reward="expert", expert_config=other).expert == judge_name(other)

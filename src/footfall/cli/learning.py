@@ -15,6 +15,7 @@ from footfall.core.errors import FootfallError
 from footfall.core.files import writable_path
 from footfall.core.limits import check_count
 from footfall.experiments.rank_eval import rank_eval
+from footfall.expert.settings_file import load_expert
 from footfall.learning.train import learn_from_store
 
 SOURCE_HELP = ("Only demonstrations whose source starts with this: walker:train, human (people's "
@@ -104,11 +105,14 @@ def learn(store_path: str, feature_set: str, learner: str, library_size: int,
                    "reported (the reproduction's own is 2).")
 @click.option("--no-expert", is_flag=True,
               help="Skip the reward loss and its shares (they need the expert).")
+@click.option("--expert-config", default=None, metavar="EXPERT.json",
+              help="Judge with these expert settings; default: the synthetic expert that made "
+                   "the demonstrations, or the walking expert (run steps, mixed sources).")
 @click.option("--source", multiple=True, help=SOURCE_HELP)
 @json_option
 def rank_eval_cmd(paths: tuple[str, ...], reward: str | None, decisions: str,
                   run_key: str | None, margin: float, no_expert: bool,
-                  source: tuple[str, ...], as_json: bool) -> None:
+                  expert_config: str | None, source: tuple[str, ...], as_json: bool) -> None:
     """How a scorer ranks a store's decisions against the expert: top-1, within 1 cm,
     percentile, the expert's shortfall of its pick and the shares above the correction margin
     and the severe threshold."""
@@ -116,7 +120,8 @@ def rank_eval_cmd(paths: tuple[str, ...], reward: str | None, decisions: str,
         raise FootfallError("give MODEL.npz STORE.sqlite, or --reward NAME STORE.sqlite")
     agreement = rank_eval(None if reward is not None else paths[0], paths[-1], reward=reward,
                           with_expert=not no_expert, source=source or None,
-                          decisions=decisions, run_key=run_key, margin=margin)
+                          decisions=decisions, run_key=run_key, margin=margin,
+                          expert_config=load_expert(expert_config) if expert_config else None)
     s = agreement.scores
     who = (agreement.model if reward is not None
            else f"{agreement.feature_set}/{agreement.learner}")
@@ -126,6 +131,7 @@ def rank_eval_cmd(paths: tuple[str, ...], reward: str | None, decisions: str,
          f"percentile {s.percentile:.3f}, reward loss {_number(s.reward_loss)} "
          f"(95 % CI {_number(s.reward_loss_ci[0])} to {_number(s.reward_loss_ci[1])}), "
          f"above the margin {_number(s.above_margin)}, severe {_number(s.severe)}"
+         + ("" if agreement.expert is None else f"; judged by {agreement.expert}")
          + _outcome_text(agreement.outcomes))
 
 

@@ -3,7 +3,8 @@
 Here, above both, because the measure needs the scorer and the expert's judgement
 (:mod:`footfall.learning.evaluation` explains the measures). The scorer is a learned model
 file, or a named scorer that needs no training (:data:`footfall.features.scorer.SCORERS`: the
-hand-tuned reward ``"hand-tuned"``, the expert's own value ``"expert"``, the ceiling). The
+hand-tuned reward ``"hand-tuned"``; ``"expert"``, the judging expert's own value, the ceiling).
+The judge is the synthetic expert that made the demonstrations, or the walking expert. The
 decisions are the store's demonstrations -- each with the expert's choice -- or the steps of
 its run logs, the states the robot itself visited, where the expert's best of each step's
 candidate set is the choice to rank.
@@ -11,6 +12,7 @@ candidate set is the choice to rank.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 from collections.abc import Sequence
@@ -19,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from footfall.control.footstep import FootstepConfig
 from footfall.core.errors import FootfallError
 from footfall.core.robot import LITTLEDOG
 from footfall.data.outcomes import FALL_HORIZON, OUTCOME_LABELS, step_outcomes
@@ -26,7 +29,8 @@ from footfall.data.store import Demonstration, DemoStore
 from footfall.expert.corrections import DEFAULT_MARGIN, SEVERE_SHORTFALL
 from footfall.expert.grounding import outcome_auc
 from footfall.expert.protocol import expert_settings
-from footfall.expert.synthetic import SyntheticExpert
+from footfall.expert.scorer import ExpertScorer, judge_name
+from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
 from footfall.features.scorer import SCORERS
 from footfall.features.scoring import score_footholds
 from footfall.learning.evaluation import EveryLeg, RankScores, expert_values, rank_scores
@@ -47,18 +51,38 @@ class ModelAgreement:
     decisions: str = "demonstrations"  # one of DECISIONS
     outcomes: dict | None = None  # run decisions: outcome label -> AUC of the scorer's value
     # of the footholds the robot stood on (outcome_power)
+    expert: str | None = None  # the judging expert's name (judge_name); None without one
 
     def as_dict(self) -> dict[str, Any]:
         """Plain data for JSON: the scorer, the scores' keys, the outcome AUCs (run decisions;
-        else null), then where the decisions came from."""
+        else null), the judging expert, then where the decisions came from."""
         return {"model": self.model, "feature_set": self.feature_set, "learner": self.learner,
-                **self.scores.as_dict(), "outcomes": self.outcomes, "decisions": self.decisions}
+                **self.scores.as_dict(), "outcomes": self.outcomes, "expert": self.expert,
+                "decisions": self.decisions}
+
+
+def judging_expert(demos: Sequence[Demonstration] | None) -> ExpertConfig:
+    """Who judges a store's decisions: the synthetic expert that made every one of ``demos``
+    if one did (its recorded settings, the defaults filling any it did not record), else the
+    walking expert (the one that walks and corrects runs in the reproduction)."""
+    synthetic = f"{SyntheticExpert.__module__}.{SyntheticExpert.__qualname__}"
+    recorded = {json.dumps(d.expert.get("config"), sort_keys=True) for d in demos or ()
+                if d.expert.get("class") == synthetic}
+    if demos and len(recorded) == 1 and all(d.expert.get("class") == synthetic for d in demos):
+        settings = json.loads(recorded.pop())
+        if isinstance(settings, dict):
+            try:
+                return ExpertConfig(**settings)
+            except (FootfallError, TypeError):
+                pass  # settings of another footfall: judged by the walking expert
+    return walking_expert(FootstepConfig().lead)
 
 
 def rank_eval(model_path: str | os.PathLike | None, store_path: str | os.PathLike, *,
               reward: str | None = None, with_expert: bool = True,
               source: str | Sequence[str] | None = None, decisions: str = "demonstrations",
-              run_key: str | None = None, margin: float = DEFAULT_MARGIN) -> ModelAgreement:
+              run_key: str | None = None, margin: float = DEFAULT_MARGIN,
+              expert_config: ExpertConfig | None = None) -> ModelAgreement:
     """Score the model at ``model_path`` -- or the named scorer ``reward`` -- on the store's
     decisions.
 
@@ -69,7 +93,9 @@ def rank_eval(model_path: str | os.PathLike | None, store_path: str | os.PathLik
     reward loss and its shares (they need the expert's values; NaN then, null
     in ``as_dict``); run decisions need the expert. ``margin`` [value units] is
     the correction margin the share above it counts (the reproduction corrects
-    above its own, ``ReproduceConfig.margin``).
+    above its own, ``ReproduceConfig.margin``). The judging expert is
+    ``expert_config``, or :func:`judging_expert` of the demonstrations (run
+    decisions: the walking expert); the named scorer "expert" is its own value.
 
     Raises
     ------
@@ -93,18 +119,24 @@ def rank_eval(model_path: str | os.PathLike | None, store_path: str | os.PathLik
         scorer, name, feature_set, learner = model, str(model_path), model.feature_set, \
             model.learner
     else:
-        scorer = EveryLeg(SCORERS.get(reward)(None))
+        named = SCORERS.get(reward)  # an unknown name fails here, before the store is read
         name, feature_set, learner = reward, "-", "-"
-    expert = SyntheticExpert(robot=scorer.robot) if with_expert else None
     if decisions == "demonstrations":
         demos, maps = store_demonstrations(store_path, source=source)
+    judge = expert_config or judging_expert(demos if decisions == "demonstrations" else None)
+    expert = SyntheticExpert(judge, LITTLEDOG) if with_expert else None
+    if model_path is None:  # "expert" is the judging expert's own value: the ceiling
+        scorer = EveryLeg(ExpertScorer(SyntheticExpert(judge, LITTLEDOG), name=judge_name(judge))
+                          if reward == "expert" else named(None))
+    if decisions == "demonstrations":
         values = expert_values(demos, maps.__getitem__, expert) if expert else None
     else:
         demos, maps, values = run_decisions(store_path, expert, run_key)
     scores = rank_scores(scorer, demos, maps.__getitem__, values=values,
                          margin=float(margin), severe_above=SEVERE_SHORTFALL)
     outcomes = (outcome_power(scorer, store_path, run_key) if decisions == "runs" else None)
-    return ModelAgreement(name, feature_set, learner, scores, decisions, outcomes)
+    return ModelAgreement(name, feature_set, learner, scores, decisions, outcomes,
+                          judge_name(judge) if with_expert else None)
 
 
 def outcome_power(model, store_path: str | os.PathLike, run_key: str | None = None,

@@ -306,7 +306,8 @@ def fit_outcomes(table: FootholdOutcomes, config: ExpertConfig, robot: RobotDesc
     Raises
     ------
     FootfallError
-        For an unknown label or one that never (or always) happened in ``table``.
+        For an unknown label, one that never (or always) happened in ``table``, or the
+        footholds of fewer than two boards.
     """
     if label not in OUTCOME_LABELS:
         raise FootfallError(f"unknown outcome {label!r}; one of {', '.join(OUTCOME_LABELS)}")

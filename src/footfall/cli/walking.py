@@ -98,8 +98,8 @@ def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: st
 @json_option
 def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: int,
                   log_path: str | None, expert: bool, expert_config: str | None,
-                  search_radius: float | None, processes: int | None, executor_name: str, ray_address: str | None,
-                  as_json: bool) -> None:
+                  search_radius: float | None, processes: int | None, executor_name: str,
+                  ray_address: str | None, as_json: bool) -> None:
     """N runs in parallel: success rate (Wilson 95 % CI), slip, speed."""
     todo = {"runs": runs}
 

@@ -28,12 +28,15 @@ when its foothold is chosen); a foothold chosen and never touched down is not
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
 
 from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
 from footfall.data.runlog import RunRecord
+from footfall.data.store import DemoStore
 
 STANCE_SLID = 0.015  # [m] a stance foot this far from its touch-down point has slid (the ball
 # rolls a few mm as the body passes over it); the flight recorder's threshold too
@@ -110,3 +113,16 @@ def step_outcomes(run: RunRecord, horizon: int = FALL_HORIZON,
         mine = np.flatnonzero(legs == leg_name)
         next_missed[mine[:-1]] = missed[mine[1:]]
     return StepOutcomes(used, placement, slip, slid, missed, next_missed, fall, failed)
+
+
+def stored_outcomes(store: DemoStore, key_prefix: str | None = None,
+                    horizon: int = FALL_HORIZON
+                    ) -> Iterator[tuple[dict, RunRecord, HeightMap, StepOutcomes]]:
+    """Every run of an open store (key starting with ``key_prefix``), in creation order: its
+    head (:meth:`DemoStore.runs`), the run, its board (each read once) and its outcome labels."""
+    boards: dict[str, HeightMap] = {}
+    for head in store.runs(key_prefix=key_prefix):
+        run = store.run(head["id"])
+        if run.terrain_hash not in boards:
+            boards[run.terrain_hash] = store.terrain(run.terrain_hash)
+        yield head, run, boards[run.terrain_hash], step_outcomes(run, horizon)

@@ -30,16 +30,29 @@ from footfall.data.schema import SUFFIXES as STORE_SUFFIXES
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor, LocalPool
 from footfall.experiments.runs import RunJob, reward_source
-from footfall.expert.scorer import ExpertScorer, judge_name
+from footfall.expert.scorer import ExpertScorer, judge_name, settings_hash
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
 from footfall.plots.explain import save_explain_plot
 from footfall.sim.episode import Frames, Walk, WalkConfig
 
 
-def expert_judge(config: WalkConfig, expert_config: ExpertConfig | None = None):
-    """The walking expert (:func:`footfall.expert.synthetic.walking_expert`), or the expert of
-    ``expert_config``, as a foothold judge."""
-    settings = expert_config or walking_expert(config.footstep.lead)
+def chooser_expert(config: WalkConfig, expert: bool,
+                   expert_config: ExpertConfig | None = None) -> ExpertConfig:
+    """The settings of the expert that chooses when ``expert``: ``expert_config``, or the
+    walking expert (:func:`footfall.expert.synthetic.walking_expert`) of the walk's gait.
+
+    Raises
+    ------
+    FootfallError
+        For expert settings without ``expert`` (a reward chooses then).
+    """
+    if expert_config is not None and not expert:
+        raise FootfallError("expert settings are for runs the expert chooses (--expert)")
+    return expert_config or walking_expert(config.footstep.lead)
+
+
+def expert_judge(settings: ExpertConfig) -> ExpertScorer:
+    """The expert of ``settings`` as a foothold judge, named as its runs are logged."""
     return ExpertScorer(SyntheticExpert(settings), name=judge_name(settings))
 
 
@@ -86,9 +99,7 @@ def batch_jobs(terrain_path: str | os.PathLike, model_path: str | os.PathLike | 
     hmap = HeightMap.load(terrain_path) if hmap is None else hmap
     reward_source(model_path, hmap)  # fail early, in this process, on a bad model
     model = None if model_path is None else str(model_path)
-    if expert_config is not None and not expert:
-        raise FootfallError("expert settings are for runs the expert chooses (--expert)")
-    judge = expert_config or walking_expert(config.footstep.lead)  # what expert_judge judges with
+    judge = chooser_expert(config, expert, expert_config)
     return [RunJob(None, str(terrain_path), model, s, config, expert=judge, judge=expert)
             for s in range(seed, seed + runs)]
 
@@ -115,11 +126,10 @@ def batch_run_keys(hmap: HeightMap, model_path: str | os.PathLike | None, expert
     the same run walked again has the same key, so a batch logged to a store and
     interrupted walks only what is missing when run again.
     """
-    if expert and expert_config is not None and expert_config != walking_expert(
-            config.footstep.lead):
-        chooser = "expert-" + judge_name(expert_config).rsplit(" ", 1)[-1]
-    elif expert:
-        chooser = "expert"
+    if expert:
+        judge = chooser_expert(config, expert, expert_config)
+        chooser = ("expert" if judge == walking_expert(config.footstep.lead)
+                   else f"expert-{settings_hash(judge)}")
     elif model_path is None:
         chooser = "hand"
     else:
@@ -296,8 +306,8 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
     """One run across the board at ``terrain_path`` with the reward of ``model_path``.
 
     Without a model the hand-tuned reward chooses the footholds; with
-    ``expert`` the walking expert does (:func:`expert_judge`), or the expert of
-    ``expert_config`` if given. ``search_radius`` [m] limits the candidate set F (:func:`walk_config`).
+    ``expert`` the walking expert does, or the expert of ``expert_config`` if given
+    (:func:`chooser_expert`). ``search_radius`` [m] limits the candidate set F (:func:`walk_config`).
     ``snapshots`` writes a strip of ``frames`` pictures (.png), ``video`` an
     .mp4 at 25 frames/s, ``log_path`` appends the run to a store,
     ``explain_plot`` draws the run's last seconds (.png,
@@ -310,8 +320,7 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
         or a bad output path: all before the run.
     """
     config = walk_config(model_path, expert, search_radius)
-    if expert_config is not None and not expert:
-        raise FootfallError("expert settings are for runs the expert chooses (--expert)")
+    judge = chooser_expert(config, expert, expert_config)
     hmap = load_board(terrain_path)
     reward_for = reward_source(model_path, hmap)
     check_picture_outputs(snapshots, video, explain_plot)
@@ -321,7 +330,7 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
         pictures = Frames(snapshot_count=frames if snapshots else 0,
                           video_fps=25.0 if video else 0.0)
     run = Walk(hmap, reward_for, seed, config, frames=pictures,
-               judge=expert_judge(config, expert_config) if expert else None)
+               judge=expert_judge(judge) if expert else None)
     record = run.run()
     if explain_plot is not None:
         save_explain_plot(run.trace.series(), record.result.get("explanation"), run.robot,

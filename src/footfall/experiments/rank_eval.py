@@ -24,7 +24,7 @@ import numpy as np
 from footfall.control.footstep import FootstepConfig
 from footfall.core.errors import FootfallError
 from footfall.core.robot import LITTLEDOG
-from footfall.data.outcomes import FALL_HORIZON, OUTCOME_LABELS, step_outcomes
+from footfall.data.outcomes import FALL_HORIZON, OUTCOME_LABELS, stored_outcomes
 from footfall.data.store import Demonstration, DemoStore
 from footfall.expert.corrections import DEFAULT_MARGIN, SEVERE_SHORTFALL
 from footfall.expert.grounding import outcome_auc
@@ -152,12 +152,7 @@ def outcome_power(model, store_path: str | os.PathLike, run_key: str | None = No
     boards: list[str] = []
     labels: dict[str, list] = {lab: [] for lab in OUTCOME_LABELS}
     with DemoStore(store_path, read_only=True) as store:
-        maps: dict = {}
-        for head in store.runs(key_prefix=run_key):
-            run = store.run(head["id"])
-            hmap = maps.get(run.terrain_hash) or maps.setdefault(run.terrain_hash,
-                                                                 store.terrain(run.terrain_hash))
-            outcome = step_outcomes(run, horizon)
+        for _, run, hmap, outcome in stored_outcomes(store, run_key, horizon):
             for k in np.flatnonzero(outcome.used):  # one foothold per step: its own state
                 step = run.steps[k]
                 values.append(float(score_footholds(hmap, step.state, step.foothold[None, :],

@@ -29,7 +29,7 @@ from scipy.optimize import minimize
 
 from footfall.core.errors import FootfallError
 from footfall.core.robot import RobotDescription
-from footfall.data.outcomes import FALL_HORIZON, OUTCOME_LABELS, step_outcomes
+from footfall.data.outcomes import FALL_HORIZON, OUTCOME_LABELS, stored_outcomes
 from footfall.data.store import DemoStore
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert
 from footfall.expert.terms import EXPERT_TERM_NAMES, contributions
@@ -121,13 +121,7 @@ def foothold_outcomes(store_paths: Iterable[str], expert: SyntheticExpert,
     terms: dict[str, list] = {n: [] for n in EXPERT_TERM_NAMES}
     for index, path in enumerate(store_paths):
         with DemoStore(path) as store:
-            boards: dict = {}
-            for info in store.runs():
-                run = store.run(info["id"])
-                hmap = boards.get(run.terrain_hash)
-                if hmap is None:
-                    hmap = boards[run.terrain_hash] = store.terrain(run.terrain_hash)
-                outcome = step_outcomes(run, horizon)
+            for head, run, hmap, outcome in stored_outcomes(store, horizon=horizon):
                 used = np.flatnonzero(outcome.used)
                 for k in used:  # one expert call per foothold: the state differs per step
                     step = run.steps[k]
@@ -137,7 +131,7 @@ def foothold_outcomes(store_paths: Iterable[str], expert: SyntheticExpert,
                 method = method_name(run.settings)
                 cols["method"] += [method] * used.size
                 cols["board"] += [run.terrain_hash] * used.size
-                cols["run"] += [int(info["id"])] * used.size
+                cols["run"] += [int(head["id"])] * used.size
                 cols["store"] += [index] * used.size
                 cols["k"] += used.tolist()
                 cols["leg"] += [run.steps[k].swing_leg for k in used]

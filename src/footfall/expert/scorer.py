@@ -91,8 +91,13 @@ def judge_name(config: ExpertConfig) -> str:
     lead), else that followed by the first 8 hex digits of a hash of the settings."""
     if config == walking_expert(config.stance_lead):
         return "synthetic expert"
+    return f"synthetic expert {settings_hash(config)}"
+
+
+def settings_hash(config: ExpertConfig) -> str:
+    """The first 8 hex digits of the SHA-256 of the expert's settings (sorted JSON)."""
     text = json.dumps(config.to_dict(), sort_keys=True)
-    return f"synthetic expert {hashlib.sha256(text.encode()).hexdigest()[:8]}"
+    return hashlib.sha256(text.encode()).hexdigest()[:8]
 
 
 def synthetic_expert_scorer(config: FeatureConfig | None = None) -> ExpertScorer:

@@ -391,6 +391,9 @@ LAZY_IMPORTS = {
     ("footfall.teach.server", "uvicorn"): "the server itself: only `footfall teach` serves",
     ("footfall.core.stats", "scipy.stats"):
         "about a second to import: only the exact McNemar test asks for it",
+    ("footfall.learning.boosted", "lightgbm"):
+        "a second to import: only the boosted learner's training needs it (its model file "
+        "holds arrays, scored without LightGBM)",
     ("footfall.cli.bench", "footfall.cli.fuzz.campaign"):
         "the fuzz suite is built on Hypothesis, a test extra: only `footfall bench fuzz`",
 }

@@ -1,8 +1,11 @@
-"""One suite of checks over every registered linear learner (footfall.learning.learner.LEARNERS).
+"""One suite of checks over every registered learner (footfall.learning.learner.LEARNERS).
 
 Like scikit-learn's shared estimator checks: a learner is tested the moment it
-registers. ``ridge`` below is a learner of the test's own, registered here
-without touching any other module.
+registers. Every learner: fits a known ranking, deterministically, keeps the
+fold units it is given whole, round-trips through its model file and scores a
+candidate set at once as it scores each candidate alone. The linear learners
+also: their path, weights and folds. ``ridge`` below is a learner of the test's
+own, registered here without touching any other module.
 """
 
 import numpy as np
@@ -17,7 +20,7 @@ from footfall.features.family import Candidates
 from footfall.features.terrain_features import TerrainFeatures
 from footfall.learning.learner import LEARNERS, get_learner, register_learner
 from footfall.learning.model import FootholdModel
-from footfall.learning.ranker import FootholdRanker, LinearLearner
+from footfall.learning.ranker import FootholdRanker, LinearLearner, pairwise_error
 from footfall.learning.train import TrainingDemo, learn_model
 from maps import rough_map
 
@@ -34,11 +37,12 @@ def ridge_registered():
     LEARNERS.unregister("ridge")
 
 
-NAMES = ("l1", "l2", "svm", "ridge")
+NAMES = ("l1", "l2", "svm", "ridge")  # the linear learners
+ALL = NAMES + ("kernel", "lambdarank")  # every learner
 
 
 def test_the_suite_covers_every_registered_learner():
-    assert set(LEARNERS) == set(NAMES)
+    assert set(LEARNERS) == set(ALL)
 
 
 def _toy(seed: int = 0, n_demos: int = 24, n: int = 15, d: int = 6):
@@ -100,7 +104,34 @@ def demos():
     return out
 
 
-@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("name", ALL)
+def test_every_learner_learns_a_known_ranking_the_same_way_twice(name):
+    X, y, groups = _toy(3, n_demos=40)
+    learner = get_learner(name)
+    fitted = learner.fit(X, y, groups, Cs=4, cv=3)
+    again = learner.fit(X, y, groups, Cs=4, cv=3)
+    scores = fitted.decision_function(X)
+    assert scores.shape == (X.shape[0],) and np.isfinite(scores).all()
+    np.testing.assert_array_equal(scores, again.decision_function(X))
+    assert 0.0 <= fitted.cv_error_ < 0.25  # held-out pairs, not only the training ones
+    assert pairwise_error(scores, y, groups) < 0.15
+
+
+@pytest.mark.parametrize("name", ALL)
+def test_every_learner_keeps_a_fold_unit_whole(name):
+    """Folds grouped by run: with fewer runs than folds a learner must refuse (it grouped by
+    the units, not by the demonstrations); with enough, its held-out error is measured."""
+    X, y, groups = _toy(4, n_demos=30)
+    runs = np.repeat(np.arange(30) // 10, 15)  # 3 runs of 10 demonstrations
+    learner = get_learner(name)
+    with pytest.raises(FootfallError, match="4-fold cross-validation needs at least 4 fold units"):
+        learner.fit(X, y, groups, Cs=3, cv=4, units=runs)
+    assert 0.0 <= learner.fit(X, y, groups, Cs=3, cv=3, units=runs).cv_error_ <= 1.0
+    with pytest.raises(FootfallError, match="rows of one demonstration must share one fold unit"):
+        learner.fit(X, y, groups, Cs=3, cv=3, units=np.arange(X.shape[0]) % 3)
+
+
+@pytest.mark.parametrize("name", ALL)
 def test_a_learned_model_round_trips_through_its_file_and_the_seed_fixes_it(name, demos,
                                                                             tmp_path):
     kw = dict(cv=3, Cs=4, training_candidates=30, seed=7)
@@ -120,6 +151,21 @@ def test_a_learned_model_round_trips_through_its_file_and_the_seed_fixes_it(name
     assert isinstance(model.functions["front"].families[0], TerrainFeatures)
 
 
+@pytest.mark.parametrize("name", ALL)
+def test_a_candidate_set_scores_at_once_as_each_candidate_alone(name, demos):
+    """With the pose features (a state part): the values of all candidates in one call equal
+    those of each candidate scored alone."""
+    model = learn_model(demos, "terrain+pose", name, cv=3, Cs=4, training_candidates=30, seed=7)
+    for d in demos[:4]:
+        scorer = model.reward_for(d.state.swing_leg)
+        together = scorer.values(Candidates.of_state(d.hmap, d.state, d.candidates, model.config))
+        alone = [scorer.values(Candidates.of_state(d.hmap, d.state, d.candidates[k:k + 1],
+                                                   model.config))[0]
+                 for k in range(0, len(d.candidates), 7)]
+        np.testing.assert_allclose(together[::7], alone, rtol=1e-12, atol=1e-12)
+        assert np.isfinite(together).all()
+
+
 def test_an_unknown_learner_is_refused_with_the_registered_names():
     with pytest.raises(FootfallError, match="unknown learner 'lasso'; use one of l1, l2, svm"):
         get_learner("lasso")
@@ -128,3 +174,27 @@ def test_an_unknown_learner_is_refused_with_the_registered_names():
         FootholdRanker(learner="lasso").fit(X, y, groups)
     with pytest.raises(ValueError, match="already registered"):
         register_learner(LinearLearner("l1", "another", RIDGE.make, RIDGE.path))
+
+
+def test_folds_grouped_by_run_never_split_a_run():
+    X, y, groups = _toy(5, n_demos=40)
+    runs = np.repeat(np.arange(40) % 8, 15)  # 8 runs, their steps interleaved in the data
+    ranker = FootholdRanker(learner="l1", Cs=3, cv=4).fit(X, y, groups, units=runs)
+    run_of = runs[::15]  # the run of each demonstration
+    for train, test in ranker.fold_groups_:
+        assert np.intersect1d(run_of[train], run_of[test]).size == 0  # a run is on one side
+    held_out = np.concatenate([test for _, test in ranker.fold_groups_])
+    assert np.array_equal(np.sort(held_out), np.arange(40))
+
+
+def test_the_fold_unit_of_a_demonstration(demos):
+    from footfall.learning.train import fold_unit
+
+    d = demos[0]
+    run = TrainingDemo(d.hmap, d.state, d.candidates, d.chosen, "run:12:step:3", "ab" * 32)
+    walker = TrainingDemo(d.hmap, d.state, d.candidates, d.chosen, "walker:train", "cd" * 32)
+    assert fold_unit(run, "run") == "run:12" and fold_unit(run, "board") == "board:" + "ab" * 32
+    assert fold_unit(walker, "run") == "board:" + "cd" * 32  # a kinematic walk: its board
+    assert fold_unit(run, "demonstration") == ""
+    with pytest.raises(FootfallError, match="unknown fold grouping 'walk'"):
+        fold_unit(run, "walk")

@@ -11,6 +11,7 @@ from footfall.core.errors import FootfallError
 from footfall.experiments.bench.executors import bench_executors, format_executors
 from footfall.experiments.bench.expert import bench_expert, format_expert
 from footfall.experiments.bench.learning import bench_learning, format_learning
+from footfall.experiments.bench.rankers import bench_rankers, format_rankers
 from footfall.experiments.bench.scoring import bench_scoring, format_scoring
 from footfall.experiments.bench.sim import bench_sim, format_sim
 
@@ -39,6 +40,16 @@ def bench_learning_cmd(n_demos: int, library_size: int, as_json: bool) -> None:
     """Paper-scale learning against scikit-learn's LogisticRegressionCV."""
     result = bench_learning(n_demos=n_demos, library_size=library_size)
     emit(as_json, result, format_learning(result))
+
+
+@bench.command("rankers")
+@click.option("--demos", "n_demos", type=click.IntRange(10, 10000), default=100, show_default=True)
+@click.option("--library-size", type=click.IntRange(3, 100000), default=1000, show_default=True)
+@json_option
+def bench_rankers_cmd(n_demos: int, library_size: int, as_json: bool) -> None:
+    """Each learner's learning time and its scoring of 45 000 candidates, against linear."""
+    result = bench_rankers(n_demos=n_demos, library_size=library_size)
+    emit(as_json, result, format_rankers(result))
 
 
 @bench.command("sim")

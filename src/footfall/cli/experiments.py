@@ -1,5 +1,5 @@
-"""``footfall offline``, ``reproduce``, ``study``, ``ablation`` and ``demo``: the experiments end to end, and
-the picture demo."""
+"""``footfall offline``, ``learning-curve``, ``reproduce``, ``study``, ``ablation`` and ``demo``: the
+experiments end to end, and the picture demo."""
 
 from __future__ import annotations
 
@@ -8,13 +8,16 @@ from pathlib import Path
 
 import click
 
-from footfall.cli.choices import SEED, RegistryChoice
+from footfall.cli.choices import FEATURE_SET, LEARNER, SEED, RegistryChoice
 from footfall.cli.executors import executor_options, opened_executor
 from footfall.cli.output import emit, json_option, progress_log
+from footfall.core.errors import FootfallError
 from footfall.experiments.ablation import VARIANTS, AblationConfig, ablation_markdown, run_ablation
+from footfall.experiments.learning_curve import CurveConfig, run_learning_curve
 from footfall.experiments.offline import OfflineConfig, run_offline
 from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
 from footfall.experiments.study import run_study
+from footfall.learning.train import FOLDS
 from footfall.plots.showcase import run_demo
 
 
@@ -28,6 +31,48 @@ def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
     """The offline experiment: learn from demonstrations, rank unseen terrain (Table I)."""
     config = OfflineConfig.quick(seed) if quick else OfflineConfig(seed=seed)
     summary = run_offline(Path(out), config, log=progress_log(as_json))
+    emit(as_json, summary, f"wrote {Path(out) / 'report.md'}")
+
+
+@click.command("learning-curve")
+@click.option("--out", "out", default="out/learning-curve", show_default=True,
+              help="Report folder (run again with the same settings to resume).")
+@click.option("--sizes", default=None, metavar="N[,N...]",
+              help="Demonstrations at each point [default: 25,50,100,200,400,800,1600].")
+@click.option("--draws", type=click.IntRange(min=1), default=None,
+              help="Independent draws of boards and demonstrations per point [default: 3].")
+@click.option("--features", "feature_sets", multiple=True, type=FEATURE_SET,
+              help="A feature set (repeatable) [default: terrain, templates, both].")
+@click.option("--learner", "learners", multiple=True, type=LEARNER,
+              help="A learner (repeatable) [default: l1, kernel, lambdarank].")
+@click.option("--test-decisions", type=click.IntRange(min=1), default=None,
+              help="Held-out decisions every point is measured on [default: 1000].")
+@click.option("--folds", type=click.Choice(FOLDS), default=None,
+              help="What a cross-validation fold never splits [default: demonstration].")
+@click.option("--seed", type=SEED, default=0, show_default=True)
+@click.option("--quick", is_flag=True, help="A small curve (two sizes, two draws) for a smoke "
+                                            "test.")
+@json_option
+def learning_curve(out: str, sizes: str | None, draws: int | None,
+                   feature_sets: tuple[str, ...], learners: tuple[str, ...],
+                   test_decisions: int | None, folds: str | None, seed: int, quick: bool,
+                   as_json: bool) -> None:
+    """Learning curves: each feature set and learner from 25 to 1 600 demonstrations, on
+    held-out decisions, with the hand-tuned and expert lines."""
+    config = CurveConfig.quick(seed) if quick else CurveConfig(seed=seed)
+    changes: dict = {}
+    if sizes is not None:
+        try:
+            changes["sizes"] = tuple(int(v) for v in sizes.split(","))
+        except ValueError:
+            raise FootfallError(f"--sizes must be whole numbers separated by commas, got "
+                                f"{sizes!r}") from None
+    for key, value in (("draws", draws), ("test_decisions", test_decisions), ("folds", folds),
+                       ("feature_sets", feature_sets or None), ("learners", learners or None)):
+        if value is not None:
+            changes[key] = value
+    config = replace(config, **changes)  # checked: one line for a bad value
+    summary = run_learning_curve(Path(out), config, log=progress_log(as_json))
     emit(as_json, summary, f"wrote {Path(out) / 'report.md'}")
 
 

@@ -16,7 +16,7 @@ from footfall.core.files import writable_path
 from footfall.core.limits import check_count
 from footfall.experiments.rank_eval import rank_eval
 from footfall.expert.settings_file import load_expert
-from footfall.learning.train import learn_from_store
+from footfall.learning.train import FOLDS, learn_from_store
 
 SOURCE_HELP = ("Only demonstrations whose source starts with this: walker:train, human (people's "
                "labels), run: (the synthetic expert's corrections); repeat for several.")
@@ -48,7 +48,8 @@ def model_output(path: str) -> Path:
               help="Feature set (each with the pose features), or feature families joined "
                    "by '+' (e.g. terrain+pose).")
 @click.option("--learner", type=LEARNER, default="l1", show_default=True,
-              help="L1 / L2 logistic regression or a linear SVM.")
+              help="L1 / L2 logistic regression, a linear SVM, a kernel ranker (random Fourier "
+                   "features) or gradient-boosted trees (lambdarank).")
 @click.option("--library-size", type=click.IntRange(min=3), default=1000, show_default=True,
               help="Templates in the library, over the three scales (at most the max_count "
                    "limit).")
@@ -60,7 +61,10 @@ def model_output(path: str) -> Path:
               help="Fix the RBF bandwidths as RMS height differences [m] per scale, each from "
                    f"{RMS_RANGE[0]:g} to {RMS_RANGE[1]:g} (default: chosen by cross-validation).")
 @click.option("--cv", type=click.IntRange(2, 50), default=5, show_default=True,
-              help="Cross-validation folds (grouped by demonstration).")
+              help="Cross-validation folds.")
+@click.option("--folds", type=click.Choice(FOLDS), default="demonstration", show_default=True,
+              help="What a fold never splits: a demonstration, a run (the corrections of one "
+                   "walking run; a kinematic walk's board) or a board.")
 @click.option("--selection", type=SELECTION, default="1se", show_default=True,
               help="Lambda: one-standard-error rule (sparser) or the smallest CV error.")
 @click.option("--source", multiple=True, help=SOURCE_HELP)
@@ -70,7 +74,8 @@ def model_output(path: str) -> Path:
 @json_option
 def learn(store_path: str, feature_set: str, learner: str, library_size: int,
           training_candidates: int, bandwidth_rms: tuple[float, float, float] | None, cv: int,
-          selection: str, source: tuple[str, ...], seed: int, output: str, as_json: bool) -> None:
+          folds: str, selection: str, source: tuple[str, ...], seed: int, output: str,
+          as_json: bool) -> None:
     """Learn front- and hind-leg foothold ranking functions from demonstrations."""
     check_count(library_size, "--library-size", 3)
     check_count(training_candidates, "--training-candidates", 1)
@@ -79,11 +84,13 @@ def learn(store_path: str, feature_set: str, learner: str, library_size: int,
                                log=progress_log(as_json), library_size=library_size,
                                training_candidates=training_candidates,
                                bandwidth_rms=bandwidth_rms, cv=cv, seed=seed,
-                               selection=selection)
+                               selection=selection, folds=folds)
     lines = [f"wrote {learned.model}: {feature_set}/{learner} from {learned.demonstrations} "
              f"demonstrations in {learned.seconds:.1f} s"]
     for g, v in learned.groups.items():
-        lines.append(f"  {g}: lambda {v['lambda']:.4g}, cv error {v['cv_error']:.4f}, "
+        chosen = (f"{v['trees']} trees" if v.get("trees") is not None
+                  else f"lambda {v['lambda']:.4g}")
+        lines.append(f"  {g}: {chosen}, cv error {v['cv_error']:.4f}, "
                      f"templates kept {v['templates_kept']} of {v['library']}")
     emit(as_json, learned.as_dict(), "\n".join(lines))
 

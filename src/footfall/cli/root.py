@@ -35,6 +35,10 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "offline": ("footfall.cli.experiments", "offline",
                 "The offline experiment: learn from demonstrations, rank unseen terrain "
                 "(Table I)."),
+    "learning-curve": ("footfall.cli.experiments", "learning_curve",
+                       "Learning curves: each feature set and learner from 25 to 1 600 "
+                       "demonstrations, on held-out decisions, with the hand-tuned and expert "
+                       "lines."),
     "reproduce": ("footfall.cli.experiments", "reproduce",
                   "The paper's walking experiment end to end: corrections, learning, Tables I "
                   "and II."),

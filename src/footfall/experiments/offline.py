@@ -151,7 +151,7 @@ def run_offline(out: Path, config: OfflineConfig | None = None,
             log(f"{split}: {len(splits[split])} demonstrations on {len(boards)} boards")
     terrain = maps.__getitem__
     values = {s: expert_values(d, terrain, expert) for s, d in splits.items() if s != "train"}
-    training = [TrainingDemo(maps[d.terrain_hash], d.state, d.candidates, d.chosen)
+    training = [TrainingDemo.of(d, maps[d.terrain_hash])
                 for d in splits["train"]]
 
     results, table1 = [], {}

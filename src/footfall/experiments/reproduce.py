@@ -235,7 +235,7 @@ def _learn(ws: Workspace, name: str, demos: list, feature_set: str, rms: float |
         except FootfallError:
             pass  # unreadable or stale: learn again
     terrains = ws.by_hash
-    training = [TrainingDemo(terrains[d.terrain_hash], d.state, d.candidates, d.chosen)
+    training = [TrainingDemo.of(d, terrains[d.terrain_hash])
                 for d in demos]
     t0 = time.perf_counter()
     model = learn_model(training, feature_set, "l1", library_size=config.library_size,

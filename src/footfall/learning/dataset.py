@@ -35,7 +35,8 @@ from footfall.features.family import (
 DEFAULT_TRAINING_CANDIDATES = 100  # other candidates per demonstration used for training pairs
 
 __all__ = ["FEATURE_SETS", "Example", "check_feature_set", "column_names", "create_families",
-           "design_matrix", "distinct_examples", "make_example", "stack", "training_rows"]
+           "design_matrix", "distinct_examples", "make_example", "stack", "stack_units",
+           "training_rows"]
 
 
 def check_feature_set(feature_set: str) -> str:
@@ -62,6 +63,17 @@ class Example:
     rows: np.ndarray  # (n,) indices of these rows in the demonstration's full candidate set
     key: str = ""  # the demonstration's decision_hash (state, all candidates, choice): examples
     # with the same key are the same demonstration, stacked once; "" = unique
+    unit: str = ""  # its fold unit (a run, a board): folds never split one; "" = its own
+
+
+def stack_units(examples: Sequence[Example]) -> np.ndarray | None:
+    """The fold unit (N,) of every row :func:`stack` gives, or None when every example is its
+    own unit (folds grouped by demonstration)."""
+    examples = distinct_examples(examples)
+    if not any(e.unit for e in examples):
+        return None
+    return np.concatenate([np.full(e.n, e.unit or f"demonstration {k}", dtype=object)
+                           for k, e in enumerate(examples)]).astype(str)
 
 
 def make_example(hmap: HeightMap, state: RobotState, candidates: np.ndarray, chosen: int,

@@ -30,8 +30,8 @@ import numpy as np
 from footfall.core.errors import FootfallError
 from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.core.stats import bootstrap_ci
+from footfall.features.family import Candidates
 from footfall.features.scorer import FootholdScorer
-from footfall.features.scoring import score_footholds
 
 NEAR = 0.01  # [m] a pick this close (horizontally) to the expert's choice counts as "near"
 
@@ -104,33 +104,62 @@ def rank_scores(model, demos: Sequence, terrain: Callable[[str], object],
     ``above_margin`` and ``severe`` count the losses above ``margin`` and
     ``severe_above`` [value units] (NaN where those are not given).
     """
+    return rank_scores_many({"model": model}, demos, terrain, expert, values, margin=margin,
+                            severe_above=severe_above)["model"]
+
+
+def rank_scores_many(models: dict, demos: Sequence, terrain: Callable[[str], object],
+                     expert=None, values: Sequence[np.ndarray] | None = None, *,
+                     margin: float = float("nan"), severe_above: float = float("nan")
+                     ) -> dict[str, RankScores]:
+    """:func:`rank_scores` of several models on the same demonstrations, by name: each
+    demonstration's candidates (their terrain patches, the costly part) are prepared once for
+    every model with the same feature settings."""
     if values is None and expert is not None:
         values = expert_values(demos, terrain, expert)
     if not demos:
         raise FootfallError("no demonstrations to evaluate on")
-    top1, near, pct, loss = [], [], [], []
+    found: dict[str, list] = {name: [] for name in models}
     for k, d in enumerate(demos):  # one demonstration at a time, vectorised over its candidates
         hmap = terrain(d.terrain_hash)
-        model.check_compatible(map_resolution=hmap.resolution)
-        reward = model.reward_for(d.state.swing_leg)
-        r = score_footholds(hmap, d.state, d.candidates, reward, model.robot)
-        if not np.isfinite(r).all():
-            raise FootfallError(f"demonstration {d.id}: a candidate has no valid features")
-        pick = int(np.argmax(r))
-        others = np.delete(r, d.chosen)
-        top1.append(pick == d.chosen or r[pick] == r[d.chosen])
-        near.append(bool(np.hypot(*(d.candidates[pick, :2] - d.candidates[d.chosen, :2]))
-                         <= NEAR + 1e-9))
-        pct.append(float(np.mean(others < r[d.chosen])) if others.size else 1.0)
-        if values is not None:
-            loss.append(float(values[k].max() - values[k][pick]))
-    losses = np.array(loss)
-    return RankScores(len(demos), float(np.mean(top1)), float(np.mean(pct)),
-                      float(np.mean(loss)) if loss else float("nan"),
-                      float(np.std(loss)) if loss else float("nan"),
+        prepared: dict = {}
+        for name, model in models.items():
+            model.check_compatible(map_resolution=hmap.resolution)
+            reward = model.reward_for(d.state.swing_leg)
+            key = (id(model.robot), repr(reward.config.to_dict()))
+            if key not in prepared:
+                prepared[key] = Candidates.of_state(hmap, d.state, d.candidates, reward.config,
+                                                    model.robot)
+            r = reward.values(prepared[key])
+            if not np.isfinite(r).all():
+                raise FootfallError(f"demonstration {d.id}: a candidate has no valid features")
+            found[name].append(_decision(r, d, None if values is None else values[k]))
+    return {name: _scores(rows, margin, severe_above) for name, rows in found.items()}
+
+
+def _decision(r: np.ndarray, d, values: np.ndarray | None) -> tuple[bool, bool, float, float]:
+    """Top-1, near, percentile and reward loss (NaN without values) of one decision whose
+    candidates the scorer valued ``r``."""
+    pick = int(np.argmax(r))
+    others = np.delete(r, d.chosen)
+    near = bool(np.hypot(*(d.candidates[pick, :2] - d.candidates[d.chosen, :2])) <= NEAR + 1e-9)
+    pct = float(np.mean(others < r[d.chosen])) if others.size else 1.0
+    loss = float("nan") if values is None else float(values.max() - values[pick])
+    return bool(pick == d.chosen or r[pick] == r[d.chosen]), near, pct, loss
+
+
+def _scores(rows: list[tuple[bool, bool, float, float]], margin: float,
+            severe_above: float) -> RankScores:
+    top1, near, pct, loss = (np.array(c, dtype=float) for c in zip(*rows))
+    has_loss = not np.isnan(loss).any()
+    losses = loss if has_loss else np.zeros(0)
+    return RankScores(len(rows), float(np.mean(top1)), float(np.mean(pct)),
+                      float(np.mean(loss)) if has_loss else float("nan"),
+                      float(np.std(loss)) if has_loss else float("nan"),
                       top1_near=float(np.mean(near)),
-                      reward_loss_ci=bootstrap_ci(losses) if loss else (float("nan"),) * 2,
-                      losses=tuple(loss), above_margin=_share_above(losses, margin),
+                      reward_loss_ci=bootstrap_ci(losses) if has_loss else (float("nan"),) * 2,
+                      losses=tuple(float(v) for v in losses),
+                      above_margin=_share_above(losses, margin),
                       severe=_share_above(losses, severe_above), margin=float(margin),
                       severe_above=float(severe_above))
 

@@ -7,14 +7,18 @@ learner's own arrays and its training record. It turns into a
 (:meth:`RankingFunction.scorer`) and into named arrays for the model file
 (:meth:`RankingFunction.arrays`, :meth:`RankingFunction.from_arrays`): each
 learner keeps its own arrays, and the file never pickles. The linear
-function of the paper (Eq. 1), :class:`LinearFunction`, is the one every
-built-in learner makes.
+function of the paper (Eq. 1), :class:`LinearFunction`, is the one the
+linear learners make; a non-linear learner's function is a
+:class:`ColumnFunction` (a value predicted from the families' columns side
+by side), scored by :class:`ColumnScorer`.
 """
 
 from __future__ import annotations
 
+import hashlib
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -22,7 +26,7 @@ import numpy as np
 from footfall.core.errors import FootfallError
 from footfall.core.validate import require_float_array
 from footfall.features.config import FeatureConfig
-from footfall.features.family import FeatureFamily
+from footfall.features.family import Candidates, FeatureFamily
 from footfall.features.reward import LinearReward
 from footfall.features.scorer import FootholdScorer
 from footfall.features.templates import TemplateFeatures, TemplateLibrary
@@ -140,6 +144,103 @@ class LinearFunction(RankingFunction):
         if extra:
             raise FootfallError(f"unexpected array(s) {', '.join(extra[:4])}")
         return cls(tuple(families), tuple(c for c, _ in pairs), tuple(s for _, s in pairs), info)
+
+
+def own_arrays(arrays: dict[str, np.ndarray], prefix: str, names: tuple[str, ...]
+               ) -> dict[str, np.ndarray]:
+    """A function's arrays ``<prefix><name>`` by ``name``: every one present, no other."""
+    wanted = {f"{prefix}{n}": n for n in names}
+    extra = sorted(set(arrays) - set(wanted))
+    if extra:
+        raise FootfallError(f"unexpected array(s) {', '.join(extra[:4])}")
+    missing = [key for key in wanted if key not in arrays]
+    if missing:
+        raise FootfallError(f"lacks array {missing[0]}")
+    return {n: arrays[key] for key, n in wanted.items()}
+
+
+class ColumnFunction(RankingFunction):
+    """A ranking function that predicts a value from the families' columns side by side (not
+    w^T x): a kernel or boosted ranker. Subclasses implement :meth:`predict`."""
+
+    @abstractmethod
+    def predict(self, X: np.ndarray) -> np.ndarray:
+        """Values (n,) of candidates with features X (n, d) (finite; higher: preferred)."""
+
+    def scorer(self, config: FeatureConfig, name: str = "learned") -> ColumnScorer:
+        """The function as a :class:`ColumnScorer`."""
+        return ColumnScorer(self, config, name)
+
+    @property
+    def n_columns(self) -> int:
+        """Number of columns d the function reads."""
+        return sum(len(f.columns()) for f in self.families)
+
+
+@dataclass(frozen=True, eq=False)
+class ColumnScorer(FootholdScorer):
+    """A :class:`ColumnFunction`'s values of candidates: every family's columns, then predict.
+
+    The value is not separable into a terrain part and a state part: with a
+    family that reads the robot's state (pose features) all of it is the
+    state part, and the terrain part only marks footholds that are not valid
+    (-inf); without one, all of it is the terrain part, and the dense form
+    evaluates it at every lattice point (the generic
+    :meth:`FootholdScorer.dense`). Either way a candidate set is scored in one
+    call, vectorised over its candidates.
+    """
+
+    function: ColumnFunction
+    config: FeatureConfig = field(default_factory=FeatureConfig)
+    name: str = "learned"
+
+    def family_names(self) -> tuple[str, ...]:
+        """Every family of the function (a non-linear function reads all its columns)."""
+        return tuple(f.name for f in self.function.families)
+
+    @property
+    def has_state_part(self) -> bool:
+        """Whether a family reads the robot's state (then the whole value is the state part)."""
+        return any(f.needs_state for f in self.function.families)
+
+    def _predicted(self, c: Candidates) -> np.ndarray:
+        """The function's value of every valid candidate, -inf for the others, (n,)."""
+        out = np.full(c.n, -np.inf)
+        valid = np.flatnonzero(c.patches.valid)
+        if valid.size:
+            X = np.hstack([f.compute(c) for f in self.function.families])[valid]
+            finite = np.isfinite(X).all(axis=1)
+            out[valid[finite]] = self.function.predict(X[finite])
+        return out
+
+    def terrain_values(self, c: Candidates) -> np.ndarray:
+        """The value (terrain families only), or 0 / -inf (valid or not) when it needs the state."""
+        if self.has_state_part:
+            return np.where(c.patches.valid, 0.0, -np.inf)
+        return self._predicted(c)
+
+    def state_values(self, c: Candidates) -> np.ndarray:
+        """The whole value when a family reads the state (0 where the terrain part is -inf)."""
+        if not self.has_state_part:
+            return np.zeros(c.n)
+        v = self._predicted(c)
+        return np.where(np.isfinite(v), v, 0.0)
+
+    @cached_property
+    def _digest(self) -> str:
+        """Digest of the function's families and arrays and the settings (hashed once: a kernel
+        function's arrays run to megabytes)."""
+        digest = hashlib.sha256(type(self.function).__qualname__.encode()
+                                + repr(self.config.to_dict()).encode())
+        for family in self.function.families:
+            digest.update(family.name.encode() + family.digest().encode())
+        for name, array in sorted(self.function.arrays().items()):
+            digest.update(name.encode() + np.ascontiguousarray(array).tobytes())
+        return digest.hexdigest()
+
+    def key(self, state: bool) -> str:
+        """Digest of the function's families and arrays, the settings and the part."""
+        return hashlib.sha256(f"{self._digest}:{state}".encode()).hexdigest()
 
 
 def check_function(function: Any) -> RankingFunction:

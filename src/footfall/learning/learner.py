@@ -5,8 +5,10 @@ feature matrices of demonstrations (paper §II-C): :meth:`Learner.fit` returns
 a fitted scikit-learn estimator, and :meth:`Learner.function` turns it into a
 :class:`~footfall.learning.function.RankingFunction` -- which families and
 columns it keeps, and its own arrays for the model file. The built-in
-learners (:mod:`footfall.learning.ranker`) are linear classifiers on pairwise
-differences; a non-linear ranker is one new module with a
+learners are linear classifiers on pairwise differences
+(:mod:`footfall.learning.ranker`), a kernel ranker on random Fourier features
+(:mod:`footfall.learning.kernel`) and a gradient-boosted ranker
+(:mod:`footfall.learning.boosted`); a new ranker is one new module with a
 :class:`~footfall.learning.function.RankingFunction` of its own and a
 ``register_learner`` call.
 """
@@ -38,7 +40,7 @@ class Learner(ABC):
 
     @abstractmethod
     def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray, *, Cs: Any = 10,
-            cv: int = 5, selection: str = "1se") -> Any:
+            cv: int = 5, selection: str = "1se", units: np.ndarray | None = None) -> Any:
         """A fitted estimator for stacked candidates of demonstrations.
 
         Parameters
@@ -53,6 +55,10 @@ class Learner(ABC):
         Cs, cv, selection
             The regularisation path, folds and selection rule, for learners
             that use them.
+        units : array of shape (n_candidates,), optional
+            The fold unit of each candidate's demonstration (its run or
+            board): cross-validation folds never split one. None: each
+            demonstration is its own unit.
 
         Returns
         -------

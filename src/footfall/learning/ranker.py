@@ -57,10 +57,10 @@ class LinearLearner(Learner):
     function_type: type[RankingFunction] = LinearFunction
 
     def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray, *, Cs=10, cv: int = 5,
-            selection: str = "1se") -> FootholdRanker:
+            selection: str = "1se", units: np.ndarray | None = None) -> FootholdRanker:
         """:class:`FootholdRanker` with this learner, fitted."""
         return FootholdRanker(learner=self.name, Cs=Cs, cv=cv, selection=selection).fit(
-            X, y, groups)
+            X, y, groups, units)
 
     def function(self, fitted: FootholdRanker, families: tuple[FeatureFamily, ...],
                  n_demonstrations: int) -> LinearFunction:
@@ -185,13 +185,63 @@ def _check_demonstrations(X: np.ndarray, y: np.ndarray, groups: np.ndarray) -> N
         raise FootfallError("every demonstration needs at least two candidates")
 
 
-def grouped_folds(pair_groups: np.ndarray, n_splits: int) -> list[tuple[np.ndarray, np.ndarray]]:
-    """K folds of pair indices; all pairs of one demonstration fall in the same fold."""
-    n_groups = np.unique(pair_groups).size
+def grouped_folds(pair_groups: np.ndarray, n_splits: int, units: np.ndarray | None = None
+                  ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """K folds of pair (or row) indices; all pairs of one demonstration fall in the same fold,
+    and with ``units`` (the fold unit of each pair: its run or board) all pairs of one unit.
+
+    Neighbouring steps of one run are not independent: folds grouped by run
+    (or board) hold out whole runs, so that the held-out error measures
+    learning on terrain and states the learner has not seen.
+    """
+    labels = pair_groups if units is None else np.asarray(units)
+    if labels.shape != np.shape(pair_groups):
+        raise FootfallError("need one fold unit per pair")
+    n_groups = np.unique(labels).size
     if n_groups < n_splits:
+        what = "demonstrations" if units is None else "fold units (runs or boards)"
         raise FootfallError(f"{n_splits}-fold cross-validation needs at least {n_splits} "
-                            f"demonstrations, got {n_groups}")
-    return list(GroupKFold(n_splits=n_splits).split(pair_groups, groups=pair_groups))
+                            f"{what}, got {n_groups}")
+    return list(GroupKFold(n_splits=n_splits).split(labels, groups=labels))
+
+
+def units_of(groups: np.ndarray, units: np.ndarray | None, of: np.ndarray) -> np.ndarray | None:
+    """The fold unit of each entry of ``of`` (demonstration ids), from per-row ``groups`` and
+    ``units``; None without units. A demonstration's rows must share one unit."""
+    if units is None:
+        return None
+    groups, units = np.asarray(groups), np.asarray(units)
+    if units.shape != groups.shape:
+        raise FootfallError("need one fold unit per candidate row")
+    uniq, first = np.unique(groups, return_index=True)
+    unit_of_group = units[first]
+    if np.any(units != unit_of_group[np.searchsorted(uniq, groups)]):
+        raise FootfallError("the rows of one demonstration must share one fold unit")
+    return unit_of_group[np.searchsorted(uniq, np.asarray(of))]
+
+
+def pairwise_error(scores: np.ndarray, y: np.ndarray, groups: np.ndarray) -> float:
+    """The share of (chosen, other) pairs of demonstrations that ``scores`` does not order
+    strictly right (a tie is an error): the linear learners' held-out error, for any scorer."""
+    uniq, inverse = np.unique(groups, return_inverse=True)
+    chosen_score = np.empty(uniq.size)
+    chosen = y == 1
+    chosen_score[inverse[chosen]] = scores[chosen]
+    return float(np.mean(scores[~chosen] >= chosen_score[inverse[~chosen]]))
+
+
+def select_on_path(errors: np.ndarray, stds: np.ndarray, n_folds: int, selection: str) -> int:
+    """The index picked on a path ordered from the simplest model to the most complex: the
+    smallest held-out error (``"min"``), or the simplest within one standard error of it
+    (``"1se"``: as good within the noise of the folds, and simpler)."""
+    if selection not in SELECTIONS:
+        raise FootfallError(f"unknown selection rule {selection!r}; use one of "
+                            f"{', '.join(SELECTIONS)}")
+    best = int(np.argmin(errors))
+    if selection == "1se":
+        bound = errors[best] + stds[best] / np.sqrt(n_folds)
+        best = int(np.flatnonzero(errors <= bound + 1e-12)[0])
+    return best
 
 
 def _fit_coef(learner: LinearLearner, C: float, X: np.ndarray, y: np.ndarray, tol: float,
@@ -266,7 +316,8 @@ class FootholdRanker(BaseEstimator):
         the smallest C that keeps a weight non-zero, upward over 3.7 decades;
         L2 and the SVM: over ``L2_LOG_C``).
     cv : int
-        Number of folds, grouped by demonstration.
+        Number of folds, grouped by demonstration (or by the ``units`` given to
+        :meth:`fit`: runs or boards).
     selection : {"1se", "min"}
         How lambda is picked from the path: the strongest regularisation
         within one standard error of the smallest CV error (sparser), or
@@ -309,8 +360,12 @@ class FootholdRanker(BaseEstimator):
             raise FootfallError("Cs must be at least 1")
         return _linear(self.learner).path(pairs, labels, n)
 
-    def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray) -> "FootholdRanker":
+    def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray,
+            units: np.ndarray | None = None) -> "FootholdRanker":
         """Learn from stacked candidate features of demonstrations (see :func:`pairwise_transform`).
+
+        ``units`` (n_candidates,), if given, names the fold unit of each row
+        (its demonstration's run or board): the folds never split one.
 
         The mirrored pair set holds every pair twice, once with each sign, and
         a linear classifier without intercept has the same loss on (x, +1)
@@ -331,7 +386,7 @@ class FootholdRanker(BaseEstimator):
         Xs = pairs / scale * signs[:, None]
         labels = signs
         Cs = self._path(Xs, labels)
-        folds = grouped_folds(pair_groups, int(self.cv))
+        folds = grouped_folds(pair_groups, int(self.cv), units_of(groups, units, pair_groups))
         self.fold_groups_ = [(np.unique(pair_groups[tr]), np.unique(pair_groups[te]))
                              for tr, te in folds]
         self.path_ = _cross_validate(learner, 2.0 * Cs, Xs, labels, folds, self.tol,
@@ -341,11 +396,9 @@ class FootholdRanker(BaseEstimator):
         # One-standard-error rule: the strongest regularisation whose held-out
         # error is within one standard error of the smallest (sparser, and as
         # good within the noise of the folds); or the smallest error itself.
-        errors = np.array([p.error for p in self.path_])
-        best = int(np.argmin(errors))
-        if self.selection == "1se":
-            bound = errors[best] + self.path_[best].error_std / np.sqrt(len(folds))
-            best = int(np.flatnonzero(errors <= bound + 1e-12)[0])
+        best = select_on_path(np.array([p.error for p in self.path_]),
+                              np.array([p.error_std for p in self.path_]), len(folds),
+                              self.selection)
         self.C_ = float(Cs[best])
         self.lambda_ = 1.0 / self.C_
         self.cv_error_ = self.path_[best].error

@@ -15,7 +15,7 @@ import math
 import os
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -38,6 +38,7 @@ from footfall.learning.dataset import (
     create_families,
     make_example,
     stack,
+    stack_units,
     training_rows,
 )
 from footfall.learning.function import RankingFunction, check_function
@@ -47,18 +48,52 @@ from footfall.learning.model import LEG_GROUPS, FootholdModel
 
 @dataclass(frozen=True)
 class TrainingDemo:
-    """What the learner sees of a demonstration: terrain, state, candidates, choice."""
+    """What the learner sees of a demonstration: terrain, state, candidates, choice, and where
+    it came from (for folds grouped by run or board)."""
 
     hmap: HeightMap
     state: RobotState
     candidates: np.ndarray  # (n, 3) [m]
     chosen: int
+    source: str = ""  # the demonstration's source ("run:<key>:step:<k>", "walker:train", ...)
+    terrain: str = ""  # its terrain's content hash ("" : computed from hmap when needed)
+
+    @classmethod
+    def of(cls, demo: Demonstration, hmap: HeightMap) -> TrainingDemo:
+        """A stored demonstration on its terrain ``hmap``."""
+        return cls(hmap, demo.state, demo.candidates, demo.chosen, demo.source,
+                   demo.terrain_hash)
+
+
+FOLDS = ("demonstration", "run", "board")
+"""What cross-validation folds never split: one demonstration (the paper's folds), one run
+(the steps of one walk: a correction's run, or a kinematic walk's board), or one board."""
+
+
+def fold_unit(demo: TrainingDemo, folds: str) -> str:
+    """The fold unit of a demonstration ("" for folds by demonstration: each its own).
+
+    ``run``: corrections of one walking run ("run:<key>:step:<k>" -> "run:<key>"); the
+    kinematic walker's demonstrations carry no walk of their own, so their unit is their
+    board. ``board``: the terrain's content hash.
+    """
+    if folds not in FOLDS:
+        raise FootfallError(f"unknown fold grouping {folds!r}; use one of {', '.join(FOLDS)}")
+    if folds == "demonstration":
+        return ""
+    board = "board:" + (demo.terrain or demo.hmap.content_hash())
+    if folds == "run" and demo.source.startswith("run:"):
+        return ":".join(demo.source.split(":")[:2])
+    return board
 
 
 def _fit(examples: list[Example], families: Sequence[FeatureFamily], learner: Learner, Cs,
          cv: int, selection: str = "1se") -> Any:
     X, y, groups = stack(examples, families)
-    return learner.fit(X, y, groups, Cs=Cs, cv=cv, selection=selection)
+    units = stack_units(examples)
+    if units is None:
+        return learner.fit(X, y, groups, Cs=Cs, cv=cv, selection=selection)
+    return learner.fit(X, y, groups, Cs=Cs, cv=cv, selection=selection, units=units)
 
 
 def _tune(examples: list[Example], families: tuple[FeatureFamily, ...], learner: Learner, Cs,
@@ -79,6 +114,7 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
                 training_candidates: int = DEFAULT_TRAINING_CANDIDATES,
                 bandwidth_rms: Sequence[float] | None = None, Cs=10, cv: int = 5, seed: int = 0,
                 selection: str = "1se", family_options: dict[str, dict[str, Any]] | None = None,
+                folds: str = "demonstration",
                 log: Callable[[str], None] = lambda s: None) -> FootholdModel:
     """Learn front- and hind-leg ranking functions from demonstrations.
 
@@ -88,9 +124,12 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     per scale, instead of choosing them by cross-validation) are the template
     family's options; ``family_options`` passes any family's own options by
     family name. ``selection`` picks lambda on the path (see
-    :class:`footfall.learning.ranker.FootholdRanker`).
+    :class:`footfall.learning.ranker.FootholdRanker`); ``folds`` what the
+    cross-validation folds never split (:data:`FOLDS`).
     """
     feature_set = check_feature_set(feature_set)
+    if folds not in FOLDS:
+        raise FootfallError(f"unknown fold grouping {folds!r}; use one of {', '.join(FOLDS)}")
     chosen_learner = get_learner(learner)  # a registered learner, or a clear error
     seed = require_int(seed, "seed", 0)
     check_count(library_size, "library_size", 3)
@@ -115,8 +154,9 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     examples = []
     for d in demos:  # one demonstration at a time: each is vectorised over its candidates
         rows = training_rows(d.candidates.shape[0], d.chosen, training_candidates, rng)
-        examples.append(make_example(d.hmap, d.state, d.candidates, d.chosen, families, config,
-                                     rows, robot))
+        example = make_example(d.hmap, d.state, d.candidates, d.chosen, families, config, rows,
+                               robot)
+        examples.append(replace(example, unit=fold_unit(d, folds)))
     functions = {}
     for group in LEG_GROUPS:
         chosen = [e for e in examples if e.front == (group == "front")]
@@ -136,7 +176,7 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
                          info={"n_demonstrations": len(demos), "seed": seed,
                                "library_size": library_size,
                                "training_candidates": training_candidates,
-                               "selection": selection,
+                               "selection": selection, "folds": folds,
                                "seconds": time.perf_counter() - started})
 
 
@@ -185,9 +225,10 @@ class LearnedModel:
 
 
 def _group_summary(f: RankingFunction, scales: int) -> dict[str, Any]:
-    """Lambda, CV error, RBF bandwidths [1/m^2] and [m RMS], templates kept of a ranking function
-    (None where its learner does not say)."""
-    return {"lambda": f.info.get("lambda"), "cv_error": f.info.get("cv_error"),
+    """Lambda (or the number of trees), CV error, RBF bandwidths [1/m^2] and [m RMS], templates
+    kept of a ranking function (None where its learner does not say)."""
+    return {"lambda": f.info.get("lambda"), "trees": f.info.get("trees"),
+            "cv_error": f.info.get("cv_error"),
             "bandwidths_per_m2": list(getattr(f.family("templates"), "bandwidths", ())),
             "bandwidth_rms_m": f.info.get("bandwidth_rms_m"),
             "templates_kept": f.info.get("kept_counts", [0] * scales),
@@ -213,7 +254,7 @@ def learn_from_store(store: str | os.PathLike, path: str | os.PathLike, feature_
     """
     out = writable_path(path)
     demos, maps = store_demonstrations(store, source=source)
-    training = [TrainingDemo(maps[d.terrain_hash], d.state, d.candidates, d.chosen) for d in demos]
+    training = [TrainingDemo.of(d, maps[d.terrain_hash]) for d in demos]
     model = learn_model(training, feature_set, learner, log=log, **options)
     model.save(out)
     return LearnedModel(str(out), feature_set, learner, len(demos), model.info["seconds"],

@@ -2,7 +2,9 @@
 
 One module per benchmark (``footfall bench ...``): dense scoring against a
 per-candidate loop (:mod:`~footfall.experiments.bench.scoring`), learning
-against scikit-learn (:mod:`~footfall.experiments.bench.learning`), the whole
+against scikit-learn (:mod:`~footfall.experiments.bench.learning`), each
+ranker's learning and scoring against the linear function
+(:mod:`~footfall.experiments.bench.rankers`), the whole
 walking stack against bare MuJoCo stepping (:mod:`~footfall.experiments.bench.sim`),
 the walking expert with its placement error against without
 (:mod:`~footfall.experiments.bench.expert`), and a batch on a Ray cluster

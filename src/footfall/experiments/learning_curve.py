@@ -1,0 +1,373 @@
+"""Learning curves (``footfall learning-curve``): how each feature set and learner improves with
+the number of demonstrations, measured on held-out decisions.
+
+Every draw has its own training boards (every kind at every difficulty, board
+seeds from the draw's own stream, so no two draws share a board) and its own
+demonstrations: the walking expert demonstrates ``max(sizes)`` footholds on
+them with the kinematic walker, and each size learns from the first n of one
+random order of those (nested: a larger size adds demonstrations to a
+smaller one's). The held-out decisions come from test boards of their own
+seeds, the same for every draw and never trained on: the walking expert's
+decisions on them, each judged by the expert's values of all its candidates.
+
+Each point is measured as ``footfall rank-eval`` measures a scorer: the
+share of decisions whose expert shortfall is above the correction margin
+(the number the issue's targets are in) and above the severe threshold, the
+mean shortfall with a bootstrap interval, top-1 and within 1 cm, and the
+templates kept per scale. The hand-tuned reward and the expert's own value
+(the ceiling: no shortfall by construction) are measured on the same
+decisions as lines. Results are written after every point and a rerun with
+the same settings resumes where it stopped.
+
+Every point's RBF bandwidths are fixed (``bandwidth_rms``, the reproduction's
+rounds' value) unless set to None: choosing them by cross-validation at every
+point multiplies the learning time several times over.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from footfall.control.footstep import FootstepConfig
+from footfall.core.atomic import write_text_atomic
+from footfall.core.errors import FootfallError
+from footfall.core.params import Params, above, at_least, param
+from footfall.core.robot import LITTLEDOG
+from footfall.core.seeds import SeedStreams
+from footfall.data.demonstration import Demonstration
+from footfall.data.store import DemoStore
+from footfall.expert.collect import collect_demonstrations
+from footfall.expert.corrections import DEFAULT_MARGIN, SEVERE_SHORTFALL
+from footfall.expert.scorer import ExpertScorer
+from footfall.expert.synthetic import SyntheticExpert, walking_expert
+from footfall.features.family import PAPER_FEATURE_SETS
+from footfall.features.reward import default_reward
+from footfall.learning.evaluation import EveryLeg, RankScores, rank_scores_many
+from footfall.learning.learner import LEARNERS
+from footfall.learning.model import FootholdModel
+from footfall.learning.train import FOLDS, TrainingDemo, learn_model
+from footfall.plots.curves import save_curve_figure
+from footfall.terrain import make_board
+
+from .offline import _difficulties, _feature_sets, _kinds
+
+FORMAT = "footfall.learning-curve"
+VERSION = 1
+COLLECT_MORE = 1.25  # a draw collects this many times its largest size: the legs do not take
+# turns exactly, and each leg group's prefix must reach half of every size
+LINES = ("hand-tuned", "expert")  # the scorers measured once, as horizontal lines
+
+
+def _sizes(value: object) -> bool:
+    return isinstance(value, tuple) and len(value) > 0 and all(
+        isinstance(n, int) and not isinstance(n, bool) and n >= 5 for n in value) and \
+        list(value) == sorted(set(value))
+
+
+@dataclass(frozen=True)
+class CurveConfig(Params):
+    """What a learning curve measures; written next to its results (docs/configuration.md)."""
+
+    sizes: tuple[int, ...] = param((25, 50, 100, 200, 400, 800, 1600), check=_sizes,
+                                   must="increasing whole numbers >= 5",
+                                   doc="demonstrations learned from at each point")
+    draws: int = param(3, range=at_least(1), doc="independent draws of training boards and "
+                                                 "demonstrations per point")
+    feature_sets: tuple[str, ...] = param(
+        PAPER_FEATURE_SETS, check=_feature_sets, must="a tuple of feature sets",
+        doc="the feature sets learned")
+    learners: tuple[str, ...] = param(
+        ("l1", "kernel", "lambdarank"), check=lambda v: isinstance(v, tuple) and len(v) > 0
+        and all(learner in LEARNERS for learner in v), must="a tuple of registered learners",
+        doc="the learners compared")
+    train_kinds: tuple[str, ...] = param(("steps", "barrier", "slope", "rocky"), check=_kinds,
+                                         must="a non-empty tuple of terrain kinds",
+                                         doc="the kinds of every draw's training boards")
+    train_difficulties: tuple[float, ...] = param(
+        (0.3, 0.6, 0.9), unit="-", check=_difficulties, must="a tuple of numbers in [0, 1]",
+        doc="difficulties of the training boards (one board per kind and difficulty)")
+    test_difficulties: tuple[float, ...] = param(
+        (0.45, 0.75), unit="-", check=_difficulties, must="a tuple of numbers in [0, 1]",
+        doc="difficulties of the held-out test boards (the training kinds)")
+    test_decisions: int = param(1000, range=at_least(1),
+                                doc="held-out decisions every point is measured on")
+    library_size: int = param(1000, range=at_least(3),
+                              doc="templates in the library before selection")
+    bandwidth_rms: float | None = param(
+        0.004, unit="m", range=above(0), doc="RBF bandwidth of every scale, as an RMS height "
+        "difference, for every point (the reproduction's rounds' value); None: each learner "
+        "chooses them by cross-validation at each point (much slower)")
+    folds: str = param("demonstration", check=lambda v: v in FOLDS,
+                       must=f"one of {', '.join(FOLDS)}",
+                       doc="what a cross-validation fold never splits")
+    seed: int = param(0, range=at_least(0), doc="the curve's seed: boards, demonstrations and "
+                                                "learning draw from its named streams")
+
+    @classmethod
+    def quick(cls, seed: int = 0) -> CurveConfig:
+        """A small curve for a smoke test: two sizes, two draws, small boards' worth."""
+        return cls(sizes=(16, 32), draws=2, feature_sets=("terrain", "templates"),
+                   learners=("l1", "lambdarank"), train_kinds=("rocky", "steps"),
+                   train_difficulties=(0.6,), test_difficulties=(0.6,), test_decisions=30,
+                   library_size=60, seed=seed)
+
+    @property
+    def streams(self) -> SeedStreams:
+        """The curve's named seed streams."""
+        return SeedStreams("learning curve", self.seed)
+
+    def training_boards(self, draw: int) -> list[tuple[str, float, int]]:
+        """(kind, difficulty, seed) of draw ``draw``'s training boards: a stream of their own."""
+        return [(k, d, self.streams.seed_for("boards", 0, draw, i, j))
+                for i, k in enumerate(self.train_kinds)
+                for j, d in enumerate(self.train_difficulties)]
+
+    def test_boards(self) -> list[tuple[str, float, int]]:
+        """(kind, difficulty, seed) of the held-out test boards, the same for every draw."""
+        return [(k, d, self.streams.seed_for("boards", 1, i, j))
+                for i, k in enumerate(self.train_kinds)
+                for j, d in enumerate(self.test_difficulties)]
+
+
+def _point(scores: RankScores, **extra) -> dict:
+    """A point's figures: ``extra`` (the point's draw, n, feature set, learner ...) and the
+    rank-eval measures, the number of decisions as ``decisions`` (per-decision losses left out:
+    the report needs the means)."""
+    d = scores.as_dict()
+    d.pop("losses")
+    d["decisions"] = d.pop("n")
+    return {**d, **extra}
+
+
+def _expert() -> SyntheticExpert:
+    """The teacher and judge: the walking expert (the reproduction's corrections' expert)."""
+    return SyntheticExpert(walking_expert(FootstepConfig().lead))
+
+
+def _stored_demos(path: Path, specs: list[tuple[str, float, int]], n: int, seed: int,
+                  source: str, expert: SyntheticExpert, log: Callable[[str], None]
+                  ) -> tuple[list[Demonstration], dict]:
+    """The expert's ``n`` demonstrations on the boards ``specs``, from the store at ``path``
+    (collected into it the first time: a rerun reads them back)."""
+    boards = [make_board([(kind, d)], s) for kind, d, s in specs]
+    maps = {b.content_hash(): b for b in boards}
+    with DemoStore(path, create=True) as store:
+        demos = store.demonstrations(source_prefix=source)
+        if not demos:
+            log(f"collecting {n} demonstrations on {len(boards)} boards ({path.name})")
+            store.add_demonstrations(collect_demonstrations(boards, expert, n, seed=seed,
+                                                            source=source), terrains=boards)
+            demos = store.demonstrations(source_prefix=source)
+    if {d.terrain_hash for d in demos} - set(maps):
+        raise FootfallError(f"{path} holds demonstrations of other boards; use another --out")
+    return demos, maps
+
+
+def balanced_order(front: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """A random order of demonstrations (``front`` (n,) bool: a front leg's) that alternates
+    front and hind legs while both last, so that every prefix -- every curve point -- holds
+    both leg groups in equal numbers (each learns its own function)."""
+    groups = [rng.permutation(np.flatnonzero(front)), rng.permutation(np.flatnonzero(~front))]
+    k = min(g.size for g in groups)
+    order = np.column_stack([groups[0][:k], groups[1][:k]]).ravel()
+    return np.concatenate([order, groups[0][k:], groups[1][k:]])
+
+
+def _model_path(out: Path, draw: int, n: int, fs: str, ln: str) -> Path:
+    return out / "models" / f"{fs}-{ln}-{n}-draw{draw}.npz"
+
+
+def _resumed_points(results_path: Path, config: CurveConfig) -> list[dict]:
+    """The points a results file of the same settings holds ([] without one)."""
+    if not results_path.exists():
+        return []
+    try:
+        old = json.loads(results_path.read_text())
+    except (OSError, ValueError) as exc:
+        raise FootfallError(f"{results_path}: cannot be read ({exc}); remove it to start "
+                            f"again") from None
+    if old.get("format") != FORMAT or old.get("config") != json.loads(
+            json.dumps(config.to_dict())):
+        raise FootfallError(f"{results_path} holds a curve of other settings; use another "
+                            f"--out or remove it")
+    return old["points"]
+
+
+@dataclass
+class _HeldOut:
+    """The held-out decisions, their terrains and the expert's values of their candidates."""
+
+    decisions: list[Demonstration]
+    terrain: Callable[[str], object]
+    values: list[np.ndarray]
+
+    def measure(self, models: dict) -> dict[str, RankScores]:
+        """rank-eval's measures of every model on the decisions (their patches made once)."""
+        return rank_scores_many(models, self.decisions, self.terrain, values=self.values,
+                                margin=DEFAULT_MARGIN, severe_above=SEVERE_SHORTFALL)
+
+
+def _held_out(out: Path, config: CurveConfig, expert: SyntheticExpert,
+              log: Callable[[str], None]) -> _HeldOut:
+    test, maps = _stored_demos(out / "test.sqlite", config.test_boards(),
+                               config.test_decisions, config.streams.seed_for("demonstrations", 1),
+                               "walker:test", expert, log)
+    if len(test) < config.test_decisions:
+        raise FootfallError(f"the test boards gave {len(test)} decisions, fewer than "
+                            f"{config.test_decisions}")
+    test = test[:config.test_decisions]
+    return _HeldOut(test, maps.__getitem__, [expert.values(maps[d.terrain_hash], d.state,
+                                                           d.candidates) for d in test])
+
+
+def _draw_models(out: Path, config: CurveConfig, draw: int, todo: list[tuple],
+                 expert: SyntheticExpert, log: Callable[[str], None]
+                 ) -> dict[tuple, FootholdModel]:
+    """The models of draw ``draw``'s points ``todo`` (n, feature set, learner): learned from
+    the draw's demonstrations and saved, or read back when saved already."""
+    demos, maps = _stored_demos(out / f"draw{draw}.sqlite", config.training_boards(draw),
+                                math.ceil(COLLECT_MORE * max(config.sizes)),
+                                config.streams.seed_for("demonstrations", 0, draw),
+                                f"walker:draw{draw}", expert, log)
+    front = np.array([LITTLEDOG.leg(d.state.swing_leg).front for d in demos])
+    order = balanced_order(front, config.streams.generator("demonstrations", 2, draw))
+    training = [TrainingDemo.of(demos[k], maps[demos[k].terrain_hash]) for k in order]
+    rms = None if config.bandwidth_rms is None else (config.bandwidth_rms,) * 3
+    models = {}
+    for n, fs, ln in todo:
+        if n > len(training):
+            log(f"  draw {draw}: {len(training)} demonstrations, not {n}: point skipped")
+            continue
+        path = _model_path(out, draw, n, fs, ln)
+        if not path.exists():
+            t0 = time.perf_counter()
+            learn_model(training[:n], fs, ln, library_size=config.library_size,
+                        bandwidth_rms=rms, folds=config.folds,
+                        seed=config.streams.seed_for("learning", draw, n)).save(path)
+            log(f"  draw {draw}, {n} demonstrations, {fs}/{ln}: learned in "
+                f"{time.perf_counter() - t0:.0f} s")
+        models[(draw, n, fs, ln)] = FootholdModel.load(path)
+    return models
+
+
+def _model_point(key: tuple, model: FootholdModel, scores: RankScores) -> dict:
+    kept = model.templates_kept()
+    return _point(scores, draw=key[0], n=key[1], feature_set=key[2], learner=key[3],
+                  seconds=model.info.get("seconds"),
+                  templates_kept={g: v["kept"] for g, v in kept.items()},
+                  cv_error={g: f.info.get("cv_error") for g, f in model.functions.items()})
+
+
+def run_learning_curve(out: Path, config: CurveConfig | None = None,
+                       log: Callable[[str], None] = print) -> dict:
+    """Measure the curve into ``out``: ``results.json``, ``report.md``, ``learning-curve.png``,
+    the demonstrations (``test.sqlite``, ``draw<k>.sqlite``) and every model (``models/``).
+
+    A rerun with the same settings resumes: stored demonstrations, saved models and measured
+    points are not made again.
+    """
+    config = CurveConfig() if config is None else config
+    if out.exists() and not out.is_dir():
+        raise FootfallError(f"output path is not a directory: {out}")
+    (out / "models").mkdir(parents=True, exist_ok=True)
+    results_path = out / "results.json"
+    points = _resumed_points(results_path, config)
+    if points:
+        log(f"resuming: {len(points)} points measured")
+    done = {(p["draw"], p["n"], p["feature_set"], p["learner"]) for p in points}
+    started = time.perf_counter()
+    expert = _expert()
+    held_out = _held_out(out, config, expert, log)
+    lines = {name: _point(scores) for name, scores in held_out.measure(
+        {"hand-tuned": EveryLeg(default_reward()), "expert": EveryLeg(ExpertScorer(expert))}
+    ).items()}
+    log(f"{len(held_out.decisions)} held-out decisions; hand-tuned above the margin "
+        f"{lines['hand-tuned']['above_margin']:.3f}")
+
+    def save() -> dict:
+        summary = {"format": FORMAT, "version": VERSION, "config": config.to_dict(),
+                   "lines": lines, "points": points, "test_decisions": len(held_out.decisions)}
+        write_text_atomic(results_path, json.dumps(summary, indent=1))
+        return summary
+
+    for draw in range(config.draws):
+        todo = [(n, fs, ln) for n in config.sizes for fs in config.feature_sets
+                for ln in config.learners if (draw, n, fs, ln) not in done]
+        models = _draw_models(out, config, draw, todo, expert, log) if todo else {}
+        if not models:
+            continue
+        log(f"  draw {draw}: measuring {len(models)} models on {len(held_out.decisions)} "
+            f"decisions")
+        scores = held_out.measure({str(k): m for k, m in models.items()})
+        points.extend(_model_point(k, m, scores[str(k)]) for k, m in models.items())
+        done.update(models)
+        save()
+    summary = save()
+    summary["seconds"] = time.perf_counter() - started
+    write_text_atomic(out / "report.md", curve_report(summary))
+    save_curve_figure(curve_table(summary), summary["lines"], out / "learning-curve.png")
+    return summary
+
+
+def curve_table(summary: dict) -> list[dict]:
+    """One row per (feature set, learner, size): the mean and range over draws of the share
+    above the margin, the severe share, the mean shortfall and top-1; templates kept per
+    scale (front + hind, mean over draws)."""
+    rows = []
+    keys = sorted({(p["feature_set"], p["learner"], p["n"]) for p in summary["points"]},
+                  key=lambda k: (k[0], k[1], k[2]))
+    for fs, ln, n in keys:
+        ps = [p for p in summary["points"]
+              if (p["feature_set"], p["learner"], p["n"]) == (fs, ln, n)]
+        share = np.array([p["above_margin"] for p in ps])
+        kept = np.mean([np.add(p["templates_kept"]["front"], p["templates_kept"]["hind"])
+                        for p in ps], axis=0)
+        rows.append({"feature_set": fs, "learner": ln, "n": n, "draws": len(ps),
+                     "above_margin": float(share.mean()), "above_margin_min": float(share.min()),
+                     "above_margin_max": float(share.max()),
+                     "severe": float(np.mean([p["severe"] for p in ps])),
+                     "reward_loss": float(np.mean([p["reward_loss"] for p in ps])),
+                     "top1": float(np.mean([p["top1"] for p in ps])),
+                     "templates_kept": [round(float(k), 1) for k in kept]})
+    return rows
+
+
+def curve_report(summary: dict) -> str:
+    """The curve as a markdown table, with the lines and the settings."""
+    cfg = summary["config"]
+    lines = summary["lines"]
+    out = ["# footfall learning curve", "",
+           f"{summary['test_decisions']} held-out decisions on test boards never trained on "
+           f"(kinds {', '.join(cfg['train_kinds'])}, difficulties "
+           f"{', '.join(map(str, cfg['test_difficulties']))}); {cfg['draws']} draws of training "
+           f"boards and demonstrations per point; folds by {cfg['folds']}; template library "
+           f"{cfg['library_size']}. Settings in `results.json`.", "",
+           f"Above margin: the share of decisions whose expert shortfall is above "
+           f"{DEFAULT_MARGIN:g} value unit (1 cm of progress); severe: above "
+           f"{SEVERE_SHORTFALL:g}.", "",
+           "| scorer | above margin | severe | mean shortfall | top-1 |",
+           "| --- | --- | --- | --- | --- |"]
+    for name in LINES:
+        p = lines[name]
+        out.append(f"| {name} | {p['above_margin']:.3f} | {p['severe']:.3f} | "
+                   f"{p['reward_loss']:.2f} | {p['top1']:.3f} |")
+    out += ["", "| feature set | learner | demonstrations | draws | above margin (min - max) | "
+            "severe | mean shortfall | top-1 | templates kept (S, M, L; front + hind) |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for r in curve_table(summary):
+        out.append(f"| {r['feature_set']} | {r['learner']} | {r['n']} | {r['draws']} | "
+                   f"{r['above_margin']:.3f} ({r['above_margin_min']:.3f} - "
+                   f"{r['above_margin_max']:.3f}) | {r['severe']:.3f} | "
+                   f"{r['reward_loss']:.2f} | {r['top1']:.3f} | "
+                   f"{', '.join(f'{k:g}' for k in r['templates_kept'])} |")
+    if "seconds" in summary:
+        out += ["", f"This invocation took {summary['seconds'] / 60:.0f} min (measured points "
+                    f"are not measured again)."]
+    return "\n".join(out) + "\n"

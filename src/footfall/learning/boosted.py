@@ -1,0 +1,347 @@
+"""A gradient-boosted ranker: LightGBM's ``lambdarank`` with each demonstration as one query.
+
+Each demonstration is one query group whose chosen candidate is the one
+relevant item; LightGBM fits regression trees to the LambdaRank gradients
+(NDCG of the chosen candidate). The number of trees is chosen by
+cross-validation with grouped folds -- the held-out pairwise error (the
+linear learners' measure) at each point of :data:`TREE_PATH` -- and the
+linear learners' selection rules (``1se``: the fewest trees within one
+standard error of the smallest error). Columns no tree splits on are dropped
+(a template no tree reads is not kept), so the boosted function selects
+templates too.
+
+The model file holds the trees as checked arrays (:class:`Forest`), not
+LightGBM's text format: LightGBM and XGBoost both crash the process (abort,
+segmentation fault) on some corrupted model texts, and a model file is input.
+The arrays are evaluated here, vectorised over trees and candidates, and the
+tests check that they give LightGBM's own predictions.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from sklearn.base import BaseEstimator
+from sklearn.utils.validation import check_is_fitted
+
+from footfall.core.errors import FootfallError
+from footfall.core.validate import require_float_array
+from footfall.features.family import FeatureFamily
+from footfall.learning.function import MAX_WEIGHT, ColumnFunction, own_arrays
+from footfall.learning.learner import Learner, register_learner
+from footfall.learning.ranker import (
+    PathPoint,
+    _check_demonstrations,
+    grouped_folds,
+    pairwise_error,
+    select_on_path,
+    units_of,
+)
+
+TREE_PATH = (10, 25, 50, 100, 200, 400)  # numbers of trees cross-validated, simplest first
+MAX_TREES = 100_000  # most trees a model file may hold
+MAX_NODES = 10_000_000  # most tree nodes a model file may hold
+FOREST_ARRAYS = ("feature", "threshold", "left", "right", "value", "roots")  # a forest's arrays
+BLOCK = 4096  # candidates evaluated at a time (bounds the (trees, candidates) index arrays)
+
+
+# ------------------------------------------------------------------ the forest as arrays
+@dataclass(frozen=True, eq=False)
+class Forest:
+    """Regression trees as flat node arrays; a candidate's value is the sum of its leaves.
+
+    Node k of the forest splits on column ``feature[k]``: a candidate x goes
+    to node ``left[k]`` if x[feature[k]] <= ``threshold[k]``, else to
+    ``right[k]``. A leaf has ``feature`` -1, children equal to itself and its
+    value in ``value`` (an internal node's value is 0). ``roots`` (T,) are the
+    trees' first nodes. Children come after their parent, so every path ends
+    at a leaf within ``depth`` steps.
+    """
+
+    feature: np.ndarray  # (N,) int column index, -1 at a leaf
+    threshold: np.ndarray  # (N,) split value [units of the column]
+    left: np.ndarray  # (N,) int node index
+    right: np.ndarray  # (N,) int node index
+    value: np.ndarray  # (N,) leaf value [reward]
+    roots: np.ndarray  # (T,) int node index
+    depth: int  # longest root-to-leaf path [splits]
+
+    def predict(self, X: np.ndarray) -> np.ndarray:
+        """The sum over trees of each candidate's leaf value, (n, d) -> (n,)."""
+        X = np.asarray(X, dtype=np.float64)
+        out = np.empty(X.shape[0])
+        column = np.maximum(self.feature, 0)  # a leaf reads column 0 and stays where it is
+        for start in range(0, X.shape[0], BLOCK):  # blocks of candidates, all trees at once
+            XT = X[start:start + BLOCK].T
+            cols = np.arange(XT.shape[1])
+            node = np.repeat(self.roots[:, None], XT.shape[1], axis=1)
+            for _ in range(self.depth):
+                x = XT[column[node], cols]
+                node = np.where(x <= self.threshold[node], self.left[node], self.right[node])
+            out[start:start + BLOCK] = self.value[node].sum(axis=0)
+        return out
+
+    def used_columns(self, d: int) -> np.ndarray:
+        """(d,) bool: the columns some split reads."""
+        used = np.zeros(d, dtype=bool)
+        used[self.feature[self.feature >= 0]] = True
+        return used
+
+    def renumbered(self, kept: np.ndarray) -> Forest:
+        """The forest over the kept columns only (``kept`` (d,) bool must hold every used one)."""
+        new = np.cumsum(kept) - 1
+        feature = np.where(self.feature >= 0, new[np.maximum(self.feature, 0)], -1)
+        return Forest(feature, self.threshold, self.left, self.right, self.value, self.roots,
+                      self.depth)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The node arrays as float64 (integers exactly), for the model file."""
+        return {k: np.asarray(getattr(self, k), dtype=np.float64) for k in FOREST_ARRAYS}
+
+    @classmethod
+    def from_arrays(cls, arrays: dict[str, np.ndarray], n_columns: int, where: str) -> Forest:
+        """A forest from :meth:`arrays`' output, every node checked (raise naming the array)."""
+        got = {}
+        for k in FOREST_ARRAYS:
+            if k not in arrays:
+                raise FootfallError(f"lacks array {where}{k}")
+            got[k] = require_float_array(arrays[k], f"array {where}{k}", (None,),
+                                         bound=MAX_WEIGHT)
+        n, t = got["feature"].size, got["roots"].size
+        if not 1 <= t <= MAX_TREES or not t <= n <= MAX_NODES:
+            raise FootfallError(f"array {where}roots must hold 1 to {MAX_TREES} trees and "
+                                f"{where}feature up to {MAX_NODES} nodes")
+        for k in ("threshold", "left", "right", "value"):
+            if got[k].size != n:
+                raise FootfallError(f"array {where}{k} must have shape ({n},), one per node")
+        ints = {}
+        for k, low, high in (("feature", -1, n_columns - 1), ("left", 0, n - 1),
+                             ("right", 0, n - 1), ("roots", 0, n - 1)):
+            a = got[k]
+            if np.any(a != np.round(a)) or np.any(a < low) or np.any(a > high):
+                raise FootfallError(f"array {where}{k} must hold whole numbers in "
+                                    f"[{low}, {high}]")
+            ints[k] = a.astype(np.intp)
+        idx = np.arange(n)
+        leaf = ints["feature"] < 0
+        if np.any(leaf & ((ints["left"] != idx) | (ints["right"] != idx))) or np.any(
+                ~leaf & ((ints["left"] <= idx) | (ints["right"] <= idx))):
+            raise FootfallError(f"arrays {where}left and {where}right must lead from each node "
+                                f"to later ones (a leaf: to itself)")
+        depth = _depth(ints["left"], ints["right"], leaf)
+        return cls(ints["feature"], got["threshold"], ints["left"], ints["right"],
+                   np.where(leaf, got["value"], 0.0), ints["roots"], depth)
+
+
+def _depth(left: np.ndarray, right: np.ndarray, leaf: np.ndarray) -> int:
+    """The longest path from any node to a leaf (children after parents: one backward pass
+    per level, at most the number of nodes)."""
+    depth = np.zeros(left.size, dtype=np.intp)
+    while True:  # levels, not nodes: each pass is vectorised over every node
+        new = np.where(leaf, 0, 1 + np.maximum(depth[left], depth[right]))
+        if np.array_equal(new, depth):
+            return int(depth.max(initial=0))
+        depth = new
+
+
+def forest_of(booster: Any) -> Forest:
+    """The trees of a fitted LightGBM booster as a :class:`Forest`.
+
+    Only numerical ``<=`` splits on finite columns are read (footfall's
+    features are finite; LightGBM makes no other split on them).
+    """
+    feature, threshold, left, right, value, roots = [], [], [], [], [], []
+
+    def add(node: dict) -> int:
+        k = len(feature)
+        feature.append(-1)
+        threshold.append(0.0)
+        left.append(k)
+        right.append(k)
+        value.append(float(node.get("leaf_value", 0.0)))
+        if "split_feature" in node:
+            if node.get("decision_type") != "<=" or node.get("missing_type") == "Zero":
+                raise FootfallError("a boosted tree has a split footfall does not read "
+                                    f"({node.get('decision_type')}, {node.get('missing_type')})")
+            feature[k] = int(node["split_feature"])
+            threshold[k] = float(node["threshold"])
+            left[k] = add(node["left_child"])
+            right[k] = add(node["right_child"])
+        return k
+
+    for tree in booster.dump_model()["tree_info"]:
+        roots.append(add(tree["tree_structure"]))
+    arrays = {"feature": np.array(feature, float), "threshold": np.array(threshold),
+              "left": np.array(left, float), "right": np.array(right, float),
+              "value": np.array(value), "roots": np.array(roots, float)}
+    return Forest.from_arrays(arrays, booster.num_feature(), "forest.")
+
+
+# ------------------------------------------------------------------ the estimator
+class BoostedRanker(BaseEstimator):
+    """A foothold ranking function: LightGBM trees fitted to LambdaRank gradients.
+
+    Parameters
+    ----------
+    objective : {"lambdarank", "rank_xendcg"}
+        LightGBM's ranking objective.
+    trees : tuple of int
+        Numbers of trees cross-validated (:data:`TREE_PATH`), increasing.
+    num_leaves, learning_rate, min_data_in_leaf, feature_fraction, lambda_l2
+        LightGBM's tree settings (leaves per tree, shrinkage, fewest candidates
+        per leaf, share of columns drawn per tree, L2 penalty on leaf values).
+    cv : int
+        Folds, grouped by demonstration (or by the ``units`` given to :meth:`fit`).
+    selection : {"1se", "min"}
+        The number of trees: the fewest within one standard error of the
+        smallest held-out error, or the smallest.
+    random_state : int
+        LightGBM's seed (column sampling); training is deterministic.
+
+    Attributes
+    ----------
+    forest_ : :class:`Forest`, the trees;  n_trees_ : int
+    cv_error_ : float, the held-out pairwise error at ``n_trees_``
+    path_ : list of PathPoint (``C`` holds the number of trees)
+    """
+
+    def __init__(self, objective: str = "lambdarank", trees: tuple[int, ...] = TREE_PATH,
+                 num_leaves: int = 7, learning_rate: float = 0.05, min_data_in_leaf: int = 50,
+                 feature_fraction: float = 0.5, lambda_l2: float = 1.0, cv: int = 5,
+                 selection: str = "1se", random_state: int = 0):
+        self.objective = objective
+        self.trees = trees
+        self.num_leaves = num_leaves
+        self.learning_rate = learning_rate
+        self.min_data_in_leaf = min_data_in_leaf
+        self.feature_fraction = feature_fraction
+        self.lambda_l2 = lambda_l2
+        self.cv = cv
+        self.selection = selection
+        self.random_state = random_state
+
+    def _params(self) -> dict:
+        return {"objective": self.objective, "num_leaves": int(self.num_leaves),
+                "learning_rate": float(self.learning_rate),
+                "min_data_in_leaf": int(self.min_data_in_leaf),
+                "feature_fraction": float(self.feature_fraction),
+                "lambda_l2": float(self.lambda_l2), "seed": int(self.random_state),
+                "deterministic": True, "force_col_wise": True, "verbosity": -1}
+
+    def _train(self, X: np.ndarray, y: np.ndarray, sizes: np.ndarray, rounds: int) -> Any:
+        import lightgbm  # imported when boosting: the linear learners do without it
+
+        data = lightgbm.Dataset(X, y, group=sizes, params={"verbosity": -1},
+                                free_raw_data=True)
+        return lightgbm.train(self._params(), data, num_boost_round=int(rounds))
+
+    def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray,
+            units: np.ndarray | None = None) -> BoostedRanker:
+        """Learn from stacked candidates of demonstrations (as :class:`FootholdRanker`)."""
+        X = np.asarray(X, dtype=np.float64)
+        y, groups = np.asarray(y), np.asarray(groups)
+        _check_demonstrations(X, y, groups)
+        if self.objective not in ("lambdarank", "rank_xendcg"):
+            raise FootfallError(f"unknown ranking objective {self.objective!r}")
+        trees = np.asarray(self.trees, dtype=int)
+        if trees.size == 0 or np.any(trees < 1) or np.any(np.diff(trees) <= 0):
+            raise FootfallError("trees must be increasing positive numbers")
+        if int(self.cv) < 2:
+            raise FootfallError("cv needs at least 2 folds")
+        order = np.argsort(groups, kind="stable")  # LightGBM reads queries as contiguous runs
+        X, y, groups = X[order], y[order], groups[order]
+        units = None if units is None else np.asarray(units)[order]
+        uniq, sizes = np.unique(groups, return_counts=True)
+        folds = grouped_folds(uniq, int(self.cv), units_of(groups, units, uniq))
+        errors = np.empty((len(folds), trees.size))
+        for i, (train_q, test_q) in enumerate(folds):
+            train = np.isin(groups, uniq[train_q])
+            booster = self._train(X[train], y[train], sizes[train_q], trees[-1])
+            test = ~train
+            for j, t in enumerate(trees):
+                scores = booster.predict(X[test], num_iteration=int(t))
+                errors[i, j] = pairwise_error(scores, y[test], groups[test])
+        self.path_ = [PathPoint(float(t), float(errors[:, j].mean()), float(errors[:, j].std()),
+                                float("nan"), float(t)) for j, t in enumerate(trees)]
+        best = select_on_path(errors.mean(axis=0), errors.std(axis=0), len(folds),
+                              self.selection)
+        self.n_trees_ = int(trees[best])
+        self.cv_error_ = float(errors[:, best].mean())
+        self.forest_ = forest_of(self._train(X, y, sizes, self.n_trees_))
+        self.n_features_in_ = X.shape[1]
+        return self
+
+    def decision_function(self, X: np.ndarray) -> np.ndarray:
+        """The forest's value of each candidate, (n, d) -> (n,)."""
+        check_is_fitted(self)
+        return self.forest_.predict(X)
+
+
+# ------------------------------------------------------------------ the function and learner
+@dataclass(frozen=True, eq=False)
+class BoostedFunction(ColumnFunction):
+    """A sum of regression trees over the families' kept columns: the boosted ranker's function."""
+
+    families: tuple[FeatureFamily, ...]
+    forest: Forest
+    info: dict = field(default_factory=dict)  # trees, cv error, path, the families' facts
+
+    def __post_init__(self) -> None:
+        if self.forest.feature.size and self.forest.feature.max(initial=-1) >= self.n_columns:
+            raise FootfallError("a boosted tree reads a column its families do not have")
+
+    def predict(self, X: np.ndarray) -> np.ndarray:
+        """The sum of the trees' leaf values, (n, d) -> (n,)."""
+        return self.forest.predict(X)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """``boosted.feature``, ``.threshold``, ``.left``, ``.right``, ``.value``, ``.roots``."""
+        return {f"boosted.{k}": v for k, v in self.forest.arrays().items()}
+
+    @classmethod
+    def from_arrays(cls, families: tuple[FeatureFamily, ...], arrays: dict[str, np.ndarray],
+                    info: dict, prefix: str = "") -> BoostedFunction:
+        mine = own_arrays(arrays, f"{prefix}boosted.", FOREST_ARRAYS)
+        d = sum(len(f.columns()) for f in families)
+        return cls(tuple(families), Forest.from_arrays(mine, d, f"{prefix}boosted."), info)
+
+
+@dataclass(frozen=True)
+class BoostedLearner(Learner):
+    """The boosted ranker as a registered learner (``--learner lambdarank``)."""
+
+    name: str = "lambdarank"
+    description: str = ("gradient-boosted trees (LightGBM lambdarank, one query per "
+                        "demonstration): non-linear, keeps the columns its trees read")
+    function_type: type = BoostedFunction
+    objective: str = "lambdarank"
+
+    def fit(self, X, y, groups, *, Cs=10, cv: int = 5, selection: str = "1se",
+            units=None) -> BoostedRanker:
+        """:class:`BoostedRanker`, fitted (the number of trees is its path; ``Cs`` unused)."""
+        return BoostedRanker(self.objective, cv=cv, selection=selection).fit(X, y, groups, units)
+
+    def function(self, fitted: BoostedRanker, families: tuple[FeatureFamily, ...],
+                 n_demonstrations: int) -> BoostedFunction:
+        """Per family the columns a tree reads (a template library keeps those templates)."""
+        used = fitted.forest_.used_columns(fitted.n_features_in_)
+        kept, masks, info = [], [], {}
+        start = 0
+        for family in families:
+            stop = start + len(family.columns())
+            reduced, keep = family.select(used[start:stop])
+            kept.append(reduced)
+            masks.append(keep)
+            info.update(reduced.info())
+            start = stop
+        info.update({"trees": fitted.n_trees_, "cv_error": fitted.cv_error_,
+                     "path": [vars(p) for p in fitted.path_],
+                     "n_demonstrations": n_demonstrations, "objective": self.objective,
+                     "n_nonzero": int(np.count_nonzero(used))})
+        return BoostedFunction(tuple(kept), fitted.forest_.renumbered(np.concatenate(masks)),
+                               info)
+
+
+register_learner(BoostedLearner())

@@ -1,0 +1,118 @@
+"""The boosted ranker's trees as checked arrays: LightGBM's predictions exactly, and a bad forest
+refused at load with one line naming the array (never handed to a parser that can crash)."""
+
+import numpy as np
+import pytest
+
+from footfall.core.errors import FootfallError
+from footfall.learning.boosted import BoostedRanker, Forest
+from footfall.learning.model import FootholdModel
+from footfall.learning.ranker import pairwise_error
+from test_bad_models import read_raw, write_raw
+
+
+def _toy(seed=0, n_demos=60, n=20, d=8):
+    """Demonstrations whose choice maximises x0 - x1^2 (a middling x1 is best)."""
+    rng = np.random.default_rng(seed)
+    X = rng.normal(size=(n_demos * n, d))
+    score = (X[:, 0] - X[:, 1] ** 2).reshape(n_demos, n)
+    y = np.zeros(n_demos * n, dtype=int)
+    y[np.arange(n_demos) * n + np.argmax(score, axis=1)] = 1
+    return X, y, np.repeat(np.arange(n_demos), n)
+
+
+@pytest.mark.parametrize("objective", ["lambdarank", "rank_xendcg"])
+def test_the_forest_gives_lightgbm_s_own_predictions(objective):
+    X, y, groups = _toy()
+    ranker = BoostedRanker(objective, trees=(5, 20, 40), cv=3).fit(X, y, groups)
+    booster = ranker._train(X, y, np.bincount(groups), ranker.n_trees_)
+    rng = np.random.default_rng(1)
+    fresh = rng.normal(size=(5000, X.shape[1]))  # more than one block of candidates
+    np.testing.assert_array_equal(ranker.forest_.predict(fresh), booster.predict(fresh))
+    assert ranker.forest_.roots.size == ranker.n_trees_
+    assert ranker.n_trees_ in (5, 20, 40) and len(ranker.path_) == 3
+
+
+def test_demonstrations_in_any_row_order_form_their_own_queries():
+    """LightGBM reads a query as contiguous rows: shuffled rows are grouped before training (a
+    query mixing demonstrations would learn nothing). Row order changes LightGBM's floating-point
+    sums, so the forests are close, not equal."""
+    X, y, groups = _toy(2)
+    order = np.random.default_rng(0).permutation(X.shape[0])
+    b = BoostedRanker(trees=(10, 30), cv=3).fit(X[order], y[order], groups[order])
+    assert pairwise_error(b.decision_function(X), y, groups) < 0.1
+
+
+def _stump() -> dict:
+    """One tree: a split on column 1 at 0.5, leaves -1 and +2."""
+    return {"feature": np.array([1.0, -1, -1]), "threshold": np.array([0.5, 0, 0]),
+            "left": np.array([1.0, 1, 2]), "right": np.array([2.0, 1, 2]),
+            "value": np.array([0.0, -1, 2]), "roots": np.array([0.0])}
+
+
+def test_a_stump_splits_as_written():
+    forest = Forest.from_arrays(_stump(), 3, "")
+    X = np.array([[9.0, 0.5, 9.0], [9.0, 0.51, 9.0]])
+    np.testing.assert_array_equal(forest.predict(X), [-1.0, 2.0])  # x <= t goes left
+    assert forest.depth == 1
+
+
+@pytest.mark.parametrize("change, match", [
+    (lambda a: a["left"].__setitem__(0, 0.0), "lead from each node to later ones"),
+    (lambda a: a["right"].__setitem__(1, 2.0), "lead from each node to later ones"),
+    (lambda a: a["feature"].__setitem__(0, 3.0), r"feature must hold whole numbers in \[-1, 2\]"),
+    (lambda a: a["left"].__setitem__(0, 1.5), "left must hold whole numbers"),
+    (lambda a: a["roots"].__setitem__(0, 7.0), "roots must hold whole numbers"),
+    (lambda a: a.__setitem__("value", np.zeros(2)), r"value must have shape \(3,\)"),
+    (lambda a: a["threshold"].__setitem__(0, np.nan), "threshold must be finite"),
+    (lambda a: a.pop("roots"), "lacks array roots"),
+])
+def test_a_bad_forest_is_refused_naming_the_array(change, match):
+    arrays = _stump()
+    change(arrays)
+    with pytest.raises(FootfallError, match=match):
+        Forest.from_arrays(arrays, 3, "")
+
+
+@pytest.fixture(scope="module")
+def saved(tmp_path_factory):
+    """A boosted model over the terrain features, saved."""
+    from footfall.core.state import nominal_state
+    from footfall.features.candidates import reachable_footholds
+    from footfall.learning.train import TrainingDemo, learn_model
+    from maps import rough_map
+
+    board = rough_map(seed=5)
+    demos = []
+    for k, leg in enumerate(("LF", "RF", "LH", "RH") * 4):
+        state = nominal_state(board, (-0.06 + 0.04 * (k // 4), 0.0), 0.0, leg)
+        cand = reachable_footholds(board, state)[::4]
+        demos.append(TrainingDemo(board, state, cand, int(np.argmin(cand[:, 2]))))
+    model = learn_model(demos, "terrain", "lambdarank", cv=3, training_candidates=30)
+    path = tmp_path_factory.mktemp("boosted") / "model.npz"
+    model.save(path)
+    return path
+
+
+def test_the_saved_trees_are_named_arrays_of_the_model_file(saved):
+    raw, meta = read_raw(saved)
+    assert meta["learner"] == "lambdarank"
+    assert meta["groups"]["front"]["function"] == [f"boosted.{k}" for k in sorted(
+        ("feature", "left", "right", "roots", "threshold", "value"))]
+    assert all(raw[f"front.boosted.{k}"].dtype == np.float64 for k in ("feature", "roots"))
+    assert FootholdModel.load(saved).functions["front"].info["trees"] >= 1
+
+
+@pytest.mark.parametrize("key, make, match", [
+    ("front.boosted.left", lambda a: np.zeros_like(a), "front.boosted.left"),
+    ("hind.boosted.feature", lambda a: a + 1000, "hind.boosted.feature"),
+    ("front.boosted.roots", lambda a: a.astype(np.int64), "front.boosted.roots"),
+])
+def test_a_tampered_model_file_is_refused_in_one_line(saved, tmp_path, key, make, match):
+    raw, meta = read_raw(saved)
+    raw[key] = make(raw[key])
+    path = tmp_path / "bad.npz"
+    write_raw(path, raw, meta)
+    with pytest.raises(FootfallError, match=match) as err:
+        FootholdModel.load(path)
+    assert "\n" not in str(err.value)

@@ -1,0 +1,87 @@
+"""The learning curve: its draws' boards are disjoint from each other and from the test boards,
+every prefix of a draw's demonstrations holds both leg groups, and a small curve is measured,
+written and resumed."""
+
+import json
+
+import numpy as np
+import pytest
+
+from cli_helpers import assert_user_error, run
+from footfall.core.errors import FootfallError
+from footfall.experiments.learning_curve import (
+    CurveConfig,
+    balanced_order,
+    curve_table,
+    run_learning_curve,
+)
+from footfall.terrain import make_board
+
+
+def _hashes(specs):
+    return {make_board([(kind, d)], seed).content_hash() for kind, d, seed in specs}
+
+
+def test_the_draws_use_disjoint_boards_and_never_the_test_boards():
+    config = CurveConfig(train_kinds=("rocky", "steps"), train_difficulties=(0.5, 0.8),
+                         test_difficulties=(0.6,), draws=3)
+    draws = [_hashes(config.training_boards(k)) for k in range(3)]
+    test = _hashes(config.test_boards())
+    assert all(len(h) == 4 for h in draws) and len(test) == 2
+    for k in range(3):
+        assert not draws[k] & test
+        for j in range(k):
+            assert not draws[k] & draws[j]
+    assert config.training_boards(1) == CurveConfig(
+        train_kinds=("rocky", "steps"), train_difficulties=(0.5, 0.8)).training_boards(1)
+
+
+def test_every_prefix_of_the_order_holds_both_leg_groups():
+    front = np.random.default_rng(0).permutation(np.arange(50) < 20)  # 20 front, 30 hind
+    order = balanced_order(front, np.random.default_rng(1))
+    assert np.array_equal(np.sort(order), np.arange(50))
+    for n in range(2, 41, 2):
+        assert front[order[:n]].sum() == n // 2
+    again = balanced_order(front, np.random.default_rng(1))
+    assert np.array_equal(order, again)
+
+
+TINY = CurveConfig(sizes=(10,), draws=1, feature_sets=("terrain",), learners=("l1",),
+                   train_kinds=("rocky",), train_difficulties=(0.6,), test_difficulties=(0.6,),
+                   test_decisions=8, library_size=30)
+
+
+def test_a_small_curve_is_measured_written_and_resumed(tmp_path):
+    logs = []
+    summary = run_learning_curve(tmp_path, TINY, log=logs.append)
+    (point,) = summary["points"]
+    assert (point["draw"], point["n"], point["feature_set"], point["learner"]) == \
+        (0, 10, "terrain", "l1")
+    assert point["decisions"] == 8 and 0.0 <= point["above_margin"] <= 1.0
+    assert summary["lines"]["expert"]["above_margin"] == 0.0  # the ceiling: no shortfall
+    assert 0.0 <= summary["lines"]["hand-tuned"]["above_margin"] <= 1.0
+    assert (tmp_path / "learning-curve.png").stat().st_size > 0
+    assert "| terrain | l1 | 10 | 1 |" in (tmp_path / "report.md").read_text()
+    assert curve_table(summary)[0]["above_margin"] == point["above_margin"]
+    assert any("learned" in line for line in logs)
+
+    logs.clear()
+    again = run_learning_curve(tmp_path, TINY, log=logs.append)
+    assert "resuming: 1 points measured" in logs and not any("learned" in s for s in logs)
+    assert again["points"] == summary["points"]
+    stored = json.loads((tmp_path / "results.json").read_text())
+    assert stored["format"] == "footfall.learning-curve" and stored["points"] == again["points"]
+
+    with pytest.raises(FootfallError, match="holds a curve of other settings"):
+        run_learning_curve(tmp_path, CurveConfig(**{**vars(TINY), "test_decisions": 9}))
+
+
+@pytest.mark.parametrize("args, match", [
+    (["--sizes", "10,abc"], "--sizes must be whole numbers"),
+    (["--sizes", "50,25"], "sizes"),
+    (["--draws", "0"], "--draws"),
+    (["--learner", "lasso"], "lasso"),
+])
+def test_bad_curve_settings_are_one_line(tmp_path, capsys, args, match):
+    code, _, err = run(capsys, "learning-curve", "--out", str(tmp_path / "c"), *args)
+    assert_user_error(code, err, match)

@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: run offline demo test smoke bench clean chromium
+.PHONY: run offline demo test smoke bench clean chromium libgomp
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -32,7 +32,7 @@ smoke: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/footfall reproduce --quick --out out/smoke
 	test -s out/smoke/report.html
 
-test: $(STAMP) chromium
+test: $(STAMP) chromium libgomp
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n auto
 
 # The teaching page's browser tests drive Debian's Chromium (Playwright cannot download its own
@@ -49,9 +49,22 @@ chromium:
 	      chromium >/dev/null; \
 	  else echo "no Chromium and no apt-get to install it: the browser tests will skip"; fi; }
 
-bench: $(STAMP)
+# LightGBM (the boosted ranker) needs the GNU OpenMP runtime, Debian's libgomp1: installed with
+# apt where it is missing and this user may, as Chromium is.
+libgomp:
+	@ldconfig -p 2>/dev/null | grep -q 'libgomp\.so\.1' || { \
+	  if [ "$$(id -u)" = 0 ]; then SUDO=; elif sudo -n true 2>/dev/null; then SUDO="sudo -n"; \
+	  else SUDO=none; fi; \
+	  if [ "$$SUDO" != none ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "installing Debian's libgomp1 for LightGBM"; \
+	    $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq \
+	      libgomp1 >/dev/null; \
+	  else echo "no libgomp1 and no apt-get to install it: the boosted ranker cannot learn"; fi; }
+
+bench: $(STAMP) libgomp
 	$(BIN)/footfall bench scoring
 	$(BIN)/footfall bench learning
+	$(BIN)/footfall bench rankers
 	$(BIN)/footfall bench expert
 	$(BIN)/footfall bench sim
 	$(BIN)/footfall bench executors

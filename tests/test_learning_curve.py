@@ -68,6 +68,7 @@ def test_a_small_curve_is_measured_written_and_resumed(tmp_path):
     logs.clear()
     again = run_learning_curve(tmp_path, TINY, log=logs.append)
     assert "resuming: 1 points measured" in logs and not any("learned" in s for s in logs)
+    assert again["lines"] == summary["lines"] and (tmp_path / "test-values.npz").exists()
     assert again["points"] == summary["points"]
     stored = json.loads((tmp_path / "results.json").read_text())
     assert stored["format"] == "footfall.learning-curve" and stored["points"] == again["points"]

@@ -38,6 +38,7 @@ import numpy as np
 from footfall.control.footstep import FootstepConfig
 from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
+from footfall.core.files import load_npz, save_npz
 from footfall.core.params import Params, above, at_least, param
 from footfall.core.robot import LITTLEDOG
 from footfall.core.seeds import SeedStreams
@@ -45,7 +46,7 @@ from footfall.data.demonstration import Demonstration
 from footfall.data.store import DemoStore
 from footfall.expert.collect import collect_demonstrations
 from footfall.expert.corrections import DEFAULT_MARGIN, SEVERE_SHORTFALL
-from footfall.expert.scorer import ExpertScorer
+from footfall.expert.scorer import ExpertScorer, settings_hash
 from footfall.expert.synthetic import SyntheticExpert, walking_expert
 from footfall.features.family import PAPER_FEATURE_SETS
 from footfall.features.reward import default_reward
@@ -59,6 +60,7 @@ from footfall.terrain import make_board
 from .offline import _difficulties, _feature_sets, _kinds
 
 FORMAT = "footfall.learning-curve"
+VALUES_FORMAT = "footfall.learning-curve.values"  # the expert's values of the held-out decisions
 VERSION = 1
 COLLECT_MORE = 1.25  # a draw collects this many times its largest size: the legs do not take
 # turns exactly, and each leg group's prefix must reach half of every size
@@ -184,10 +186,11 @@ def _model_path(out: Path, draw: int, n: int, fs: str, ln: str) -> Path:
     return out / "models" / f"{fs}-{ln}-{n}-draw{draw}.npz"
 
 
-def _resumed_points(results_path: Path, config: CurveConfig) -> list[dict]:
-    """The points a results file of the same settings holds ([] without one)."""
+def _resumed(results_path: Path, config: CurveConfig) -> tuple[list[dict], dict | None]:
+    """The points and lines a results file of the same settings holds ([] and None without
+    one)."""
     if not results_path.exists():
-        return []
+        return [], None
     try:
         old = json.loads(results_path.read_text())
     except (OSError, ValueError) as exc:
@@ -197,7 +200,7 @@ def _resumed_points(results_path: Path, config: CurveConfig) -> list[dict]:
             json.dumps(config.to_dict())):
         raise FootfallError(f"{results_path} holds a curve of other settings; use another "
                             f"--out or remove it")
-    return old["points"]
+    return old["points"], old.get("lines")
 
 
 @dataclass
@@ -223,8 +226,26 @@ def _held_out(out: Path, config: CurveConfig, expert: SyntheticExpert,
         raise FootfallError(f"the test boards gave {len(test)} decisions, fewer than "
                             f"{config.test_decisions}")
     test = test[:config.test_decisions]
-    return _HeldOut(test, maps.__getitem__, [expert.values(maps[d.terrain_hash], d.state,
-                                                           d.candidates) for d in test])
+    return _HeldOut(test, maps.__getitem__,
+                    _expert_values(out / "test-values.npz", test, maps, expert))
+
+
+def _expert_values(path: Path, decisions: list[Demonstration], maps: dict,
+                   expert: SyntheticExpert) -> list[np.ndarray]:
+    """The expert's values of every candidate of the decisions, from ``path`` when it holds
+    those of the same decisions and expert (else computed and written there)."""
+    key = {"expert": settings_hash(expert.config), "decisions": [d.id for d in decisions]}
+    sizes = [d.candidates.shape[0] for d in decisions]
+    if path.exists():
+        try:
+            _, arrays, meta = load_npz(path, VALUES_FORMAT, 1, allow_nonfinite=True)
+            if meta == key and arrays["values"].shape == (sum(sizes),):
+                return np.split(arrays["values"], np.cumsum(sizes)[:-1])
+        except (FootfallError, KeyError):
+            pass  # another file: computed again
+    values = [expert.values(maps[d.terrain_hash], d.state, d.candidates) for d in decisions]
+    save_npz(path, VALUES_FORMAT, 1, {"values": np.concatenate(values)}, key)
+    return values
 
 
 def _draw_models(out: Path, config: CurveConfig, draw: int, todo: list[tuple],
@@ -265,6 +286,15 @@ def _model_point(key: tuple, model: FootholdModel, scores: RankScores) -> dict:
                   cv_error={g: f.info.get("cv_error") for g, f in model.functions.items()})
 
 
+def _save(path: Path, config: CurveConfig, lines: dict, points: list[dict], decisions: int
+          ) -> dict:
+    """Write the curve's results (atomically) and return them."""
+    summary = {"format": FORMAT, "version": VERSION, "config": config.to_dict(), "lines": lines,
+               "points": points, "test_decisions": decisions}
+    write_text_atomic(path, json.dumps(summary, indent=1))
+    return summary
+
+
 def run_learning_curve(out: Path, config: CurveConfig | None = None,
                        log: Callable[[str], None] = print) -> dict:
     """Measure the curve into ``out``: ``results.json``, ``report.md``, ``learning-curve.png``,
@@ -278,24 +308,23 @@ def run_learning_curve(out: Path, config: CurveConfig | None = None,
         raise FootfallError(f"output path is not a directory: {out}")
     (out / "models").mkdir(parents=True, exist_ok=True)
     results_path = out / "results.json"
-    points = _resumed_points(results_path, config)
+    points, lines = _resumed(results_path, config)
     if points:
         log(f"resuming: {len(points)} points measured")
     done = {(p["draw"], p["n"], p["feature_set"], p["learner"]) for p in points}
     started = time.perf_counter()
     expert = _expert()
     held_out = _held_out(out, config, expert, log)
-    lines = {name: _point(scores) for name, scores in held_out.measure(
-        {"hand-tuned": EveryLeg(default_reward()), "expert": EveryLeg(ExpertScorer(expert))}
-    ).items()}
+    if lines is None:  # measured once: a resumed curve keeps them
+        lines = {name: _point(scores) for name, scores in held_out.measure(
+            {"hand-tuned": EveryLeg(default_reward()), "expert": EveryLeg(ExpertScorer(expert))}
+        ).items()}
+        _save(results_path, config, lines, points, len(held_out.decisions))
     log(f"{len(held_out.decisions)} held-out decisions; hand-tuned above the margin "
         f"{lines['hand-tuned']['above_margin']:.3f}")
 
     def save() -> dict:
-        summary = {"format": FORMAT, "version": VERSION, "config": config.to_dict(),
-                   "lines": lines, "points": points, "test_decisions": len(held_out.decisions)}
-        write_text_atomic(results_path, json.dumps(summary, indent=1))
-        return summary
+        return _save(results_path, config, lines, points, len(held_out.decisions))
 
     for draw in range(config.draws):
         todo = [(n, fs, ln) for n in config.sizes for fs in config.feature_sets

@@ -35,31 +35,28 @@ smoke: $(STAMP)
 test: $(STAMP) chromium libgomp
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n auto
 
-# The teaching page's browser tests drive Debian's Chromium (Playwright cannot download its own
-# browsers here): installed with apt where it is missing and this user may (root, or sudo
-# without a password). Without it those tests skip, unless FOOTFALL_REQUIRE_BROWSER is set
-# (.ci/run sets it): then they fail.
-chromium:
-	@command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || { \
+# Debian packages the tests need, installed with apt where missing and this user may (root, or
+# sudo without a password): $(call apt_install,PACKAGE,TEST THAT IT IS PRESENT,WHAT LACKS IT).
+define apt_install
+	@$(2) || { \
 	  if [ "$$(id -u)" = 0 ]; then SUDO=; elif sudo -n true 2>/dev/null; then SUDO="sudo -n"; \
 	  else SUDO=none; fi; \
 	  if [ "$$SUDO" != none ] && command -v apt-get >/dev/null 2>&1; then \
-	    echo "installing Debian's chromium for the browser tests"; \
+	    echo "installing Debian's $(1)"; \
 	    $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq \
-	      chromium >/dev/null; \
-	  else echo "no Chromium and no apt-get to install it: the browser tests will skip"; fi; }
+	      $(1) >/dev/null; \
+	  else echo "no $(1) and no apt-get to install it: $(3)"; fi; }
+endef
 
-# LightGBM (the boosted ranker) needs the GNU OpenMP runtime, Debian's libgomp1: installed with
-# apt where it is missing and this user may, as Chromium is.
+# The teaching page's browser tests drive Debian's Chromium (Playwright cannot download its own
+# browsers here). Without it those tests skip, unless FOOTFALL_REQUIRE_BROWSER is set (.ci/run
+# sets it): then they fail.
+chromium:
+	$(call apt_install,chromium,command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1,the browser tests will skip)
+
+# LightGBM (the boosted ranker) needs the GNU OpenMP runtime, Debian's libgomp1.
 libgomp:
-	@ldconfig -p 2>/dev/null | grep -q 'libgomp\.so\.1' || { \
-	  if [ "$$(id -u)" = 0 ]; then SUDO=; elif sudo -n true 2>/dev/null; then SUDO="sudo -n"; \
-	  else SUDO=none; fi; \
-	  if [ "$$SUDO" != none ] && command -v apt-get >/dev/null 2>&1; then \
-	    echo "installing Debian's libgomp1 for LightGBM"; \
-	    $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq \
-	      libgomp1 >/dev/null; \
-	  else echo "no libgomp1 and no apt-get to install it: the boosted ranker cannot learn"; fi; }
+	$(call apt_install,libgomp1,ldconfig -p 2>/dev/null | grep -q 'libgomp\.so\.1',the boosted ranker cannot learn)
 
 bench: $(STAMP) libgomp
 	$(BIN)/footfall bench scoring

@@ -195,6 +195,8 @@ def test_the_fold_unit_of_a_demonstration(demos):
     walker = TrainingDemo(d.hmap, d.state, d.candidates, d.chosen, "walker:train", "cd" * 32)
     assert fold_unit(run, "run") == "run:12" and fold_unit(run, "board") == "board:" + "ab" * 32
     assert fold_unit(walker, "run") == "board:" + "cd" * 32  # a kinematic walk: its board
+    keyed = TrainingDemo(d.hmap, d.state, d.candidates, d.chosen, "run:eval/a:b:step:7", "ab" * 32)
+    assert fold_unit(keyed, "run") == "run:eval/a:b"
     assert fold_unit(run, "demonstration") == ""
     with pytest.raises(FootfallError, match="unknown fold grouping 'walk'"):
         fold_unit(run, "walk")

@@ -82,8 +82,8 @@ def fold_unit(demo: TrainingDemo, folds: str) -> str:
     if folds == "demonstration":
         return ""
     board = "board:" + (demo.terrain or demo.hmap.content_hash())
-    if folds == "run" and demo.source.startswith("run:"):
-        return ":".join(demo.source.split(":")[:2])
+    if folds == "run" and demo.source.startswith("run:") and ":step:" in demo.source:
+        return demo.source.rsplit(":step:", 1)[0]  # a run key may itself hold colons
     return board
 
 

@@ -8,7 +8,9 @@ from footfall.core.errors import FootfallError
 from footfall.learning.boosted import BoostedRanker, Forest
 from footfall.learning.model import FootholdModel
 from footfall.learning.ranker import pairwise_error
+from footfall.learning.train import learn_model
 from test_bad_models import read_raw, write_raw
+from test_learners import lowest_foothold_demos
 
 
 def _toy(seed=0, n_demos=60, n=20, d=8):
@@ -77,17 +79,7 @@ def test_a_bad_forest_is_refused_naming_the_array(change, match):
 @pytest.fixture(scope="module")
 def saved(tmp_path_factory):
     """A boosted model over the terrain features, saved."""
-    from footfall.core.state import nominal_state
-    from footfall.features.candidates import reachable_footholds
-    from footfall.learning.train import TrainingDemo, learn_model
-    from maps import rough_map
-
-    board = rough_map(seed=5)
-    demos = []
-    for k, leg in enumerate(("LF", "RF", "LH", "RH") * 4):
-        state = nominal_state(board, (-0.06 + 0.04 * (k // 4), 0.0), 0.0, leg)
-        cand = reachable_footholds(board, state)[::4]
-        demos.append(TrainingDemo(board, state, cand, int(np.argmin(cand[:, 2]))))
+    demos = lowest_foothold_demos()
     model = learn_model(demos, "terrain", "lambdarank", cv=3, training_candidates=30)
     path = tmp_path_factory.mktemp("boosted") / "model.npz"
     model.save(path)

@@ -92,8 +92,7 @@ def test_a_demonstration_is_never_split_across_folds(name):
         assert np.union1d(train, test).size == np.unique(groups).size
 
 
-@pytest.fixture(scope="module")
-def demos():
+def lowest_foothold_demos() -> list[TrainingDemo]:
     """Sixteen demonstrations on a rough map: the choice is the lowest foothold."""
     board = rough_map(seed=5)
     out = []
@@ -102,6 +101,11 @@ def demos():
         cand = reachable_footholds(board, state)[::4]
         out.append(TrainingDemo(board, state, cand, int(np.argmin(cand[:, 2]))))
     return out
+
+
+@pytest.fixture(scope="module")
+def demos():
+    return lowest_foothold_demos()
 
 
 @pytest.mark.parametrize("name", ALL)

@@ -17,6 +17,7 @@ from footfall.experiments.learning_curve import CurveConfig, run_learning_curve
 from footfall.experiments.offline import OfflineConfig, run_offline
 from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
 from footfall.experiments.study import run_study
+from footfall.learning.ranker import SELECTIONS
 from footfall.learning.train import FOLDS
 from footfall.plots.showcase import run_demo
 
@@ -49,14 +50,19 @@ def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
               help="Held-out decisions every point is measured on [default: 1000].")
 @click.option("--folds", type=click.Choice(FOLDS), default=None,
               help="What a cross-validation fold never splits [default: demonstration].")
+@click.option("--selection", type=click.Choice(SELECTIONS), default=None,
+              help="Where a learner stops on its path: one standard error or the smallest CV "
+                   "error [default: 1se].")
+@click.option("--library-size", type=click.IntRange(min=3), default=None,
+              help="Templates in the library before selection [default: 1000].")
 @click.option("--seed", type=SEED, default=0, show_default=True)
 @click.option("--quick", is_flag=True, help="A small curve (two sizes, two draws) for a smoke "
                                             "test.")
 @json_option
 def learning_curve(out: str, sizes: str | None, draws: int | None,
                    feature_sets: tuple[str, ...], learners: tuple[str, ...],
-                   test_decisions: int | None, folds: str | None, seed: int, quick: bool,
-                   as_json: bool) -> None:
+                   test_decisions: int | None, folds: str | None, selection: str | None,
+                   library_size: int | None, seed: int, quick: bool, as_json: bool) -> None:
     """Learning curves: each feature set and learner from 25 to 1 600 demonstrations, on
     held-out decisions, with the hand-tuned and expert lines."""
     config = CurveConfig.quick(seed) if quick else CurveConfig(seed=seed)
@@ -68,6 +74,7 @@ def learning_curve(out: str, sizes: str | None, draws: int | None,
             raise FootfallError(f"--sizes must be whole numbers separated by commas, got "
                                 f"{sizes!r}") from None
     for key, value in (("draws", draws), ("test_decisions", test_decisions), ("folds", folds),
+                       ("selection", selection), ("library_size", library_size),
                        ("feature_sets", feature_sets or None), ("learners", learners or None)):
         if value is not None:
             changes[key] = value

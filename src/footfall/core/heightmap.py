@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from footfall.core.bilinear import map_at, map_patches
 from footfall.core.errors import FootfallError
 from footfall.core.files import load_npz, save_npz
 from footfall.core.limits import check_cells
@@ -318,29 +319,11 @@ class HeightMap:
         never leaks into its neighbours' heights. Within half a cell of the
         border the edge cells are held constant.
         """
-        f = self.continuous_index(positions)
-        nx, ny = self.shape
-        fi, fj = f[..., 0], f[..., 1]
-        inside = (fi >= -0.5) & (fi < nx - 0.5) & (fj >= -0.5) & (fj < ny - 0.5)
-        fi = np.clip(np.where(inside, fi, 0.0), 0.0, nx - 1.0)
-        fj = np.clip(np.where(inside, fj, 0.0), 0.0, ny - 1.0)
-        i0 = np.minimum(np.floor(fi).astype(np.intp), nx - 2)
-        j0 = np.minimum(np.floor(fj).astype(np.intp), ny - 2)
-        ti, tj = fi - i0, fj - j0
-        h = self.heights
-        corners = (h[i0, j0], h[i0 + 1, j0], h[i0, j0 + 1], h[i0 + 1, j0 + 1])
-        weights = ((1 - ti) * (1 - tj), ti * (1 - tj), (1 - ti) * tj, ti * tj)
-        num = np.zeros(fi.shape)
-        den = np.zeros(fi.shape)
-        for c, w in zip(corners, weights):  # four corners, not a loop over points
-            ok = ~np.isnan(c)
-            num += np.where(ok, c, 0.0) * w
-            den += ok * w
-        nearest = h[np.floor(fi + 0.5).astype(np.intp), np.floor(fj + 0.5).astype(np.intp)]
-        out = np.full(fi.shape, np.nan)
-        good = inside & ~np.isnan(nearest) & (den > 0)
-        np.divide(num, den, out=out, where=good)
-        return out
+        p = _as_points(positions)
+        flat = np.ascontiguousarray(p.reshape(-1, 2))
+        out = map_at(self.heights, float(self.origin[0]), float(self.origin[1]),
+                     float(self.resolution), flat[:, 0], flat[:, 1])
+        return out.reshape(p.shape[:-1])
 
     def sample_points(self, positions: Any, yaw: Any, mirror: Any, grid: PatchGrid) -> np.ndarray:
         """World positions [m] of a patch grid's samples, shape (n, nu, nv, 2).
@@ -369,7 +352,14 @@ class HeightMap:
         ``mirror``), bilinearly interpolated with the NaN rules of
         :meth:`height_at`; samples off the map or in holes are NaN.
         """
-        return self.height_at(self.sample_points(positions, yaw, mirror, grid))
+        p = np.ascontiguousarray(_as_points(positions).reshape(-1, 2))
+        n = p.shape[0]
+        psi = np.broadcast_to(np.asarray(yaw, dtype=np.float64), (n,))
+        sign = np.where(np.broadcast_to(np.asarray(mirror, dtype=bool), (n,)), -1.0, 1.0)
+        return map_patches(self.heights, float(self.origin[0]), float(self.origin[1]),
+                           float(self.resolution), p, np.cos(psi), np.sin(psi), sign,
+                           np.ascontiguousarray(grid.u, dtype=np.float64),
+                           np.ascontiguousarray(grid.v, dtype=np.float64))
 
     # -------------------------------------------------------------- transforms
     def mirrored_y(self) -> "HeightMap":

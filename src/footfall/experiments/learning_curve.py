@@ -53,6 +53,7 @@ from footfall.features.reward import default_reward
 from footfall.learning.evaluation import EveryLeg, RankScores, rank_scores_many
 from footfall.learning.learner import LEARNERS
 from footfall.learning.model import FootholdModel
+from footfall.learning.ranker import SELECTIONS
 from footfall.learning.train import FOLDS, TrainingDemo, learn_model
 from footfall.plots.curves import save_curve_figure
 from footfall.terrain import make_board
@@ -109,6 +110,10 @@ class CurveConfig(Params):
     folds: str = param("demonstration", check=lambda v: v in FOLDS,
                        must=f"one of {', '.join(FOLDS)}",
                        doc="what a cross-validation fold never splits")
+    selection: str = param("min", choices=SELECTIONS,
+                           doc="where on its path a learner stops: at the smallest CV error "
+                               "(the reproduction's, paper §V) or the simplest within one "
+                               "standard error of it")
     seed: int = param(0, range=at_least(0), doc="the curve's seed: boards, demonstrations and "
                                                 "learning draw from its named streams")
 
@@ -139,11 +144,11 @@ class CurveConfig(Params):
 
 
 def _point(scores: RankScores, **extra) -> dict:
-    """A point's figures: ``extra`` (the point's draw, n, feature set, learner ...) and the
-    rank-eval measures, the number of decisions as ``decisions`` (per-decision losses left out:
-    the report needs the means)."""
+    """A point's figures: ``extra`` (the point's draw, n, feature set, learner ...), the
+    rank-eval measures and the number of decisions as ``decisions``; the per-decision
+    shortfalls [value units] to 1e-4, in decision order, for paired comparisons of points."""
     d = scores.as_dict()
-    d.pop("losses")
+    d["losses"] = [round(v, 4) for v in d["losses"]]
     d["decisions"] = d.pop("n")
     return {**d, **extra}
 
@@ -248,34 +253,34 @@ def _expert_values(path: Path, decisions: list[Demonstration], maps: dict,
     return values
 
 
-def _draw_models(out: Path, config: CurveConfig, draw: int, todo: list[tuple],
-                 expert: SyntheticExpert, log: Callable[[str], None]
-                 ) -> dict[tuple, FootholdModel]:
-    """The models of draw ``draw``'s points ``todo`` (n, feature set, learner): learned from
-    the draw's demonstrations and saved, or read back when saved already."""
+def _draw_training(out: Path, config: CurveConfig, draw: int, expert: SyntheticExpert,
+                   log: Callable[[str], None]) -> list[TrainingDemo]:
+    """Draw ``draw``'s demonstrations in the order its points take prefixes of (collected into
+    its store the first time)."""
     demos, maps = _stored_demos(out / f"draw{draw}.sqlite", config.training_boards(draw),
                                 math.ceil(COLLECT_MORE * max(config.sizes)),
                                 config.streams.seed_for("demonstrations", 0, draw),
                                 f"walker:draw{draw}", expert, log)
     front = np.array([LITTLEDOG.leg(d.state.swing_leg).front for d in demos])
     order = balanced_order(front, config.streams.generator("demonstrations", 2, draw))
-    training = [TrainingDemo.of(demos[k], maps[demos[k].terrain_hash]) for k in order]
-    rms = None if config.bandwidth_rms is None else (config.bandwidth_rms,) * 3
-    models = {}
-    for n, fs, ln in todo:
-        if n > len(training):
-            log(f"  draw {draw}: {len(training)} demonstrations, not {n}: point skipped")
-            continue
-        path = _model_path(out, draw, n, fs, ln)
-        if not path.exists():
-            t0 = time.perf_counter()
-            learn_model(training[:n], fs, ln, library_size=config.library_size,
-                        bandwidth_rms=rms, folds=config.folds,
-                        seed=config.streams.seed_for("learning", draw, n)).save(path)
-            log(f"  draw {draw}, {n} demonstrations, {fs}/{ln}: learned in "
-                f"{time.perf_counter() - t0:.0f} s")
-        models[(draw, n, fs, ln)] = FootholdModel.load(path)
-    return models
+    return [TrainingDemo.of(demos[k], maps[demos[k].terrain_hash]) for k in order]
+
+
+def _point_model(out: Path, config: CurveConfig, key: tuple, training: list[TrainingDemo],
+                 log: Callable[[str], None]) -> FootholdModel:
+    """The model of point ``key`` (draw, n, feature set, learner): learned from the first n of
+    its draw's demonstrations and saved, or read back when saved already."""
+    draw, n, fs, ln = key
+    path = _model_path(out, draw, n, fs, ln)
+    if not path.exists():
+        t0 = time.perf_counter()
+        rms = None if config.bandwidth_rms is None else (config.bandwidth_rms,) * 3
+        learn_model(training[:n], fs, ln, library_size=config.library_size, bandwidth_rms=rms,
+                    folds=config.folds, selection=config.selection,
+                    seed=config.streams.seed_for("learning", draw, n)).save(path)
+        log(f"  draw {draw}, {n} demonstrations, {fs}/{ln}: learned in "
+            f"{time.perf_counter() - t0:.0f} s")
+    return FootholdModel.load(path)
 
 
 def _model_point(key: tuple, model: FootholdModel, scores: RankScores) -> dict:
@@ -323,26 +328,36 @@ def run_learning_curve(out: Path, config: CurveConfig | None = None,
     log(f"{len(held_out.decisions)} held-out decisions; hand-tuned above the margin "
         f"{lines['hand-tuned']['above_margin']:.3f}")
 
-    def save() -> dict:
-        return _save(results_path, config, lines, points, len(held_out.decisions))
+    def save(seconds: float | None = None) -> dict:
+        """Results, report and figure of the points measured so far (an interrupted curve
+        shows them)."""
+        summary = _save(results_path, config, lines, points, len(held_out.decisions))
+        if seconds is not None:
+            summary["seconds"] = seconds
+        write_text_atomic(out / "report.md", curve_report(summary))
+        if points:
+            save_curve_figure(curve_table(summary), summary["lines"], out / "learning-curve.png")
+        return summary
 
-    for draw in range(config.draws):
-        todo = [(n, fs, ln) for n in config.sizes for fs in config.feature_sets
-                for ln in config.learners if (draw, n, fs, ln) not in done]
-        models = _draw_models(out, config, draw, todo, expert, log) if todo else {}
+    left = {(draw, n, fs, ln) for draw in range(config.draws) for n in config.sizes
+            for fs in config.feature_sets for ln in config.learners} - done
+    training = {draw: _draw_training(out, config, draw, expert, log)
+                for draw in sorted({k[0] for k in left})}
+    for n in config.sizes:  # a size's models of every draw, measured in one pass
+        todo = sorted(k for k in left if k[1] == n)
+        for key in [k for k in todo if n > len(training[k[0]])]:
+            log(f"  draw {key[0]}: {len(training[key[0]])} demonstrations, not {n}: "
+                f"{key[2]}/{key[3]} skipped")
+        models = {k: _point_model(out, config, k, training[k[0]], log) for k in todo
+                  if n <= len(training[k[0]])}
         if not models:
             continue
-        log(f"  draw {draw}: measuring {len(models)} models on {len(held_out.decisions)} "
-            f"decisions")
+        log(f"  {n} demonstrations: measuring {len(models)} models on "
+            f"{len(held_out.decisions)} decisions")
         scores = held_out.measure({str(k): m for k, m in models.items()})
         points.extend(_model_point(k, m, scores[str(k)]) for k, m in models.items())
-        done.update(models)
         save()
-    summary = save()
-    summary["seconds"] = time.perf_counter() - started
-    write_text_atomic(out / "report.md", curve_report(summary))
-    save_curve_figure(curve_table(summary), summary["lines"], out / "learning-curve.png")
-    return summary
+    return save(time.perf_counter() - started)
 
 
 def curve_table(summary: dict) -> list[dict]:

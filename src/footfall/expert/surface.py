@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from footfall.core.ball import ball_centre_surface
+from footfall.core.bilinear import surface_at, surface_along_rays
 from footfall.core.heightmap import HeightMap
 
 
@@ -37,32 +38,21 @@ class SphereSurface:
         The weights of corners with a known height are renormalised (as in
         :meth:`HeightMap.height_at`), but a point whose nearest cell is unknown is NaN.
         """
-        f = (points - self.origin) / self.resolution
-        wx, wy = self.filled.shape
-        fi, fj = f[..., 0], f[..., 1]
-        inside = (fi >= 0) & (fi <= wx - 1) & (fj >= 0) & (fj <= wy - 1)
-        fi = np.where(inside, fi, 0.0)
-        fj = np.where(inside, fj, 0.0)
-        i0 = np.minimum(fi.astype(np.intp), wx - 2)
-        j0 = np.minimum(fj.astype(np.intp), wy - 2)
-        ti, tj = fi - i0, fj - j0
-        flat = i0 * wy + j0
-        corners = ((0, (1 - ti) * (1 - tj)), (wy, ti * (1 - tj)), (1, (1 - ti) * tj),
-                   (wy + 1, ti * tj))
-        num = np.zeros(fi.shape)
-        for step, w in corners:
-            num += w * np.take(self.filled, flat + step)
-        out = np.full(fi.shape, np.nan)
-        if self.complete:  # the common case: every height in the window is known
-            return np.where(inside, num, out)
-        den = np.zeros(fi.shape)
-        for step, w in corners:
-            den += w * np.take(self.known, flat + step)
-        nearest = np.take(self.known,
-                          np.rint(fi).astype(np.intp) * wy + np.rint(fj).astype(np.intp))
-        good = inside & (nearest > 0) & (den > 0)
-        np.divide(num, den, out=out, where=good)
-        return out
+        points = np.asarray(points, dtype=np.float64)
+        flat = np.ascontiguousarray(points.reshape(-1, 2))
+        out = surface_at(self.filled, self.known, self.origin[0], self.origin[1],
+                         self.resolution, self.complete, flat[:, 0], flat[:, 1])
+        return out.reshape(points.shape[:-1])
+
+    def along_rays(self, xy: np.ndarray, directions: np.ndarray, distances: np.ndarray
+                   ) -> np.ndarray:
+        """Heights (n, K, J) [m] at ``xy`` (n, 2) [m] + ``distances`` (J,) [m] along each of the
+        ``directions`` (K, 2) (unit vectors): :meth:`at` of those points, without making them."""
+        xy = np.ascontiguousarray(xy, dtype=np.float64)
+        d = np.ascontiguousarray(directions, dtype=np.float64)
+        s = np.ascontiguousarray(distances, dtype=np.float64)
+        return surface_along_rays(self.filled, self.known, self.origin[0], self.origin[1],
+                                  self.resolution, self.complete, xy, d, s)
 
 
 _BOARD_SURFACES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()

@@ -97,8 +97,8 @@ def terrain_terms(hmap: HeightMap, f: np.ndarray, cfg: ExpertConfig, robot: Robo
     # A ball with no data under it at all sits one radius above the candidate's given
     # height, or above 0 if that is unknown too (its `unknown` term is then 1).
     seat = np.where(np.isnan(seat), np.nan_to_num(f[:, 2], nan=0.0) + r, seat)
-    rays = xy[:, None, None, :] + s[None, None, :, None] * dirs[None, :, None, :]  # (n, K, J, 2)
-    rise = sample_surface(ball, rays) - seat[:, None, None]  # (n, K, J) [m]
+    along = np.full((n, k, s.size), np.nan) if ball is None else ball.along_rays(xy, dirs, s)
+    rise = along - seat[:, None, None]  # (n, K, J) [m] at xy + s * direction, K rays of J samples
     # Samples with no ball surface (no data) count as level ground: neither wall nor drop.
     rise = np.nan_to_num(rise, nan=0.0)
     secant = rise / s  # [-]
@@ -139,7 +139,8 @@ def terrain_terms(hmap: HeightMap, f: np.ndarray, cfg: ExpertConfig, robot: Robo
 
     # Missing data around the foothold (its own cell included).
     in_unknown = s <= cfg.unknown_radius + 1e-12
-    probe = np.concatenate([xy[:, None, :], rays[:, :, in_unknown].reshape(n, -1, 2)], axis=1)
+    rays = xy[:, None, None, :] + s[None, None, in_unknown, None] * dirs[None, :, None, :]
+    probe = np.concatenate([xy[:, None, :], rays.reshape(n, -1, 2)], axis=1)
     unknown = no_data(hmap, probe).mean(axis=1)
 
     terms = {"slip_margin": slip_margin, "pinch": pinch, "trap_depth": trap_depth,

@@ -61,7 +61,7 @@ def score_grid(hmap: HeightMap, scorer, **options) -> ScoreGrid:
 
 def linear_values(c: Candidates, parts: Sequence[tuple[FeatureFamily, np.ndarray]]) -> np.ndarray:
     """The sum (n,) of ``family.compute(c) @ weights`` over ``parts``, in their order; 0 if none."""
-    values = [family.compute(c) @ w for family, w in parts]
+    values = [c.columns(family) @ w for family, w in parts]
     return sum(values[1:], values[0]) if values else np.zeros(c.n)
 
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 import hashlib
 import json
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, ClassVar
@@ -68,6 +68,19 @@ class Candidates:
         if self.given_patches is not None:
             return self.given_patches
         return foothold_patches(self.hmap, self.footholds, self.yaw, self.mirror, self.config)
+
+    def columns(self, family: FeatureFamily) -> np.ndarray:
+        """``family.compute(self)``, read-only; computed once per candidate set for a family with
+        a :meth:`FeatureFamily.memo_key` (every reward that reads it shares the matrix)."""
+        key = family.memo_key()
+        if key is None:
+            return family.compute(self)
+        memo = self.__dict__.setdefault("_columns", {})  # frozen: kept beside the cached patches
+        if key not in memo:
+            x = family.compute(self)
+            x.setflags(write=False)
+            memo[key] = x
+        return memo[key]
 
 
 @dataclass(frozen=True)
@@ -128,6 +141,12 @@ class FeatureFamily(ABC):
         """The feature matrix (n, len(columns())) of the candidates."""
 
     # ------------------------------------------------------------ optional
+    def memo_key(self) -> Hashable | None:
+        """A key equal for two families exactly when they compute the same columns from the same
+        candidates, for :meth:`Candidates.columns` to compute them once; None (the default): no
+        sharing. A family without learned parameters (terrain, pose features) returns one."""
+        return None
+
     def dense(self, scale: int, weights: np.ndarray, dtype: np.dtype) -> DenseTerms | None:
         """The family's dense form on scale ``scale`` with its reward weights (k,) folded in.
 

@@ -267,3 +267,7 @@ class PoseFeatures(FeatureFamily):
         if c.state is None:
             raise FootfallError("pose features need the robot's state")
         return pose_features(c.hmap, c.state, c.footholds, c.robot)
+
+    def memo_key(self) -> tuple[str]:
+        """No parameters: the columns depend on the candidates (and their state) alone."""
+        return (self.name,)

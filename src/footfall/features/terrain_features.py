@@ -283,6 +283,10 @@ class TerrainFeatures(FeatureFamily):
     def compute(self, c: Candidates) -> np.ndarray:
         return terrain_features_from_patches(c.patches.relative, self.config)
 
+    def memo_key(self) -> tuple[str, str]:
+        """No learned parameters: the name and the feature settings identify the columns."""
+        return self.name, repr(self.config.to_dict())
+
     def dense(self, scale: int, weights: np.ndarray, dtype: np.dtype) -> DenseTerms:
         grid = self.config.grids[scale]
         k = len(QUANTITIES)

@@ -126,7 +126,7 @@ def rank_scores_many(models: dict, demos: Sequence, terrain: Callable[[str], obj
         for name, model in models.items():
             model.check_compatible(map_resolution=hmap.resolution)
             reward = model.reward_for(d.state.swing_leg)
-            key = (id(model.robot), repr(reward.config.to_dict()))
+            key = (model.robot, repr(reward.config.to_dict()))  # equal settings: one set
             if key not in prepared:
                 prepared[key] = Candidates.of_state(hmap, d.state, d.candidates, reward.config,
                                                     model.robot)

@@ -208,7 +208,7 @@ class ColumnScorer(FootholdScorer):
         out = np.full(c.n, -np.inf)
         valid = np.flatnonzero(c.patches.valid)
         if valid.size:
-            X = np.hstack([f.compute(c) for f in self.function.families])[valid]
+            X = np.hstack([c.columns(f) for f in self.function.families])[valid]
             finite = np.isfinite(X).all(axis=1)
             out[valid[finite]] = self.function.predict(X[finite])
         return out

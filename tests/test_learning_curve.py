@@ -58,6 +58,8 @@ def test_a_small_curve_is_measured_written_and_resumed(tmp_path):
     assert (point["draw"], point["n"], point["feature_set"], point["learner"]) == \
         (0, 10, "terrain", "l1")
     assert point["decisions"] == 8 and 0.0 <= point["above_margin"] <= 1.0
+    assert len(point["losses"]) == 8  # every decision's shortfall, for paired comparisons
+    assert np.mean(np.array(point["losses"]) > point["margin"]) == point["above_margin"]
     assert summary["lines"]["expert"]["above_margin"] == 0.0  # the ceiling: no shortfall
     assert 0.0 <= summary["lines"]["hand-tuned"]["above_margin"] <= 1.0
     assert (tmp_path / "learning-curve.png").stat().st_size > 0

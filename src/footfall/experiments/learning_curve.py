@@ -146,9 +146,8 @@ class CurveConfig(Params):
 def _point(scores: RankScores, **extra) -> dict:
     """A point's figures: ``extra`` (the point's draw, n, feature set, learner ...), the
     rank-eval measures and the number of decisions as ``decisions``; the per-decision
-    shortfalls [value units] to 1e-4, in decision order, for paired comparisons of points."""
+    shortfalls [value units] in decision order, for paired comparisons of points."""
     d = scores.as_dict()
-    d["losses"] = [round(v, 4) for v in d["losses"]]
     d["decisions"] = d.pop("n")
     return {**d, **extra}
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from footfall.core.ball import ball_centre_surface
-from footfall.core.bilinear import surface_at, surface_along_rays
+from footfall.core.bilinear import surface_along_rays, surface_at
 from footfall.core.heightmap import HeightMap
 
 

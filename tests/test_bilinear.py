@@ -1,67 +1,23 @@
 """The compiled bilinear samplers give the bits of the vectorised NumPy rules they replace.
 
-The references below are the rules written as whole-array NumPy (as footfall evaluated them
-before the samplers were compiled): a height map's (NaN off the map and where the nearest cell
+The references (:mod:`footfall.experiments.bench.sampling`, the benchmark's baseline) are the
+rules written as whole-array NumPy: a height map's (NaN off the map and where the nearest cell
 has no data; elsewhere the corners with data renormalised; border cells held for half a cell)
 and a sphere surface's (NaN outside its window; renormalised unless the window is complete).
 """
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
+from cli_helpers import run
 from footfall.core.heightmap import HeightMap
+from footfall.experiments.bench.sampling import map_reference, surface_reference
 from footfall.expert.surface import sphere_surface
 from footfall.features.config import FeatureConfig
-
-
-def map_reference(hmap: HeightMap, points: np.ndarray) -> np.ndarray:
-    f = hmap.continuous_index(points)
-    nx, ny = hmap.shape
-    fi, fj = f[..., 0], f[..., 1]
-    inside = (fi >= -0.5) & (fi < nx - 0.5) & (fj >= -0.5) & (fj < ny - 0.5)
-    fi = np.clip(np.where(inside, fi, 0.0), 0.0, nx - 1.0)
-    fj = np.clip(np.where(inside, fj, 0.0), 0.0, ny - 1.0)
-    i0 = np.minimum(np.floor(fi).astype(np.intp), nx - 2)
-    j0 = np.minimum(np.floor(fj).astype(np.intp), ny - 2)
-    ti, tj = fi - i0, fj - j0
-    h = hmap.heights
-    corners = (h[i0, j0], h[i0 + 1, j0], h[i0, j0 + 1], h[i0 + 1, j0 + 1])
-    weights = ((1 - ti) * (1 - tj), ti * (1 - tj), (1 - ti) * tj, ti * tj)
-    num, den = np.zeros(fi.shape), np.zeros(fi.shape)
-    for c, w in zip(corners, weights):
-        ok = ~np.isnan(c)
-        num += np.where(ok, c, 0.0) * w
-        den += ok * w
-    nearest = h[np.floor(fi + 0.5).astype(np.intp), np.floor(fj + 0.5).astype(np.intp)]
-    out = np.full(fi.shape, np.nan)
-    np.divide(num, den, out=out, where=inside & ~np.isnan(nearest) & (den > 0))
-    return out
-
-
-def surface_reference(surface, points: np.ndarray) -> np.ndarray:
-    f = (points - surface.origin) / surface.resolution
-    wx, wy = surface.filled.shape
-    fi, fj = f[..., 0], f[..., 1]
-    inside = (fi >= 0) & (fi <= wx - 1) & (fj >= 0) & (fj <= wy - 1)
-    fi, fj = np.where(inside, fi, 0.0), np.where(inside, fj, 0.0)
-    i0 = np.minimum(fi.astype(np.intp), wx - 2)
-    j0 = np.minimum(fj.astype(np.intp), wy - 2)
-    ti, tj = fi - i0, fj - j0
-    flat = i0 * wy + j0
-    corners = ((0, (1 - ti) * (1 - tj)), (wy, ti * (1 - tj)), (1, (1 - ti) * tj),
-               (wy + 1, ti * tj))
-    num, den = np.zeros(fi.shape), np.zeros(fi.shape)
-    for step, w in corners:
-        num += w * np.take(surface.filled, flat + step)
-        den += w * np.take(surface.known, flat + step)
-    out = np.full(fi.shape, np.nan)
-    if surface.complete:
-        return np.where(inside, num, out)
-    nearest = np.take(surface.known, np.rint(fi).astype(np.intp) * wy + np.rint(fj).astype(np.intp))
-    np.divide(num, den, out=out, where=inside & (nearest > 0) & (den > 0))
-    return out
 
 
 def gappy_map(seed: int, holes: float) -> HeightMap:
@@ -125,3 +81,11 @@ def test_the_sphere_surface_sampler_and_its_rays_equal_the_vectorised_rule(holes
     rays = xy[:, None, None, :] + s[None, None, :, None] * dirs[None, :, None, :]
     assert np.array_equal(surface.along_rays(xy, dirs, s), surface_reference(surface, rays),
                           equal_nan=True)
+
+
+def test_the_sampling_benchmark_compares_equal_results(capsys):
+    code, out, _ = run(capsys, "bench", "sampling", "--states", "1", "--json")
+    assert code == 0
+    result = json.loads(out)
+    assert result["equal"] is True and result["candidates_median"] > 100
+    assert result["patches"]["numpy_ms"] > 0 and result["rays"]["compiled_ms"] > 0

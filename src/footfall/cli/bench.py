@@ -12,6 +12,7 @@ from footfall.experiments.bench.executors import bench_executors, format_executo
 from footfall.experiments.bench.expert import bench_expert, format_expert
 from footfall.experiments.bench.learning import bench_learning, format_learning
 from footfall.experiments.bench.rankers import bench_rankers, format_rankers
+from footfall.experiments.bench.sampling import bench_sampling, format_sampling
 from footfall.experiments.bench.scoring import bench_scoring, format_scoring
 from footfall.experiments.bench.sim import bench_sim, format_sim
 
@@ -50,6 +51,15 @@ def bench_rankers_cmd(n_demos: int, library_size: int, as_json: bool) -> None:
     """Each learner's learning time and its scoring of 45 000 candidates, against linear."""
     result = bench_rankers(n_demos=n_demos, library_size=library_size)
     emit(as_json, result, format_rankers(result))
+
+
+@bench.command("sampling")
+@click.option("--states", type=click.IntRange(1, 100), default=8, show_default=True)
+@json_option
+def bench_sampling_cmd(states: int, as_json: bool) -> None:
+    """Compiled bilinear sampling (patches, the expert's rays) against the NumPy rules."""
+    result = bench_sampling(states=states)
+    emit(as_json, result, format_sampling(result))
 
 
 @bench.command("sim")

@@ -9,9 +9,11 @@ import pytest
 
 from cli_helpers import assert_user_error, run
 from footfall.core.errors import FootfallError
+from footfall.experiments.learning_curve import FORMAT as CURVE_FORMAT
 from footfall.experiments.learning_curve import (
     CurveConfig,
     balanced_order,
+    compare_points,
     curve_table,
     run_learning_curve,
 )
@@ -88,3 +90,36 @@ def test_a_small_curve_is_measured_written_and_resumed(tmp_path):
 def test_bad_curve_settings_are_one_line(tmp_path, capsys, args, match):
     code, _, err = run(capsys, "learning-curve", "--out", str(tmp_path / "c"), *args)
     assert_user_error(code, err, match)
+
+
+def _curve(points, **config):
+    base = {"train_kinds": ["rocky"], "train_difficulties": [0.6], "test_difficulties": [0.6],
+            "test_decisions": 6, "seed": 0}
+    return {"format": CURVE_FORMAT, "config": {**base, **config}, "points": [
+        {"draw": d, "n": n, "feature_set": fs, "learner": ln, "losses": losses, "margin": 1.0}
+        for d, n, fs, ln, losses in points]}
+
+
+def test_two_points_are_compared_decision_by_decision_over_their_shared_draws(tmp_path, capsys):
+    a = [0.0, 2.0, 3.0, 0.5, 5.0, 0.0]  # above the margin (1.0): decisions 1, 2, 4
+    b = [0.0, 0.0, 3.0, 2.0, 0.0, 0.0]  # decisions 2, 3
+    curve = _curve([(0, 100, "both", "l1", a), (1, 100, "both", "l1", a),
+                    (0, 100, "both", "kernel", b), (2, 100, "both", "kernel", b),
+                    (1, 50, "both", "kernel", b)])
+    r = compare_points(curve, curve, 100, ("both", "l1"), ("both", "kernel"))
+    assert r["draws"] == [0]  # draw 1 has no kernel point at 100, draw 2 no l1 point
+    assert r["a"]["above_margin"] == 0.5 and r["b"]["above_margin"] == pytest.approx(1 / 3)
+    assert (r["a_only_above"], r["b_only_above"]) == (2, 1)
+    assert r["p"] == pytest.approx(1.0)  # 2 against 1 separates nothing
+    with pytest.raises(FootfallError, match="differ in seed"):
+        compare_points(curve, _curve([], seed=1), 100, ("both", "l1"), ("both", "l1"))
+    with pytest.raises(FootfallError, match="no point both/svm at 100"):
+        compare_points(curve, curve, 100, ("both", "l1"), ("both", "svm"))
+
+    (tmp_path / "c").mkdir()
+    (tmp_path / "c" / "results.json").write_text(json.dumps(curve))
+    code, out, _ = run(capsys, "curve-compare", str(tmp_path / "c"), "--size", "100",
+                       "--other-learner", "kernel")
+    assert code == 0 and "only 2, for the second only 1" in out
+    code, _, err = run(capsys, "curve-compare", str(tmp_path / "none"), "--size", "100")
+    assert_user_error(code, err, "not a learning curve's results")

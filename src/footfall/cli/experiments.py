@@ -13,7 +13,12 @@ from footfall.cli.executors import executor_options, opened_executor
 from footfall.cli.output import emit, json_option, progress_log
 from footfall.core.errors import FootfallError
 from footfall.experiments.ablation import VARIANTS, AblationConfig, ablation_markdown, run_ablation
-from footfall.experiments.learning_curve import CurveConfig, run_learning_curve
+from footfall.experiments.learning_curve import (
+    CurveConfig,
+    compare_points,
+    read_curve,
+    run_learning_curve,
+)
 from footfall.experiments.offline import OfflineConfig, run_offline
 from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
 from footfall.experiments.study import run_study
@@ -81,6 +86,36 @@ def learning_curve(out: str, sizes: str | None, draws: int | None,
     config = replace(config, **changes)  # checked: one line for a bad value
     summary = run_learning_curve(Path(out), config, log=progress_log(as_json))
     emit(as_json, summary, f"wrote {Path(out) / 'report.md'}")
+
+
+@click.command("curve-compare")
+@click.argument("curve")
+@click.argument("other", required=False)
+@click.option("--size", "n", type=click.IntRange(min=1), required=True,
+              help="The demonstrations of the points compared.")
+@click.option("--features", "feature_set", default="both", show_default=True,
+              help="The feature set of the first point.")
+@click.option("--learner", default="l1", show_default=True, help="The first point's learner.")
+@click.option("--other-features", default=None, help="The second point's [default: --features].")
+@click.option("--other-learner", default=None, help="The second point's [default: --learner].")
+@json_option
+def curve_compare(curve: str, other: str | None, n: int, feature_set: str, learner: str,
+                  other_features: str | None, other_learner: str | None, as_json: bool) -> None:
+    """Two learning-curve points on the same held-out decisions, paired: the shares above the
+    margin and the exact McNemar test (OTHER: a second curve's folder, default CURVE)."""
+    a = read_curve(Path(curve))
+    b = a if other is None else read_curve(Path(other))
+    r = compare_points(a, b, n, (feature_set, learner),
+                       (other_features or feature_set, other_learner or learner))
+    lines = [f"{n} demonstrations, draws {', '.join(map(str, r['draws']))}; share of held-out "
+             f"decisions above the margin ({r['margin']:g}):"]
+    for side in ("a", "b"):
+        q = r[side]
+        lines.append(f"  {'/'.join(q['point'])}: {q['above_margin']:.3f} (per draw "
+                     f"{', '.join(f'{v:.3f}' for v in q['per_draw'])})")
+    lines.append(f"  above for the first only {r['a_only_above']}, for the second only "
+                 f"{r['b_only_above']}: exact McNemar p = {r['p']:.3g}")
+    emit(as_json, r, "\n".join(lines))
 
 
 def test_kinds_option(f):

@@ -39,6 +39,9 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
                        "Learning curves: each feature set and learner from 25 to 1 600 "
                        "demonstrations, on held-out decisions, with the hand-tuned and expert "
                        "lines."),
+    "curve-compare": ("footfall.cli.experiments", "curve_compare",
+                      "Two learning-curve points on the same held-out decisions, paired: shares "
+                      "above the margin and the exact McNemar test."),
     "reproduce": ("footfall.cli.experiments", "reproduce",
                   "The paper's walking experiment end to end: corrections, learning, Tables I "
                   "and II."),

@@ -42,6 +42,7 @@ from footfall.core.files import load_npz, save_npz
 from footfall.core.params import Params, above, at_least, param
 from footfall.core.robot import LITTLEDOG
 from footfall.core.seeds import SeedStreams
+from footfall.core.stats import mcnemar_exact
 from footfall.data.demonstration import Demonstration
 from footfall.data.store import DemoStore
 from footfall.expert.collect import collect_demonstrations
@@ -357,6 +358,61 @@ def run_learning_curve(out: Path, config: CurveConfig | None = None,
         points.extend(_model_point(k, m, scores[str(k)]) for k, m in models.items())
         save()
     return save(time.perf_counter() - started)
+
+
+PAIRED_KEYS = ("train_kinds", "train_difficulties", "test_difficulties", "test_decisions",
+               "seed")  # settings two curves share when their points are paired
+
+
+def read_curve(out: Path) -> dict:
+    """The results of the curve in folder ``out`` (its ``results.json``)."""
+    path = out / "results.json"
+    try:
+        summary = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise FootfallError(f"{path}: not a learning curve's results ({exc})") from None
+    if not isinstance(summary, dict) or summary.get("format") != FORMAT:
+        raise FootfallError(f"{path}: not a learning curve's results")
+    return summary
+
+
+def compare_points(a: dict, b: dict, n: int, a_point: tuple[str, str],
+                   b_point: tuple[str, str]) -> dict:
+    """Paired comparison of two curve points at ``n`` demonstrations: ``a_point`` (feature
+    set, learner) of curve ``a`` against ``b_point`` of curve ``b`` (the same curve or another
+    with the same boards, decisions and seed, whose draws learned from the same
+    demonstrations).
+
+    Per draw both hold and pooled over them: the share of decisions above the margin, the
+    decisions only one of the two got above it, and the exact McNemar p-value of the pooled
+    draw-decision pairs.
+    """
+    for key in PAIRED_KEYS:
+        if a["config"][key] != b["config"][key]:
+            raise FootfallError(f"the curves differ in {key}: their points are not paired")
+
+    def find(summary: dict, point: tuple[str, str]) -> dict[int, np.ndarray]:
+        found = {p["draw"]: np.asarray(p["losses"], dtype=float) for p in summary["points"]
+                 if p["n"] == n and (p["feature_set"], p["learner"]) == point}
+        if not found:
+            raise FootfallError(f"no point {point[0]}/{point[1]} at {n} demonstrations")
+        return found
+
+    la, lb = find(a, a_point), find(b, b_point)
+    draws = sorted(set(la) & set(lb))
+    if not draws:
+        raise FootfallError("the two points share no draw")
+    margin = float(a["points"][0]["margin"])
+    above_a = np.concatenate([la[d] > margin for d in draws])
+    above_b = np.concatenate([lb[d] > margin for d in draws])
+    a_only, b_only = int(np.sum(above_a & ~above_b)), int(np.sum(above_b & ~above_a))
+    return {"n": n, "draws": draws, "margin": margin,
+            "a": {"point": list(a_point), "above_margin": float(above_a.mean()),
+                  "per_draw": [float(np.mean(la[d] > margin)) for d in draws]},
+            "b": {"point": list(b_point), "above_margin": float(above_b.mean()),
+                  "per_draw": [float(np.mean(lb[d] > margin)) for d in draws]},
+            "a_only_above": a_only, "b_only_above": b_only,
+            "p": mcnemar_exact(a_only, b_only)}
 
 
 def curve_table(summary: dict) -> list[dict]:

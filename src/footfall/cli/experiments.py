@@ -101,8 +101,11 @@ def learning_curve(out: str, sizes: str | None, draws: int | None,
 @json_option
 def curve_compare(curve: str, other: str | None, n: int, feature_set: str, learner: str,
                   other_features: str | None, other_learner: str | None, as_json: bool) -> None:
-    """Two learning-curve points on the same held-out decisions, paired: the shares above the
-    margin and the exact McNemar test (OTHER: a second curve's folder, default CURVE)."""
+    """Two learning-curve points on the same held-out decisions, paired: shares above the
+    margin and the exact McNemar test.
+
+    CURVE is a curve's folder; OTHER a second one whose draws learned from the same
+    demonstrations (default: CURVE)."""
     a = read_curve(Path(curve))
     b = a if other is None else read_curve(Path(other))
     r = compare_points(a, b, n, (feature_set, learner),

@@ -77,8 +77,14 @@ def test_a_small_curve_is_measured_written_and_resumed(tmp_path):
     stored = json.loads((tmp_path / "results.json").read_text())
     assert stored["format"] == "footfall.learning-curve" and stored["points"] == again["points"]
 
-    with pytest.raises(FootfallError, match="holds a curve of other settings"):
+    with pytest.raises(FootfallError, match="holds a curve of other settings .test_decisions"):
         run_learning_curve(tmp_path, CurveConfig(**{**vars(TINY), "test_decisions": 9}))
+
+    logs.clear()  # more sizes extend the curve: the measured point stays, the new one is added
+    more = run_learning_curve(tmp_path, CurveConfig(**{**vars(TINY), "sizes": (10, 12)}),
+                              log=logs.append)
+    assert [p["n"] for p in more["points"]] == [10, 12] and more["points"][0] == point
+    assert sum("learned" in line for line in logs) == 1
 
 
 @pytest.mark.parametrize("args, match", [

@@ -66,6 +66,9 @@ VALUES_FORMAT = "footfall.learning-curve.values"  # the expert's values of the h
 VERSION = 1
 COLLECT_MORE = 1.25  # a draw collects this many times its largest size: the legs do not take
 # turns exactly, and each leg group's prefix must reach half of every size
+EXTENSIBLE = ("sizes", "draws", "feature_sets", "learners")  # settings a resumed curve may
+# change: they say which points to measure, not what a point means (its draw's demonstrations
+# are those its store holds)
 LINES = ("hand-tuned", "expert")  # the scorers measured once, as horizontal lines
 
 
@@ -201,10 +204,12 @@ def _resumed(results_path: Path, config: CurveConfig) -> tuple[list[dict], dict 
     except (OSError, ValueError) as exc:
         raise FootfallError(f"{results_path}: cannot be read ({exc}); remove it to start "
                             f"again") from None
-    if old.get("format") != FORMAT or old.get("config") != json.loads(
-            json.dumps(config.to_dict())):
-        raise FootfallError(f"{results_path} holds a curve of other settings; use another "
-                            f"--out or remove it")
+    new = json.loads(json.dumps(config.to_dict()))
+    was = old.get("config") if isinstance(old.get("config"), dict) else {}
+    differ = sorted(k for k in new if k not in EXTENSIBLE and was.get(k) != new[k])
+    if old.get("format") != FORMAT or differ or set(was) != set(new):
+        raise FootfallError(f"{results_path} holds a curve of other settings "
+                            f"({', '.join(differ) or 'format'}); use another --out or remove it")
     return old["points"], old.get("lines")
 
 

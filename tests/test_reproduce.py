@@ -198,3 +198,20 @@ def test_extra_rounds_are_walked_while_a_leg_group_is_short_then_a_clear_error(t
     assert sorted(walked) == ["correct/r0/train00", "correct/r1/train00"]
     with pytest.raises(FootfallError, match="extra_rounds"):
         replace(TINY, extra_rounds=-1)
+
+
+def test_the_learner_and_folds_options_reach_the_reproductions_settings(tmp_path, capsys):
+    from cli_helpers import assert_user_error, run
+    from footfall.cli.experiments import _reproduce_config
+
+    config = _reproduce_config(3, True, None, "lambdarank", "run")
+    assert (config.learner, config.folds, config.seed) == ("lambdarank", "run", 3)
+    assert config == ReproduceConfig(**{**vars(ReproduceConfig.quick(3)), "learner": "lambdarank",
+                                        "folds": "run"})
+    assert _reproduce_config(0, False, None) == ReproduceConfig(seed=0)
+    assert (ReproduceConfig().learner, ReproduceConfig().folds) == ("l1", "demonstration")
+    for command in (["reproduce"], ["study", "--seeds", "0"]):
+        code, _, err = run(capsys, *command, "--learner", "lasso", "--out", tmp_path / "r")
+        assert_user_error(code, err, "lasso")
+    with pytest.raises(FootfallError, match="learner must be a registered learner"):
+        ReproduceConfig(learner="lasso")

@@ -129,12 +129,24 @@ def test_kinds_option(f):
              "[default: rocky,steps]; e.g. rocky,logs to test on kinds never trained on.")(f)
 
 
-def _reproduce_config(seed: int, quick: bool, test_kinds: str | None):
-    """The reproduction's settings for ``seed``: the default or quick ones, with other kinds."""
+def learner_options(f):
+    """Add --learner and --folds: how the reproduction learns its ranking functions."""
+    f = click.option("--folds", type=click.Choice(FOLDS), default=None,
+                     help="What a cross-validation fold never splits [default: "
+                          "demonstration].")(f)
+    return click.option("--learner", type=LEARNER, default=None,
+                        help="The learner of every ranking function [default: l1].")(f)
+
+
+def _reproduce_config(seed: int, quick: bool, test_kinds: str | None,
+                      learner: str | None = None, folds: str | None = None):
+    """The reproduction's settings for ``seed``: the default or quick ones, with other kinds,
+    learner or folds."""
     config = ReproduceConfig.quick(seed) if quick else ReproduceConfig(seed=seed)
-    if test_kinds is None:
-        return config
-    return replace(config, test_kinds=tuple(k.strip() for k in test_kinds.split(",")))
+    changes: dict = {"learner": learner, "folds": folds}
+    if test_kinds is not None:
+        changes["test_kinds"] = tuple(k.strip() for k in test_kinds.split(","))
+    return replace(config, **{k: v for k, v in changes.items() if v is not None})
 
 
 def _table2_line(name: str, row: dict) -> str:
@@ -150,12 +162,14 @@ def _table2_line(name: str, row: dict) -> str:
 @click.option("--seed", type=SEED, default=0, show_default=True)
 @click.option("--quick", is_flag=True, help="A small version (a few minutes) for a smoke test.")
 @test_kinds_option
+@learner_options
 @executor_options
 @json_option
-def reproduce(out: str, seed: int, quick: bool, test_kinds: str | None, processes: int | None,
-              executor_name: str, ray_address: str | None, as_json: bool) -> None:
+def reproduce(out: str, seed: int, quick: bool, test_kinds: str | None, learner: str | None,
+              folds: str | None, processes: int | None, executor_name: str,
+              ray_address: str | None, as_json: bool) -> None:
     """The paper's walking experiment end to end: corrections, learning, Tables I and II."""
-    config = _reproduce_config(seed, quick, test_kinds)
+    config = _reproduce_config(seed, quick, test_kinds, learner, folds)
     with opened_executor(executor_name, processes, ray_address) as executor:
         results = run_reproduction(Path(out), config, log=progress_log(as_json),
                                    executor=executor)
@@ -181,17 +195,23 @@ def reproduce(out: str, seed: int, quick: bool, test_kinds: str | None, processe
               "a reproduction folder per seed (seedN/) and the summary; run again to resume.")
 @click.option("--quick", is_flag=True, help="Each reproduction's small version (a smoke test).")
 @test_kinds_option
+@learner_options
 @executor_options
 @json_option
 def study(first_seed: int, more_seeds: tuple[int, ...], out: str, quick: bool,
-          test_kinds: str | None, processes: int | None, executor_name: str,
-          ray_address: str | None, as_json: bool) -> None:
+          test_kinds: str | None, learner: str | None, folds: str | None,
+          processes: int | None, executor_name: str, ray_address: str | None,
+          as_json: bool) -> None:
     """Several whole reproductions and a verdict on each of the paper's orderings."""
     seeds = [first_seed, *more_seeds]
-    _reproduce_config(0, quick, test_kinds)  # bad kinds: one line before anything is walked
+
+    def config_for(seed: int):
+        return _reproduce_config(seed, quick, test_kinds, learner, folds)
+
+    config_for(0)  # bad settings: one line before anything is walked
     with opened_executor(executor_name, processes, ray_address) as executor:
         summary = run_study(Path(out), seeds, executor=executor, log=progress_log(as_json),
-                            config_for=lambda seed: _reproduce_config(seed, quick, test_kinds))
+                            config_for=config_for)
     lines = [f"{v['ordering']}: success {v['success_verdict']} (p = {v['p_value']:.3g}, "
              f"{v['a_only']} against {v['b_only']} paired runs), slip {v['slip_verdict']}"
              for v in summary["verdicts"]]

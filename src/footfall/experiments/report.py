@@ -159,7 +159,11 @@ def _demonstration_rounds(results: dict) -> list[str]:
 
 
 def _table1(results: dict) -> list[str]:
-    lines = ["## Table I: templates kept per scale (L1, lambda at the smallest CV error)", "",
+    c = results["config"]
+    how = ("L1, lambda at the smallest CV error" if c.get("learner", "l1") == "l1"
+           and c["selection"] == "min" else f"learner {c.get('learner', 'l1')}, "
+           f"{c['selection']} on its path, folds by {c.get('folds', 'demonstration')}")
+    lines = [f"## Table I: templates kept per scale ({how})", "",
              "| features | legs | small | medium | large | paper (of 946) |",
              "| --- | --- | --- | --- | --- | --- |"]
     for fs, groups in results["table1"].items():

@@ -80,9 +80,10 @@ from footfall.expert.corrections import SEVERE_SHORTFALL, step_verdicts
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
 from footfall.features.family import PAPER_FEATURE_SETS
 from footfall.learning.evaluation import expert_values, rank_scores
+from footfall.learning.learner import LEARNERS
 from footfall.learning.model import LEG_GROUPS, FootholdModel
 from footfall.learning.ranker import SELECTIONS
-from footfall.learning.train import TrainingDemo, learn_model
+from footfall.learning.train import FOLDS, TrainingDemo, learn_model
 from footfall.sim.episode import WalkConfig
 from footfall.terrain import KINDS
 
@@ -164,6 +165,11 @@ class ReproduceConfig(Params):
                            doc="lambda: at the smallest cross-validation error (paper §V) or by "
                                "the one-standard-error rule")
     cv: int = param(5, range=at_least(1), doc="cross-validation folds")
+    learner: str = param("l1", check=lambda v: v in LEARNERS,
+                         must="a registered learner", doc="the learner of every ranking "
+                         "function (l1: the paper's; docs/learning/model-selection.md)")
+    folds: str = param("demonstration", choices=FOLDS,
+                       doc="what a cross-validation fold never splits")
     round_bandwidth_rms: float = param(
         0.004, unit="m", range=above(0), doc="RBF bandwidth (as RMS height difference) of the "
                                              "functions the robot walks with between rounds")
@@ -226,6 +232,8 @@ def _learn(ws: Workspace, name: str, demos: list, feature_set: str, rms: float |
     settings = {"library_size": config.library_size, "selection": config.selection,
                 "cv": config.cv, "rms": rms, "seed": seed,
                 "training_candidates": config.training_candidates}
+    if (config.learner, config.folds) != ("l1", "demonstration"):  # keys of the paper's stay
+        settings.update(learner=config.learner, folds=config.folds)
     key = _training_key(demos, feature_set, settings)
     if path.exists():
         try:
@@ -238,10 +246,12 @@ def _learn(ws: Workspace, name: str, demos: list, feature_set: str, rms: float |
     training = [TrainingDemo.of(d, terrains[d.terrain_hash])
                 for d in demos]
     t0 = time.perf_counter()
-    model = learn_model(training, feature_set, "l1", library_size=config.library_size,
+    model = learn_model(training, feature_set, config.learner,
+                        library_size=config.library_size,
                         training_candidates=config.training_candidates,
                         bandwidth_rms=None if rms is None else (rms,) * 3, cv=config.cv,
-                        seed=seed, selection=config.selection, log=lambda s: log("    " + s))
+                        seed=seed, selection=config.selection, folds=config.folds,
+                        log=lambda s: log("    " + s))
     model = replace(model, info={**model.info, "training_key": key,
                                  "sources": [d.source for d in demos]})
     model.save(path)
@@ -334,9 +344,10 @@ class Functions:
         return {fs: m.templates_kept() for fs, m in self.models.items() if fs != "terrain"}
 
     def summary(self) -> dict:
-        """Per set and leg group: lambda, CV error, non-zero weights, template bandwidths."""
-        return {fs: {g: {"lambda": f.info["lambda"], "cv_error": f.info["cv_error"],
-                         "n_nonzero": f.info["n_nonzero"],
+        """Per set and leg group: lambda (a linear learner's) or trees (a boosted one's), CV
+        error, non-zero weights (columns a tree reads), template bandwidths."""
+        return {fs: {g: {"lambda": f.info.get("lambda"), "trees": f.info.get("trees"),
+                         "cv_error": f.info["cv_error"], "n_nonzero": f.info["n_nonzero"],
                          "bandwidth_rms_m": f.info.get("bandwidth_rms_m")}
                      for g, f in m.functions.items()} for fs, m in self.models.items()}
 

@@ -206,8 +206,9 @@ def _resumed(results_path: Path, config: CurveConfig) -> tuple[list[dict], dict 
                             f"again") from None
     new = json.loads(json.dumps(config.to_dict()))
     was = old.get("config") if isinstance(old.get("config"), dict) else {}
-    differ = sorted(k for k in new if k not in EXTENSIBLE and was.get(k) != new[k])
-    if old.get("format") != FORMAT or differ or set(was) != set(new):
+    differ = sorted(k for k in set(new) | set(was) if k not in new or k not in was
+                    or (k not in EXTENSIBLE and was[k] != new[k]))
+    if old.get("format") != FORMAT or differ:
         raise FootfallError(f"{results_path} holds a curve of other settings "
                             f"({', '.join(differ) or 'format'}); use another --out or remove it")
     return old["points"], old.get("lines")

@@ -209,7 +209,7 @@ def test_the_learner_and_folds_options_reach_the_reproductions_settings(tmp_path
     assert config == ReproduceConfig(**{**vars(ReproduceConfig.quick(3)), "learner": "lambdarank",
                                         "folds": "run"})
     assert _reproduce_config(0, False, None) == ReproduceConfig(seed=0)
-    assert (ReproduceConfig().learner, ReproduceConfig().folds) == ("l1", "demonstration")
+    assert (ReproduceConfig().learner, ReproduceConfig().folds) == ("lambdarank", "demonstration")
     for command in (["reproduce"], ["study", "--seeds", "0"]):
         code, _, err = run(capsys, *command, "--learner", "lasso", "--out", tmp_path / "r")
         assert_user_error(code, err, "lasso")

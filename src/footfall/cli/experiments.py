@@ -135,7 +135,7 @@ def learner_options(f):
                      help="What a cross-validation fold never splits [default: "
                           "demonstration].")(f)
     return click.option("--learner", type=LEARNER, default=None,
-                        help="The learner of every ranking function [default: l1].")(f)
+                        help="The learner of every ranking function [default: lambdarank].")(f)
 
 
 def _reproduce_config(seed: int, quick: bool, test_kinds: str | None,

@@ -165,9 +165,10 @@ class ReproduceConfig(Params):
                            doc="lambda: at the smallest cross-validation error (paper §V) or by "
                                "the one-standard-error rule")
     cv: int = param(5, range=at_least(1), doc="cross-validation folds")
-    learner: str = param("l1", check=lambda v: v in LEARNERS,
+    learner: str = param("lambdarank", check=lambda v: v in LEARNERS,
                          must="a registered learner", doc="the learner of every ranking "
-                         "function (l1: the paper's; docs/learning/model-selection.md)")
+                         "function (l1: the paper's; lambdarank: picked by the rule of "
+                         "docs/learning/model-selection.md)")
     folds: str = param("demonstration", choices=FOLDS,
                        doc="what a cross-validation fold never splits")
     round_bandwidth_rms: float = param(

@@ -6,8 +6,12 @@ import click
 
 from footfall.cli.choices import RECORDED_STEP, SEED, Finite, count_range
 from footfall.cli.output import emit, json_option, progress_bar
+from footfall.control.footstep import FootstepConfig
 from footfall.data.inventory import store_inventory
 from footfall.expert.collect import collect_into_store
+from footfall.expert.corrections import correct_stored_runs
+from footfall.expert.settings_file import load_expert
+from footfall.expert.synthetic import SyntheticExpert, walking_expert
 
 
 @click.group()
@@ -55,6 +59,37 @@ def demos_collect(terrains: tuple[str, ...], more_terrains: tuple[str, ...], n: 
     if added.added < n:
         text += f" (only {added.added} of the {n} requested fit on these terrains)"
     emit(as_json, added.as_dict(), text)
+
+
+@demos.command("correct")
+@click.argument("run_paths", nargs=-1, required=True, metavar="RUNS.sqlite...")
+@click.option("-o", "--output", required=True, metavar="DEMOS.sqlite",
+              help="Store the corrections are added to (created if missing).")
+@click.option("--margin", type=Finite(min=0.0), default=2.0, show_default=True,
+              help="A step is corrected when the robot's choice falls short of the expert's "
+                   "best by more than this [value units] (the reproduction's margin).")
+@click.option("--per-run", type=count_range(1), default=6, show_default=True,
+              help="Label at most this many steps of a run, the worst (the reproduction's).")
+@click.option("--run-key", default=None, metavar="PREFIX",
+              help="Only the runs whose key starts with this.")
+@click.option("--expert-config", default=None, metavar="EXPERT.json",
+              help="Correct with these expert settings; default: the walking expert.")
+@click.option("--seed", type=SEED, default=0, show_default=True,
+              help="Seed of an imperfect expert's labels.")
+@json_option
+def demos_correct(run_paths: tuple[str, ...], output: str, margin: float, per_run: int,
+                  run_key: str | None, expert_config: str | None, seed: int,
+                  as_json: bool) -> None:
+    """The expert's corrections of logged runs (walk-many --log, a reproduction's store), as
+    the reproduction's correction rounds make them, added to a demonstration store."""
+    config = load_expert(expert_config) if expert_config else walking_expert(
+        FootstepConfig().lead)
+    done = correct_stored_runs(run_paths, output, SyntheticExpert(config), margin, per_run, seed,
+                               key_prefix=run_key)
+    emit(as_json, done.as_dict(),
+         f"added {done.added} corrections to {done.store}: {done.runs} "
+         f"{_plural(done.runs, 'run')}, {done.steps} steps, {done.above_margin} short of the "
+         f"expert's best by more than {done.margin:g}")
 
 
 @demos.command("info")

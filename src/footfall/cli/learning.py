@@ -43,7 +43,7 @@ def model_output(path: str) -> Path:
 
 
 @click.command()
-@click.argument("store_path", metavar="DEMOS.sqlite")
+@click.argument("store_path", metavar="[DEMOS.sqlite]", required=False)
 @click.option("--features", "feature_set", type=FEATURE_SET, required=True,
               help="Feature set (each with the pose features), or feature families joined "
                    "by '+' (e.g. terrain+pose).")
@@ -68,25 +68,37 @@ def model_output(path: str) -> Path:
 @click.option("--selection", type=SELECTION, default="1se", show_default=True,
               help="Lambda: one-standard-error rule (sparser) or the smallest CV error.")
 @click.option("--source", multiple=True, help=SOURCE_HELP)
+@click.option("--trials", multiple=True, metavar="RUNS.sqlite",
+              help="Also learn from the robot's own runs in this store (repeatable): every "
+                   "foothold followed by a slide, a miss or a fall is ranked below footholds of "
+                   "its board that were not. Without DEMOS.sqlite, learn from them alone.")
+@click.option("--trial-pairs", type=click.IntRange(1, 100), default=4, show_default=True,
+              help="Footholds that went well each one that went wrong is ranked below.")
 @click.option("--seed", type=SEED, default=0, show_default=True,
               help="Seed of the template library's sample and the training candidates.")
 @click.option("-o", "--output", required=True, help="Output model (.npz).")
 @json_option
 def learn(store_path: str, feature_set: str, learner: str, library_size: int,
           training_candidates: int, bandwidth_rms: tuple[float, float, float] | None, cv: int,
-          folds: str, selection: str, source: tuple[str, ...], seed: int, output: str,
-          as_json: bool) -> None:
-    """Learn front- and hind-leg foothold ranking functions from demonstrations."""
+          folds: str, selection: str, source: tuple[str, ...], trials: tuple[str, ...],
+          trial_pairs: int, seed: int, output: str, as_json: bool) -> None:
+    """Learn front- and hind-leg foothold ranking functions from demonstrations, from the
+    robot's own trials, or from both."""
+    if store_path is None and not trials:
+        raise FootfallError("give DEMOS.sqlite, --trials RUNS.sqlite, or both")
     check_count(library_size, "--library-size", 3)
     check_count(training_candidates, "--training-candidates", 1)
     out = model_output(output)
     learned = learn_from_store(store_path, out, feature_set, learner, source=source or None,
+                               trials=trials, trial_pairs=trial_pairs,
                                log=progress_log(as_json), library_size=library_size,
                                training_candidates=training_candidates,
                                bandwidth_rms=bandwidth_rms, cv=cv, seed=seed,
                                selection=selection, folds=folds)
+    tried = (f" and {learned.trial_footholds} footholds of its own runs"
+             if learned.trial_footholds else "")
     lines = [f"wrote {learned.model}: {feature_set}/{learner} from {learned.demonstrations} "
-             f"demonstrations in {learned.seconds:.1f} s"]
+             f"demonstrations{tried} in {learned.seconds:.1f} s"]
     for g, v in learned.groups.items():
         chosen = (f"{v['trees']} trees" if v.get("trees") is not None
                   else f"lambda {v['lambda']:.4g}")

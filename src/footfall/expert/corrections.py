@@ -12,14 +12,18 @@ alone, exactly as a human expert skims the good parts of a run.
 from __future__ import annotations
 
 import math
+import os
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from footfall.core.errors import FootfallError
+from footfall.core.files import writable_path
 from footfall.core.heightmap import HeightMap
 from footfall.data.runlog import RunRecord
-from footfall.data.store import Demonstration
+from footfall.data.schema import SUFFIXES
+from footfall.data.store import Demonstration, DemoStore
 from footfall.expert.protocol import Expert, expert_settings
 
 DEFAULT_MARGIN = 1.0  # [value units; 1 unit = 1 cm of progress for the synthetic expert] a choice
@@ -108,3 +112,61 @@ def corrections_to_demonstrations(run: RunRecord, run_key: str, corrections: lis
     return [Demonstration(run.terrain_hash, steps[c.k].state, steps[c.k].candidates, c.label,
                           source=source_of(run_key, c.k), expert=settings)
             for c in corrections if c.label is not None]
+
+
+@dataclass(frozen=True)
+class StoredCorrections:
+    """What correcting a store's runs added to a demonstration store."""
+
+    store: str  # the output store's path
+    runs: int  # runs inspected
+    steps: int  # their steps (decisions)
+    above_margin: int  # steps whose shortfall exceeded the margin
+    added: int  # corrections stored (at most ``per_run`` a run)
+    margin: float  # [value units]
+    per_run: int | None  # labels a run at most (None: every step above the margin)
+    seed: int
+
+    def as_dict(self) -> dict:
+        """Plain data for JSON, in field order."""
+        return dict(vars(self))
+
+
+def correct_stored_runs(run_paths: Sequence[str | os.PathLike], out: str | os.PathLike,
+                        expert: Expert, margin: float, per_run: int | None, seed: int,
+                        key_prefix: str | None = None) -> StoredCorrections:
+    """The expert's corrections of the run logs in ``run_paths``, added to the store ``out``
+    (created if missing) in one transaction, as the reproduction's correction rounds make
+    them: each run's steps judged, the worst ``per_run`` above ``margin`` labelled.
+
+    The labels of run ``i`` (in store and creation order) draw their imperfection from
+    ``numpy.random.default_rng([seed, i])``: the same stores and seed give the same store.
+
+    Raises
+    ------
+    FootfallError
+        For a bad output path, an unreadable store, or stores without runs.
+    """
+    target = writable_path(out, SUFFIXES, what="store", kind="store")
+    demos, terrains, runs, steps, above = [], {}, 0, 0, 0
+    for path in run_paths:
+        with DemoStore(path, read_only=True) as store:
+            for head in store.runs(key_prefix=key_prefix):
+                run = store.run(head["id"])
+                if run.terrain_hash not in terrains:
+                    terrains[run.terrain_hash] = store.terrain(run.terrain_hash)
+                found = inspect_run(run, terrains[run.terrain_hash], expert, margin,
+                                    rng=np.random.default_rng([seed, runs]))
+                steps += len(found)
+                above += sum(c.label is not None for c in found)
+                found = worst_corrections(found, margin, per_run)
+                demos += corrections_to_demonstrations(run, head["key"] or f"{path}#{head['id']}",
+                                                       found, expert)
+                runs += 1
+    if runs == 0:
+        raise FootfallError("the stores hold no run logs to correct")
+    used = {d.terrain_hash for d in demos}
+    with DemoStore(target, create=True) as store:
+        store.add_demonstrations(demos, terrains=[h for k, h in terrains.items() if k in used])
+    return StoredCorrections(str(target), runs, steps, above, len(demos), float(margin), per_run,
+                             seed)

@@ -35,7 +35,7 @@ from footfall.features.family import (
 DEFAULT_TRAINING_CANDIDATES = 100  # other candidates per demonstration used for training pairs
 
 __all__ = ["FEATURE_SETS", "Example", "check_feature_set", "column_names", "create_families",
-           "design_matrix", "distinct_examples", "make_example", "stack", "stack_units",
+           "design_matrix", "distinct_examples", "make_example", "pair_example", "stack", "stack_units",
            "training_rows"]
 
 
@@ -64,6 +64,8 @@ class Example:
     key: str = ""  # the demonstration's decision_hash (state, all candidates, choice): examples
     # with the same key are the same demonstration, stacked once; "" = unique
     unit: str = ""  # its fold unit (a run, a board): folds never split one; "" = its own
+    parts: tuple[Example, ...] = ()  # a comparison across decisions: its rows are these
+    # examples' rows in order (each prepared in its own state); ``prepared`` is then empty
 
 
 def stack_units(examples: Sequence[Example]) -> np.ndarray | None:
@@ -99,8 +101,19 @@ def training_rows(n: int, chosen: int, k: int, rng: np.random.Generator) -> np.n
     return np.sort(np.append(others, chosen))
 
 
+def pair_example(better: Example, worse: Example, unit: str = "") -> Example:
+    """A comparison of two footholds from different decisions -- e.g. a trial's foothold that
+    went well and one that went wrong (:mod:`footfall.learning.trials`) --, the first
+    preferred: a two-row example whose rows are the one-row examples ``better`` and ``worse``."""
+    if better.n != 1 or worse.n != 1:
+        raise FootfallError("a comparison is of two one-foothold examples")
+    return Example((), 2, 0, better.front, np.arange(2), unit=unit, parts=(better, worse))
+
+
 def design_matrix(example: Example, families: Sequence[FeatureFamily]) -> np.ndarray:
     """The feature matrix (n, d) of an example, the families' columns side by side."""
+    if example.parts:
+        return np.concatenate([design_matrix(p, families) for p in example.parts])
     return np.concatenate([f.from_prepared(p) for f, p in zip(families, example.prepared)],
                           axis=1)
 

@@ -37,6 +37,7 @@ from footfall.learning.dataset import (
     check_feature_set,
     create_families,
     make_example,
+    pair_example,
     stack,
     stack_units,
     training_rows,
@@ -44,6 +45,7 @@ from footfall.learning.dataset import (
 from footfall.learning.function import RankingFunction, check_function
 from footfall.learning.learner import Learner, get_learner
 from footfall.learning.model import LEG_GROUPS, FootholdModel
+from footfall.learning.trials import DEFAULT_PAIRS, TrialFoothold, trial_footholds, trial_pairs
 
 
 @dataclass(frozen=True)
@@ -108,7 +110,28 @@ def _tune(examples: list[Example], families: tuple[FeatureFamily, ...], learner:
     return tuple(tuned)
 
 
+def _trial_examples(trials: Sequence[TrialFoothold], families: tuple[FeatureFamily, ...],
+                    config: FeatureConfig, robot: RobotDescription, pairs: int,
+                    rng: np.random.Generator, log: Callable[[str], None]) -> list[Example]:
+    """The trials' comparisons (:func:`trial_pairs`) as two-row examples, folds by board."""
+    single, kept = [], []
+    for t in trials:  # one foothold at a time: each was chosen in a state of its own
+        try:
+            single.append(make_example(t.hmap, t.state, t.foothold[None, :], 0, families, config,
+                                       robot=robot))
+        except FootfallError:  # too little terrain data around it for the features
+            continue
+        kept.append(t)
+    index = trial_pairs(np.array([t.board for t in kept], dtype=str),
+                        np.array([t.front for t in kept], dtype=bool),
+                        np.array([t.bad for t in kept], dtype=bool), pairs, rng)
+    log(f"trials: {len(kept)} footholds stood on ({sum(t.bad for t in kept)} went wrong), "
+        f"{len(index)} comparisons")
+    return [pair_example(single[g], single[b], unit="board:" + kept[b].board) for g, b in index]
+
+
 def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = "l1", *,
+                trials: Sequence[TrialFoothold] = (), trial_pairs: int = DEFAULT_PAIRS,
                 config: FeatureConfig | None = None, robot: RobotDescription = LITTLEDOG,
                 library_size: int = DEFAULT_LIBRARY_SIZE,
                 training_candidates: int = DEFAULT_TRAINING_CANDIDATES,
@@ -136,9 +159,9 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     check_count(training_candidates, "training_candidates", 1)
     cv = require_int(cv, "cv", 2)
     config = config or FeatureConfig()
-    if not demos:
-        raise FootfallError("no demonstrations to learn from")
-    resolutions = {d.hmap.resolution for d in demos}
+    if not demos and not trials:
+        raise FootfallError("no demonstrations or trials to learn from")
+    resolutions = {d.hmap.resolution for d in demos} | {t.hmap.resolution for t in trials}
     started = time.perf_counter()
     rng = np.random.default_rng(seed)
     unfitted = create_families(feature_set, config, robot)
@@ -147,23 +170,27 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     if any(f.name == "templates" for f in unfitted):
         options["templates"] = {"library_size": library_size, "bandwidth_rms": bandwidth_rms,
                                 **options.get("templates", {})}
-    families = tuple(
-        f.fit([d.hmap for d in demos], [d.state for d in demos], [d.candidates for d in demos],
-              [d.chosen for d in demos], rng, robot=robot, log=log, **options.get(f.name, {}))
-        for f in unfitted)
+    seen = (  # what the families fit on: the demonstrations, then each trial foothold alone
+        [d.hmap for d in demos] + [t.hmap for t in trials],
+        [d.state for d in demos] + [t.state for t in trials],
+        [d.candidates for d in demos] + [t.foothold[None, :] for t in trials],
+        [d.chosen for d in demos] + [0] * len(trials))
+    families = tuple(f.fit(*seen, rng, robot=robot, log=log, **options.get(f.name, {}))
+                     for f in unfitted)
     examples = []
     for d in demos:  # one demonstration at a time: each is vectorised over its candidates
         rows = training_rows(d.candidates.shape[0], d.chosen, training_candidates, rng)
         example = make_example(d.hmap, d.state, d.candidates, d.chosen, families, config, rows,
                                robot)
         examples.append(replace(example, unit=fold_unit(d, folds)))
+    examples += _trial_examples(trials, families, config, robot, trial_pairs, rng, log)
     functions = {}
     for group in LEG_GROUPS:
         chosen = [e for e in examples if e.front == (group == "front")]
         if len(chosen) < cv:
             raise FootfallError(f"{group} legs have {len(chosen)} demonstrations; "
                                 f"{cv}-fold cross-validation needs at least {cv}")
-        log(f"{group} legs: {len(chosen)} demonstrations")
+        log(f"{group} legs: {len(chosen)} demonstrations and comparisons")
         tuned = _tune(chosen, families, chosen_learner, Cs, cv, log)
         fitted = _fit(chosen, tuned, chosen_learner, Cs, cv, selection)
         functions[group] = check_function(chosen_learner.function(fitted, tuned, len(chosen)))
@@ -171,12 +198,15 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
         log(f"  lambda {info.get('lambda', math.nan):.4g}, cv error {fitted.cv_error_:.4f}, "
             f"{info.get('n_nonzero', '?')} non-zero weights, templates kept "
             f"{info.get('kept_counts', [0] * len(config.scales))}")
+    trial_info = {} if not trials else {
+        "trial_footholds": len(trials), "trial_comparisons": len(examples) - len(demos),
+        "trial_pairs": trial_pairs}
     return FootholdModel(feature_set, learner, functions, config, robot,
                          map_resolution=max(resolutions),
                          info={"n_demonstrations": len(demos), "seed": seed,
                                "library_size": library_size,
                                "training_candidates": training_candidates,
-                               "selection": selection, "folds": folds,
+                               "selection": selection, "folds": folds, **trial_info,
                                "seconds": time.perf_counter() - started})
 
 
@@ -218,6 +248,7 @@ class LearnedModel:
     demonstrations: int  # demonstrations learned from
     seconds: float  # [s] learning time
     groups: dict[str, dict[str, Any]]  # per leg group: lambda, cv_error, bandwidths, kept, ...
+    trial_footholds: int = 0  # footholds of the robot's own runs learned from
 
     def as_dict(self) -> dict[str, Any]:
         """Plain data for JSON, in field order."""
@@ -236,27 +267,36 @@ def _group_summary(f: RankingFunction, scales: int) -> dict[str, Any]:
             "non_zero_weights": f.info.get("n_nonzero")}
 
 
-def learn_from_store(store: str | os.PathLike, path: str | os.PathLike, feature_set: str,
+def learn_from_store(store: str | os.PathLike | None, path: str | os.PathLike, feature_set: str,
                      learner: str = "l1", *, source: str | Sequence[str] | None = None,
+                     trials: Sequence[str | os.PathLike] = (),
                      log: Callable[[str], None] = lambda s: None, **options: Any) -> LearnedModel:
     """Learn a model (:func:`learn_model`) from a store's demonstrations and save it to ``path``.
 
     ``source`` keeps only demonstrations whose source starts with it (or with any of
     several: ``("human", "run:")`` learns from people's labels and the synthetic expert's);
-    ``options`` are :func:`learn_model`'s keyword arguments (library_size,
-    training_candidates, bandwidth_rms, cv, seed, selection, ...).
+    ``trials`` are stores whose run logs add the robot's own footholds, labelled by what
+    followed (:mod:`footfall.learning.trials`); with ``store`` None they are all it learns
+    from. ``options`` are :func:`learn_model`'s keyword arguments (library_size,
+    training_candidates, bandwidth_rms, cv, seed, selection, trial_pairs, ...).
 
     Raises
     ------
     FootfallError
-        For a bad output path (checked first), a store without such
-        demonstrations, or bad learning settings.
+        For a bad output path (checked first), nothing to learn from (no store and no
+        trials, a store without such demonstrations, trial stores without runs), or bad
+        learning settings.
     """
     out = writable_path(path)
-    demos, maps = store_demonstrations(store, source=source)
-    training = [TrainingDemo.of(d, maps[d.terrain_hash]) for d in demos]
-    model = learn_model(training, feature_set, learner, log=log, **options)
+    if store is None and not trials:
+        raise FootfallError("give a store of demonstrations, trial stores, or both")
+    training = []
+    if store is not None:
+        demos, maps = store_demonstrations(store, source=source)
+        training = [TrainingDemo.of(d, maps[d.terrain_hash]) for d in demos]
+    tried = trial_footholds(trials) if trials else []
+    model = learn_model(training, feature_set, learner, trials=tried, log=log, **options)
     model.save(out)
-    return LearnedModel(str(out), feature_set, learner, len(demos), model.info["seconds"],
+    return LearnedModel(str(out), feature_set, learner, len(training), model.info["seconds"],
                         {g: _group_summary(f, len(model.config.scales))
-                         for g, f in model.functions.items()})
+                         for g, f in model.functions.items()}, len(tried))

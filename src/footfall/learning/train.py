@@ -36,6 +36,7 @@ from footfall.learning.dataset import (
     Example,
     check_feature_set,
     create_families,
+    design_matrix,
     make_example,
     pair_example,
     stack,
@@ -111,23 +112,28 @@ def _tune(examples: list[Example], families: tuple[FeatureFamily, ...], learner:
 
 
 def _trial_examples(trials: Sequence[TrialFoothold], families: tuple[FeatureFamily, ...],
-                    config: FeatureConfig, robot: RobotDescription, pairs: int,
+                    config: FeatureConfig, robot: RobotDescription, pairs: int, folds: str,
                     rng: np.random.Generator, log: Callable[[str], None]) -> list[Example]:
-    """The trials' comparisons (:func:`trial_pairs`) as two-row examples, folds by board."""
+    """The trials' comparisons (:func:`trial_pairs`) as two-row examples; a fold never splits
+    the comparisons of one run's foothold that went wrong (with ``folds`` board: a board's)."""
     single, kept = [], []
     for t in trials:  # one foothold at a time: each was chosen in a state of its own
         try:
-            single.append(make_example(t.hmap, t.state, t.foothold[None, :], 0, families, config,
-                                       robot=robot))
+            example = make_example(t.hmap, t.state, t.foothold[None, :], 0, families, config,
+                                   robot=robot)
         except FootfallError:  # too little terrain data around it for the features
             continue
-        kept.append(t)
+        if np.isfinite(design_matrix(example, families)).all():  # else: out of the leg's reach
+            single.append(example)
+            kept.append(t)
     index = trial_pairs(np.array([t.board for t in kept], dtype=str),
                         np.array([t.front for t in kept], dtype=bool),
                         np.array([t.bad for t in kept], dtype=bool), pairs, rng)
     log(f"trials: {len(kept)} footholds stood on ({sum(t.bad for t in kept)} went wrong), "
         f"{len(index)} comparisons")
-    return [pair_example(single[g], single[b], unit="board:" + kept[b].board) for g, b in index]
+    return [pair_example(single[g], single[b], unit=("board:" + kept[b].board if folds == "board"
+                                                     else "trial:" + kept[b].run))
+            for g, b in index]
 
 
 def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = "l1", *,
@@ -170,11 +176,16 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     if any(f.name == "templates" for f in unfitted):
         options["templates"] = {"library_size": library_size, "bandwidth_rms": bandwidth_rms,
                                 **options.get("templates", {})}
-    seen = (  # what the families fit on: the demonstrations, then each trial foothold alone
-        [d.hmap for d in demos] + [t.hmap for t in trials],
-        [d.state for d in demos] + [t.state for t in trials],
-        [d.candidates for d in demos] + [t.foothold[None, :] for t in trials],
-        [d.chosen for d in demos] + [0] * len(trials))
+    # What the families fit on: the demonstrations, then trial footholds, each alone, drawn at
+    # random to fill the library's slots (every demonstrated foothold is a template; the
+    # robot's own thousands of footholds would swamp the library if each were one).
+    slots = max(0, library_size // len(config.scales) - len(demos))
+    sample = [trials[i] for i in np.sort(rng.choice(len(trials), min(slots, len(trials)),
+                                                    replace=False))] if trials else []
+    seen = ([d.hmap for d in demos] + [t.hmap for t in sample],
+            [d.state for d in demos] + [t.state for t in sample],
+            [d.candidates for d in demos] + [t.foothold[None, :] for t in sample],
+            [d.chosen for d in demos] + [0] * len(sample))
     families = tuple(f.fit(*seen, rng, robot=robot, log=log, **options.get(f.name, {}))
                      for f in unfitted)
     examples = []
@@ -183,7 +194,8 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
         example = make_example(d.hmap, d.state, d.candidates, d.chosen, families, config, rows,
                                robot)
         examples.append(replace(example, unit=fold_unit(d, folds)))
-    examples += _trial_examples(trials, families, config, robot, trial_pairs, rng, log)
+    examples += _trial_examples(trials, families, config, robot, trial_pairs, folds, rng,
+                                log)
     functions = {}
     for group in LEG_GROUPS:
         chosen = [e for e in examples if e.front == (group == "front")]

@@ -14,7 +14,7 @@ bad", which no foothold choice can act on.
 A comparison spans two decisions (two robot states), so its two footholds are
 prepared each in its own state and stacked as one two-row example
 (:func:`footfall.learning.dataset.pair_example`); cross-validation folds never
-split a board's comparisons.
+split the comparisons of one run's foothold (with folds by board, a board's).
 """
 
 from __future__ import annotations

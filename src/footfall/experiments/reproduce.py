@@ -354,10 +354,13 @@ class Functions:
 
 
 def learn_functions(ws: Workspace, demos: list, log: Callable[[str], None]) -> Functions:
-    """Terrain features, templates, templates + features: L1, lambda at the smallest CV error."""
+    """Terrain features, templates, templates + features, by the configured learner and model
+    selection (:class:`ReproduceConfig`: learner, selection, folds)."""
+    c = ws.config
     models = {}
     for fs in PAPER_FEATURE_SETS:
-        log(f"learning {fs} (L1, lambda at the smallest CV error)")
+        log(f"learning {fs} (learner {c.learner}, {c.selection} on its path, folds by "
+            f"{c.folds})")
         models[fs] = _learn(ws, fs, demos, fs, ws.config.final_bandwidth_rms, log)
     return Functions(models)
 

@@ -90,9 +90,16 @@ def test_the_command_ranks_a_model_or_a_named_scorer_and_refuses_bad_use(store, 
     code, out, _ = run(capsys, "rank-eval", "--reward", "hand-tuned", path, "--no-expert")
     assert code == 0 and out.startswith("hand-tuned on 12 demonstrations: top-1 ")
     assert out.rstrip().endswith("above the margin n/a, severe n/a")
+    # several scorers on the same decisions: each as it is alone, the named one last
+    code, out, _ = run(capsys, "rank-eval", model, model, "--reward", "hand-tuned", path,
+                       "--no-expert", "--json")
+    many = json.loads(out)
+    assert code == 0 and [m["model"] for m in many] == [str(model), str(model), "hand-tuned"]
+    assert many[0] == many[1] == result
+    code, out, _ = run(capsys, "rank-eval", model, "--reward", "hand-tuned", path, "--no-expert")
+    assert code == 0 and out.splitlines()[1].startswith("hand-tuned on 12 demonstrations")
     for args, message in [
-            (["--reward", "hand-tuned", str(model), str(path)], "give MODEL.npz STORE.sqlite"),
-            ([str(path)], "give MODEL.npz STORE.sqlite"),
+            ([str(path)], "give MODEL.npz... STORE.sqlite"),
             (["--reward", "hand-tunde", str(path)], "unknown scorer 'hand-tunde'"),
             (["--reward", "expert", "--decisions", "runs", "--no-expert", str(path)],
              "run decisions are ranked against the expert's best")]:

@@ -14,7 +14,7 @@ from footfall.cli.output import emit, json_option, progress_log
 from footfall.core.errors import FootfallError
 from footfall.core.files import writable_path
 from footfall.core.limits import check_count
-from footfall.experiments.rank_eval import rank_eval
+from footfall.experiments.rank_eval import rank_eval_many
 from footfall.expert.settings_file import load_expert
 from footfall.learning.train import FOLDS, learn_from_store
 
@@ -108,7 +108,7 @@ def learn(store_path: str, feature_set: str, learner: str, library_size: int,
 
 
 @click.command("rank-eval")
-@click.argument("paths", nargs=-1, required=True, metavar="[MODEL.npz] STORE.sqlite")
+@click.argument("paths", nargs=-1, required=True, metavar="[MODEL.npz]... STORE.sqlite")
 @click.option("--reward", default=None, metavar="NAME",
               help="Rank with a named scorer instead of a model file: hand-tuned (the reward "
                    "learning starts from) or expert (the expert's own value, the ceiling).")
@@ -134,24 +134,31 @@ def rank_eval_cmd(paths: tuple[str, ...], reward: str | None, decisions: str,
                   expert_config: str | None, source: tuple[str, ...], as_json: bool) -> None:
     """How a scorer ranks a store's decisions against the expert: top-1, within 1 cm,
     percentile, the expert's shortfall of its pick and the shares above the correction margin
-    and the severe threshold."""
-    if len(paths) != (1 if reward is not None else 2):
-        raise FootfallError("give MODEL.npz STORE.sqlite, or --reward NAME STORE.sqlite")
-    agreement = rank_eval(None if reward is not None else paths[0], paths[-1], reward=reward,
-                          with_expert=not no_expert, source=source or None,
-                          decisions=decisions, run_key=run_key, margin=margin,
-                          expert_config=load_expert(expert_config) if expert_config else None)
+    and the severe threshold. Several models (and --reward) are judged on the same decisions,
+    the expert's values computed once."""
+    if len(paths) < 2 and reward is None:
+        raise FootfallError("give MODEL.npz... STORE.sqlite, or --reward NAME STORE.sqlite")
+    agreements = rank_eval_many(
+        paths[:-1], paths[-1], reward=reward, with_expert=not no_expert, source=source or None,
+        decisions=decisions, run_key=run_key, margin=margin,
+        expert_config=load_expert(expert_config) if expert_config else None)
+    data = ([a.as_dict() for a in agreements] if len(agreements) > 1
+            else agreements[0].as_dict())
+    emit(as_json, data, "\n".join(_agreement_text(a) for a in agreements))
+
+
+def _agreement_text(agreement) -> str:
+    """One scorer's measures on the decisions, in a line (and its outcome AUCs)."""
     s = agreement.scores
-    who = (agreement.model if reward is not None
-           else f"{agreement.feature_set}/{agreement.learner}")
-    emit(as_json, agreement.as_dict(),
-         f"{who} on {s.n} {DECISION_NOUN[agreement.decisions]}: "
-         f"top-1 {s.top1:.3f}, within 1 cm {_number(s.top1_near)}, "
-         f"percentile {s.percentile:.3f}, reward loss {_number(s.reward_loss)} "
-         f"(95 % CI {_number(s.reward_loss_ci[0])} to {_number(s.reward_loss_ci[1])}), "
-         f"above the margin {_number(s.above_margin)}, severe {_number(s.severe)}"
-         + ("" if agreement.expert is None else f"; judged by {agreement.expert}")
-         + _outcome_text(agreement.outcomes))
+    who = (agreement.model if agreement.feature_set == "-"
+           else f"{agreement.model}: {agreement.feature_set}/{agreement.learner}")
+    return (f"{who} on {s.n} {DECISION_NOUN[agreement.decisions]}: "
+            f"top-1 {s.top1:.3f}, within 1 cm {_number(s.top1_near)}, "
+            f"percentile {s.percentile:.3f}, reward loss {_number(s.reward_loss)} "
+            f"(95 % CI {_number(s.reward_loss_ci[0])} to {_number(s.reward_loss_ci[1])}), "
+            f"above the margin {_number(s.above_margin)}, severe {_number(s.severe)}"
+            + ("" if agreement.expert is None else f"; judged by {agreement.expert}")
+            + _outcome_text(agreement.outcomes))
 
 
 def _outcome_text(outcomes: dict | None) -> str:

@@ -106,6 +106,27 @@ def rank_eval(model_path: str | os.PathLike | None, store_path: str | os.PathLik
     """
     if (model_path is None) == (reward is None):
         raise FootfallError("give a model file or --reward NAME, not both and not neither")
+    return rank_eval_many([] if model_path is None else [model_path], store_path,
+                          reward=reward, with_expert=with_expert, source=source,
+                          decisions=decisions, run_key=run_key, margin=margin,
+                          expert_config=expert_config)[0]
+
+
+def rank_eval_many(model_paths: Sequence[str | os.PathLike], store_path: str | os.PathLike, *,
+                   reward: str | None = None, with_expert: bool = True,
+                   source: str | Sequence[str] | None = None, decisions: str = "demonstrations",
+                   run_key: str | None = None, margin: float = DEFAULT_MARGIN,
+                   expert_config: ExpertConfig | None = None) -> list[ModelAgreement]:
+    """:func:`rank_eval` of several models (and the named scorer ``reward``, last, if given)
+    on the same decisions: the store is read and the expert judges each decision once.
+
+    Raises
+    ------
+    FootfallError
+        As :func:`rank_eval`; also for no scorer at all.
+    """
+    if not model_paths and reward is None:
+        raise FootfallError("give a model file or --reward NAME")
     if not (isinstance(margin, (int, float)) and math.isfinite(margin) and margin >= 0):
         raise FootfallError(f"the correction margin must be a number >= 0, got {margin!r}")
     if decisions not in DECISIONS:
@@ -113,30 +134,32 @@ def rank_eval(model_path: str | os.PathLike | None, store_path: str | os.PathLik
     if decisions == "runs" and not with_expert:
         raise FootfallError("run decisions are ranked against the expert's best: they need "
                             "the expert")
-    if model_path is not None:
-        model = FootholdModel.load(model_path)
+    scorers = []  # (scorer, name, feature set, learner)
+    for path in model_paths:  # every model checked before the store is read
+        model = FootholdModel.load(path)
         model.check_compatible(robot=LITTLEDOG)  # the robot whose states the store holds
-        scorer, name, feature_set, learner = model, str(model_path), model.feature_set, \
-            model.learner
-    else:
-        named = SCORERS.get(reward)  # an unknown name fails here, before the store is read
-        name, feature_set, learner = reward, "-", "-"
+        scorers.append((model, str(path), model.feature_set, model.learner))
+    named = SCORERS.get(reward) if reward is not None else None  # an unknown name fails here
     if decisions == "demonstrations":
         demos, maps = store_demonstrations(store_path, source=source)
     judge = expert_config or judging_expert(demos if decisions == "demonstrations" else None)
     expert = SyntheticExpert(judge, LITTLEDOG) if with_expert else None
-    if model_path is None:  # "expert" is the judging expert's own value: the ceiling
-        scorer = EveryLeg(ExpertScorer(SyntheticExpert(judge, LITTLEDOG), name=judge_name(judge))
-                          if reward == "expert" else named(None))
+    if reward is not None:  # "expert" is the judging expert's own value: the ceiling
+        scorers.append((EveryLeg(ExpertScorer(SyntheticExpert(judge, LITTLEDOG),
+                                              name=judge_name(judge))
+                                 if reward == "expert" else named(None)), reward, "-", "-"))
     if decisions == "demonstrations":
         values = expert_values(demos, maps.__getitem__, expert) if expert else None
     else:
         demos, maps, values = run_decisions(store_path, expert, run_key)
-    scores = rank_scores(scorer, demos, maps.__getitem__, values=values,
-                         margin=float(margin), severe_above=SEVERE_SHORTFALL)
-    outcomes = (outcome_power(scorer, store_path, run_key) if decisions == "runs" else None)
-    return ModelAgreement(name, feature_set, learner, scores, decisions, outcomes,
-                          judge_name(judge) if with_expert else None)
+    out = []
+    for scorer, name, feature_set, learner in scorers:
+        scores = rank_scores(scorer, demos, maps.__getitem__, values=values,
+                             margin=float(margin), severe_above=SEVERE_SHORTFALL)
+        outcomes = (outcome_power(scorer, store_path, run_key) if decisions == "runs" else None)
+        out.append(ModelAgreement(name, feature_set, learner, scores, decisions, outcomes,
+                                  judge_name(judge) if with_expert else None))
+    return out
 
 
 def outcome_power(model, store_path: str | os.PathLike, run_key: str | None = None,

@@ -81,6 +81,17 @@ def test_a_function_learned_from_trials_alone_ranks_what_went_wrong_below():
         assert auc > 0.9, (group, auc)
 
 
+def test_the_template_library_draws_the_robots_footholds_into_its_slots():
+    hmap = _step_board()
+    trials = _trials(hmap, np.random.default_rng(1), n=40)
+    model = learn_model([], "templates", "l1", trials=trials, cv=3, seed=0,
+                        library_size=30, bandwidth_rms=(0.004,) * 3)
+    # 10 a scale of the 40 footholds (not every one, as a demonstrated foothold would be)
+    assert [f.info["library_counts"] for f in model.functions.values()] == [[10, 10, 10]] * 2
+    values = [_value(model, hmap, t) for t in trials[:8]]
+    assert np.isfinite(values).all()
+
+
 def _value(model, hmap, t):
     """The model's value of a trial foothold in its own state."""
     c = Candidates.of_state(hmap, t.state, t.foothold[None, :], model.config)

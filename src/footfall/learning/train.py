@@ -36,7 +36,6 @@ from footfall.learning.dataset import (
     Example,
     check_feature_set,
     create_families,
-    design_matrix,
     make_example,
     pair_example,
     stack,
@@ -111,6 +110,13 @@ def _tune(examples: list[Example], families: tuple[FeatureFamily, ...], learner:
     return tuple(tuned)
 
 
+def _finite(prepared: Any) -> bool:
+    """Whether every number in a family's prepared data (arrays, nested in tuples) is finite."""
+    if isinstance(prepared, (tuple, list)):
+        return all(_finite(p) for p in prepared)
+    return bool(np.isfinite(np.asarray(prepared, dtype=np.float64)).all())
+
+
 def _trial_examples(trials: Sequence[TrialFoothold], families: tuple[FeatureFamily, ...],
                     config: FeatureConfig, robot: RobotDescription, pairs: int, folds: str,
                     rng: np.random.Generator, log: Callable[[str], None]) -> list[Example]:
@@ -123,7 +129,7 @@ def _trial_examples(trials: Sequence[TrialFoothold], families: tuple[FeatureFami
                                    robot=robot)
         except FootfallError:  # too little terrain data around it for the features
             continue
-        if np.isfinite(design_matrix(example, families)).all():  # else: out of the leg's reach
+        if _finite(example.prepared):  # else: out of the leg's reach (no joint margin)
             single.append(example)
             kept.append(t)
     index = trial_pairs(np.array([t.board for t in kept], dtype=str),

@@ -122,6 +122,8 @@ def _trial_examples(trials: Sequence[TrialFoothold], families: tuple[FeatureFami
                     rng: np.random.Generator, log: Callable[[str], None]) -> list[Example]:
     """The trials' comparisons (:func:`trial_pairs`) as two-row examples; a fold never splits
     the comparisons of one run's foothold that went wrong (with ``folds`` board: a board's)."""
+    if not trials:
+        return []
     single, kept = [], []
     for t in trials:  # one foothold at a time: each was chosen in a state of its own
         try:

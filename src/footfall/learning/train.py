@@ -110,6 +110,30 @@ def _tune(examples: list[Example], families: tuple[FeatureFamily, ...], learner:
     return tuple(tuned)
 
 
+def _fit_families(unfitted: tuple[FeatureFamily, ...], demos: Sequence[TrainingDemo],
+                  trials: Sequence[TrialFoothold], family_options: dict | None,
+                  library_size: int, bandwidth_rms: Sequence[float] | None,
+                  config: FeatureConfig, robot: RobotDescription, rng: np.random.Generator,
+                  log: Callable[[str], None]) -> tuple[FeatureFamily, ...]:
+    """Each family fitted (a template library built) on the demonstrations, then on trial
+    footholds, each alone, drawn at random to fill the library's slots: every demonstrated
+    foothold is a template, and the robot's own thousands would swamp the library."""
+    check_family_options(unfitted, family_options or {})
+    options = {name: dict(opts) for name, opts in (family_options or {}).items()}
+    if any(f.name == "templates" for f in unfitted):
+        options["templates"] = {"library_size": library_size, "bandwidth_rms": bandwidth_rms,
+                                **options.get("templates", {})}
+    slots = max(0, library_size // len(config.scales) - len(demos))
+    sample = [trials[i] for i in np.sort(rng.choice(len(trials), min(slots, len(trials)),
+                                                    replace=False))] if trials else []
+    seen = ([d.hmap for d in demos] + [t.hmap for t in sample],
+            [d.state for d in demos] + [t.state for t in sample],
+            [d.candidates for d in demos] + [t.foothold[None, :] for t in sample],
+            [d.chosen for d in demos] + [0] * len(sample))
+    return tuple(f.fit(*seen, rng, robot=robot, log=log, **options.get(f.name, {}))
+                 for f in unfitted)
+
+
 def _finite(prepared: Any) -> bool:
     """Whether every number in a family's prepared data (arrays, nested in tuples) is finite."""
     if isinstance(prepared, (tuple, list)):
@@ -162,7 +186,11 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     family's options; ``family_options`` passes any family's own options by
     family name. ``selection`` picks lambda on the path (see
     :class:`footfall.learning.ranker.FootholdRanker`); ``folds`` what the
-    cross-validation folds never split (:data:`FOLDS`).
+    cross-validation folds never split (:data:`FOLDS`). ``trials`` are footholds
+    of the robot's own runs labelled by what followed
+    (:mod:`footfall.learning.trials`): each that went wrong is ranked below
+    ``trial_pairs`` that did not, of its board and leg group -- alone (no
+    ``demos``) or with the demonstrations, in one fit.
     """
     feature_set = check_feature_set(feature_set)
     if folds not in FOLDS:
@@ -178,24 +206,9 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     resolutions = {d.hmap.resolution for d in demos} | {t.hmap.resolution for t in trials}
     started = time.perf_counter()
     rng = np.random.default_rng(seed)
-    unfitted = create_families(feature_set, config, robot)
-    check_family_options(unfitted, family_options or {})
-    options = {name: dict(opts) for name, opts in (family_options or {}).items()}
-    if any(f.name == "templates" for f in unfitted):
-        options["templates"] = {"library_size": library_size, "bandwidth_rms": bandwidth_rms,
-                                **options.get("templates", {})}
-    # What the families fit on: the demonstrations, then trial footholds, each alone, drawn at
-    # random to fill the library's slots (every demonstrated foothold is a template; the
-    # robot's own thousands of footholds would swamp the library if each were one).
-    slots = max(0, library_size // len(config.scales) - len(demos))
-    sample = [trials[i] for i in np.sort(rng.choice(len(trials), min(slots, len(trials)),
-                                                    replace=False))] if trials else []
-    seen = ([d.hmap for d in demos] + [t.hmap for t in sample],
-            [d.state for d in demos] + [t.state for t in sample],
-            [d.candidates for d in demos] + [t.foothold[None, :] for t in sample],
-            [d.chosen for d in demos] + [0] * len(sample))
-    families = tuple(f.fit(*seen, rng, robot=robot, log=log, **options.get(f.name, {}))
-                     for f in unfitted)
+    families = _fit_families(create_families(feature_set, config, robot), demos, trials,
+                             family_options, library_size, bandwidth_rms, config, robot, rng,
+                             log)
     examples = []
     for d in demos:  # one demonstration at a time: each is vectorised over its candidates
         rows = training_rows(d.candidates.shape[0], d.chosen, training_candidates, rng)

@@ -19,7 +19,8 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
               "Collect and inspect demonstrated footholds (a demonstration store, .sqlite)."),
     "store": ("footfall.cli.store", "store", "Inspect a demonstration store file (.sqlite)."),
     "learn": ("footfall.cli.learning", "learn",
-              "Learn front- and hind-leg foothold ranking functions from demonstrations."),
+              "Learn front- and hind-leg foothold ranking functions from demonstrations, "
+              "from the robot's own trials, or from both."),
     "rank-eval": ("footfall.cli.learning", "rank_eval_cmd",
                   "How a scorer ranks a store's decisions against the expert: top-1, within 1 "
                   "cm, percentile, the expert's shortfall of its pick and the shares above "

@@ -17,6 +17,7 @@ from footfall.core.limits import check_count
 from footfall.experiments.rank_eval import rank_eval_many
 from footfall.expert.settings_file import load_expert
 from footfall.learning.train import FOLDS, learn_from_store
+from footfall.learning.trials import DEFAULT_PAIRS
 
 SOURCE_HELP = ("Only demonstrations whose source starts with this: walker:train, human (people's "
                "labels), run: (the synthetic expert's corrections); repeat for several.")
@@ -72,7 +73,8 @@ def model_output(path: str) -> Path:
               help="Also learn from the robot's own runs in this store (repeatable): every "
                    "foothold followed by a slide, a miss or a fall is ranked below footholds of "
                    "its board that were not. Without DEMOS.sqlite, learn from them alone.")
-@click.option("--trial-pairs", type=click.IntRange(1, 100), default=4, show_default=True,
+@click.option("--trial-pairs", type=click.IntRange(1, 100), default=DEFAULT_PAIRS,
+              show_default=True,
               help="Footholds that went well each one that went wrong is ranked below.")
 @click.option("--seed", type=SEED, default=0, show_default=True,
               help="Seed of the template library's sample and the training candidates.")

@@ -1,14 +1,16 @@
 """``footfall study``: whole reproductions per seed, resumable, sharing no board or run seed."""
 
 import json
+import shutil
 from dataclasses import replace
 
 import pytest
 
 from cli_helpers import assert_user_error, run
+from footfall.core.errors import FootfallError
 from footfall.data.store import DemoStore
 from footfall.experiments.reproduce import STORE_NAME, ReproduceConfig
-from footfall.experiments.study import run_study, seed_folder, study_markdown
+from footfall.experiments.study import SEED_FILE, run_study, seed_folder, study_markdown
 from footfall.expert.synthetic import ExpertConfig
 from footfall.sim.episode import WalkConfig
 
@@ -83,10 +85,33 @@ def test_a_study_resumes_after_an_interruption_and_its_seeds_share_nothing(tmp_p
     assert md == study_markdown(summary)
     assert "templates + features above templates" in md and "Spread across the seeds" in md
 
+    for v in summary["against_start"]:  # the teacher and the functions against the start
+        assert v["pairs"] == 2 * TINY.test_boards * TINY.eval_runs
+    assert "Against the hand-tuned reward" in md
+    assert set(summary["fewer_templates_than_demonstrations"]) == {"templates", "both"}
+
     again: list[str] = []  # a third time: nothing left to walk
     run_study(tmp_path, [0, 1], config_for=tiny, processes=1, log=lambda s: None,
               on_run=again.append)
     assert again == []
+
+    # A finished seed travels as its study-seed.json alone: gathered into another folder
+    # (without its store), it is read, not walked, and summarises the same.
+    gathered = tmp_path / "gathered"
+    for seed in (0, 1):
+        seed_folder(gathered, seed).mkdir(parents=True)
+        shutil.copy(seed_folder(tmp_path, seed) / SEED_FILE, seed_folder(gathered, seed))
+    elsewhere: list[str] = []
+    read = run_study(gathered, [0, 1], config_for=tiny, processes=1, log=lambda s: None,
+                     on_run=elsewhere.append)
+    assert elsewhere == [] and not (seed_folder(gathered, 0) / STORE_NAME).exists()
+    for key in ("verdicts", "against_start", "spread"):
+        assert json.dumps(read[key], sort_keys=True) == json.dumps(
+            json.loads(json.dumps(summary[key])), sort_keys=True)
+    # one of other settings is refused in one line
+    with pytest.raises(FootfallError, match="other settings"):
+        run_study(gathered, [0, 1], config_for=lambda s: replace(tiny(s), eval_runs=2),
+                  processes=1, log=lambda s: None)
 
 
 def test_a_study_folder_with_other_settings_is_refused(tmp_path, capsys):

@@ -136,3 +136,23 @@ class Finite(click.FloatRange):
         if not math.isfinite(number):
             self.fail(f"{value!r} is not a finite number", param, ctx)
         return number
+
+
+class Budget(Finite):
+    """A template budget: a share of the demonstrations above 0 [-], or ``none`` (no budget,
+    returned as :data:`NO_BUDGET`)."""
+
+    name = "share|none"
+
+    def __init__(self) -> None:
+        super().__init__(min=0.0, min_open=True)
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None
+                ) -> Any:
+        if isinstance(value, str) and value.strip().lower() == "none":
+            return NO_BUDGET
+        return value if value is NO_BUDGET else super().convert(value, param, ctx)
+
+
+NO_BUDGET = "none"  # --template-budget none: a function may read any number of templates
+BUDGET = Budget()

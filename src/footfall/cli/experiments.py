@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from footfall.cli.choices import FEATURE_SET, LEARNER, SEED, RegistryChoice
+from footfall.cli.choices import BUDGET, FEATURE_SET, LEARNER, NO_BUDGET, SEED, RegistryChoice
 from footfall.cli.executors import executor_options, opened_executor
 from footfall.cli.output import emit, json_option, progress_log
 from footfall.core.errors import FootfallError
@@ -58,6 +58,9 @@ def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
 @click.option("--selection", type=click.Choice(SELECTIONS), default=None,
               help="Where a learner stops on its path: one standard error or the smallest CV "
                    "error [default: 1se].")
+@click.option("--template-budget", type=BUDGET, default=None,
+              help="A leg group's function reads at most this share of its demonstrations' "
+                   "number of templates, or 'none' [default: none].")
 @click.option("--library-size", type=click.IntRange(min=3), default=None,
               help="Templates in the library before selection [default: 1000].")
 @click.option("--seed", type=SEED, default=0, show_default=True)
@@ -67,7 +70,8 @@ def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
 def learning_curve(out: str, sizes: str | None, draws: int | None,
                    feature_sets: tuple[str, ...], learners: tuple[str, ...],
                    test_decisions: int | None, folds: str | None, selection: str | None,
-                   library_size: int | None, seed: int, quick: bool, as_json: bool) -> None:
+                   template_budget: float | str | None, library_size: int | None, seed: int,
+                   quick: bool, as_json: bool) -> None:
     """Learning curves: each feature set and learner from 25 to 1 600 demonstrations, on
     held-out decisions, with the hand-tuned and expert lines."""
     config = CurveConfig.quick(seed) if quick else CurveConfig(seed=seed)
@@ -83,6 +87,8 @@ def learning_curve(out: str, sizes: str | None, draws: int | None,
                        ("feature_sets", feature_sets or None), ("learners", learners or None)):
         if value is not None:
             changes[key] = value
+    if template_budget is not None:
+        changes["template_budget"] = None if template_budget == NO_BUDGET else template_budget
     config = replace(config, **changes)  # checked: one line for a bad value
     summary = run_learning_curve(Path(out), config, log=progress_log(as_json))
     emit(as_json, summary, f"wrote {Path(out) / 'report.md'}")
@@ -130,7 +136,11 @@ def test_kinds_option(f):
 
 
 def learner_options(f):
-    """Add --learner and --folds: how the reproduction learns its ranking functions."""
+    """Add --learner, --folds and --template-budget: how the reproduction learns its ranking
+    functions."""
+    f = click.option("--template-budget", type=BUDGET, default=None,
+                     help="A leg group's function reads at most this share of its "
+                          "demonstrations' number of templates, or 'none' [default: 0.5].")(f)
     f = click.option("--folds", type=click.Choice(FOLDS), default=None,
                      help="What a cross-validation fold never splits [default: "
                           "demonstration].")(f)
@@ -139,14 +149,18 @@ def learner_options(f):
 
 
 def _reproduce_config(seed: int, quick: bool, test_kinds: str | None,
-                      learner: str | None = None, folds: str | None = None):
+                      learner: str | None = None, folds: str | None = None,
+                      template_budget: float | str | None = None):
     """The reproduction's settings for ``seed``: the default or quick ones, with other kinds,
-    learner or folds."""
+    learner, folds or template budget."""
     config = ReproduceConfig.quick(seed) if quick else ReproduceConfig(seed=seed)
     changes: dict = {"learner": learner, "folds": folds}
     if test_kinds is not None:
         changes["test_kinds"] = tuple(k.strip() for k in test_kinds.split(","))
-    return replace(config, **{k: v for k, v in changes.items() if v is not None})
+    changes = {k: v for k, v in changes.items() if v is not None}
+    if template_budget is not None:
+        changes["template_budget"] = None if template_budget == NO_BUDGET else template_budget
+    return replace(config, **changes)
 
 
 def _table2_line(name: str, row: dict) -> str:
@@ -166,10 +180,10 @@ def _table2_line(name: str, row: dict) -> str:
 @executor_options
 @json_option
 def reproduce(out: str, seed: int, quick: bool, test_kinds: str | None, learner: str | None,
-              folds: str | None, processes: int | None, executor_name: str,
-              ray_address: str | None, as_json: bool) -> None:
+              folds: str | None, template_budget: float | str | None, processes: int | None,
+              executor_name: str, ray_address: str | None, as_json: bool) -> None:
     """The paper's walking experiment end to end: corrections, learning, Tables I and II."""
-    config = _reproduce_config(seed, quick, test_kinds, learner, folds)
+    config = _reproduce_config(seed, quick, test_kinds, learner, folds, template_budget)
     with opened_executor(executor_name, processes, ray_address) as executor:
         results = run_reproduction(Path(out), config, log=progress_log(as_json),
                                    executor=executor)
@@ -200,13 +214,13 @@ def reproduce(out: str, seed: int, quick: bool, test_kinds: str | None, learner:
 @json_option
 def study(first_seed: int, more_seeds: tuple[int, ...], out: str, quick: bool,
           test_kinds: str | None, learner: str | None, folds: str | None,
-          processes: int | None, executor_name: str, ray_address: str | None,
-          as_json: bool) -> None:
+          template_budget: float | str | None, processes: int | None, executor_name: str,
+          ray_address: str | None, as_json: bool) -> None:
     """Several whole reproductions and a verdict on each of the paper's orderings."""
     seeds = [first_seed, *more_seeds]
 
     def config_for(seed: int):
-        return _reproduce_config(seed, quick, test_kinds, learner, folds)
+        return _reproduce_config(seed, quick, test_kinds, learner, folds, template_budget)
 
     config_for(0)  # bad settings: one line before anything is walked
     with opened_executor(executor_name, processes, ray_address) as executor:

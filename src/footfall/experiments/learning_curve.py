@@ -118,6 +118,10 @@ class CurveConfig(Params):
                            doc="where on its path a learner stops: at the smallest CV error "
                                "(the reproduction's, paper §V) or the simplest within one "
                                "standard error of it")
+    template_budget: float | None = param(
+        None, unit="-", range=above(0),
+        doc="a leg group's function reads at most this share of its demonstrations' number "
+            "of templates; None: no budget")
     seed: int = param(0, range=at_least(0), doc="the curve's seed: boards, demonstrations and "
                                                 "learning draw from its named streams")
 
@@ -283,6 +287,7 @@ def _point_model(out: Path, config: CurveConfig, key: tuple, training: list[Trai
         rms = None if config.bandwidth_rms is None else (config.bandwidth_rms,) * 3
         learn_model(training[:n], fs, ln, library_size=config.library_size, bandwidth_rms=rms,
                     folds=config.folds, selection=config.selection,
+                    template_budget=config.template_budget,
                     seed=config.streams.seed_for("learning", draw, n)).save(path)
         log(f"  draw {draw}, {n} demonstrations, {fs}/{ln}: learned in "
             f"{time.perf_counter() - t0:.0f} s")

@@ -80,10 +80,10 @@ from footfall.expert.corrections import SEVERE_SHORTFALL, step_verdicts
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
 from footfall.features.family import PAPER_FEATURE_SETS
 from footfall.learning.evaluation import expert_values, rank_scores
-from footfall.learning.learner import LEARNERS
+from footfall.learning.learner import LEARNERS, get_learner
 from footfall.learning.model import LEG_GROUPS, FootholdModel
 from footfall.learning.ranker import SELECTIONS
-from footfall.learning.train import FOLDS, TrainingDemo, learn_model
+from footfall.learning.train import FOLDS, TrainingDemo, check_budget, learn_model
 from footfall.sim.episode import WalkConfig
 from footfall.terrain import KINDS
 
@@ -171,6 +171,10 @@ class ReproduceConfig(Params):
                          "docs/learning/model-selection.md)")
     folds: str = param("demonstration", choices=FOLDS,
                        doc="what a cross-validation fold never splits")
+    template_budget: float | None = param(
+        0.5, unit="-", range=above(0),
+        doc="a leg group's function reads at most this share of its demonstrations' number "
+            "of templates (docs/learning/model-selection.md); None: no budget (the paper's)")
     round_bandwidth_rms: float = param(
         0.004, unit="m", range=above(0), doc="RBF bandwidth (as RMS height difference) of the "
                                              "functions the robot walks with between rounds")
@@ -194,6 +198,7 @@ class ReproduceConfig(Params):
         if self.expert is None and isinstance(self.walk, WalkConfig):
             object.__setattr__(self, "expert", walking_expert(self.walk.footstep.lead))
         super().__post_init__()
+        check_budget(get_learner(self.learner), self.template_budget)
 
     @classmethod
     def quick(cls, seed: int = 0) -> ReproduceConfig:
@@ -235,6 +240,8 @@ def _learn(ws: Workspace, name: str, demos: list, feature_set: str, rms: float |
                 "training_candidates": config.training_candidates}
     if (config.learner, config.folds) != ("l1", "demonstration"):  # keys of the paper's stay
         settings.update(learner=config.learner, folds=config.folds)
+    if config.template_budget is not None:
+        settings.update(template_budget=config.template_budget)
     key = _training_key(demos, feature_set, settings)
     if path.exists():
         try:
@@ -252,6 +259,7 @@ def _learn(ws: Workspace, name: str, demos: list, feature_set: str, rms: float |
                         training_candidates=config.training_candidates,
                         bandwidth_rms=None if rms is None else (rms,) * 3, cv=config.cv,
                         seed=seed, selection=config.selection, folds=config.folds,
+                        template_budget=config.template_budget,
                         log=lambda s: log("    " + s))
     model = replace(model, info={**model.info, "training_key": key,
                                  "sources": [d.source for d in demos]})

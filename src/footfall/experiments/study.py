@@ -19,13 +19,23 @@ own, on whichever executor the runs use -- and summarises them:
   own verdict beside it.
 
 The summary goes to ``summary.json`` and ``summary.md`` in ``OUT``.
+
+A finished seed also leaves ``OUT/seedN/study-seed.json`` (:data:`SEED_FILE`):
+its reproduction's results and every paired test run's outcome, with the
+settings and the source revision that made them. A study reads a seed from
+that file instead of walking it again, so the seeds of one study may be
+walked on different machines, or at different times, and gathered by
+copying each ``seedN/study-seed.json`` into one folder: only the same
+settings are accepted, and the summary names each seed's revision.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import subprocess
 import time
+from dataclasses import asdict
 from pathlib import Path
 from typing import Callable
 
@@ -36,7 +46,7 @@ from footfall.core.errors import FootfallError
 from footfall.core.files import plain_json
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor
-from footfall.experiments.paired import compare
+from footfall.experiments.paired import RunOutcome, compare
 from footfall.experiments.report import PAIR_COLUMNS, pair_cells
 from footfall.experiments.reproduce import STORE_NAME, ReproduceConfig, run_reproduction
 from footfall.experiments.runs import claim_folder
@@ -45,8 +55,62 @@ from footfall.experiments.workspace import evaluation_seeds
 
 PAPER_ORDERINGS = (("both", "templates"), ("templates", "terrain"), ("both", "terrain"))
 # the paper's Table II: the first of each pair crossed more often and slipped less
+AGAINST_START = (("expert", "default"), ("both", "default"), ("templates", "default"))
+# the teacher and the learned functions against the hand-tuned reward learning starts from
 NAMES = {"terrain": "terrain features", "templates": "templates",
          "both": "templates + features", "expert": "expert", "default": "hand-tuned"}
+
+
+SEED_FILE = "study-seed.json"  # a finished seed's results and paired outcomes
+SEED_FORMAT, SEED_VERSION = "footfall.study-seed", 1
+
+
+def source_revision() -> str | None:
+    """The git commit footfall's source is checked out at (with ``+changes`` if its tree has
+    uncommitted changes), or None outside a git checkout."""
+    here = Path(__file__).resolve().parent
+    try:
+        head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True,
+                              text=True, timeout=10)
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                               cwd=here, capture_output=True, text=True, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    if head.returncode != 0:
+        return None
+    return head.stdout.strip() + ("+changes" if dirty.stdout.strip() else "")
+
+
+def save_seed(folder: Path, seed: int, settings: dict, results: dict, outcomes: dict) -> None:
+    """Write a finished seed's :data:`SEED_FILE` (atomically)."""
+    record = {"format": SEED_FORMAT, "version": SEED_VERSION, "seed": seed,
+              "settings": settings, "revision": source_revision(), "results": results,
+              "outcomes": {m: [[unit[0], unit[1], asdict(o)] for unit, o in units.items()]
+                           for m, units in outcomes.items()}}
+    write_text_atomic(folder / SEED_FILE,
+                      json.dumps(plain_json(record, nonfinite="keep"), indent=1))
+
+
+def load_seed(folder: Path, seed: int, settings: dict) -> tuple[dict, dict, str | None] | None:
+    """A finished seed's results, paired outcomes and revision from its :data:`SEED_FILE`;
+    None without one. A file of other settings, another seed or format is refused."""
+    path = folder / SEED_FILE
+    if not path.exists():
+        return None
+    try:
+        record = json.loads(path.read_text())
+        if (record.get("format"), record.get("version")) != (SEED_FORMAT, SEED_VERSION):
+            raise ValueError(f"not a {SEED_FORMAT} file of version {SEED_VERSION}")
+        outcomes = {m: {(str(board), int(s)): RunOutcome(**o) for board, s, o in units}
+                    for m, units in record["outcomes"].items()}
+        results = record["results"]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise FootfallError(f"{path}: unreadable ({exc}); remove it to walk the seed "
+                            f"again") from None
+    if record.get("seed") != seed or record.get("settings") != json.loads(json.dumps(settings)):
+        raise FootfallError(f"{path} holds seed {record.get('seed')} of other settings; "
+                            f"remove it or use another --out")
+    return results, outcomes, record.get("revision")
 
 
 def seed_folder(out: Path, seed: int) -> Path:
@@ -75,18 +139,28 @@ def run_study(out: str | os.PathLike, seeds: list[int], quick: bool = False,
     claim_folder(out, {"study of": "reproduce", "settings": settings}, "a study")
     started = time.perf_counter()
     results, outcomes = {}, {m: {} for m in METHODS}
+    revisions = {}
     for n, seed in enumerate(seeds):
-        log(f"=== reproduction seed {seed} ({n + 1} of {len(seeds)})")
         folder = seed_folder(out, seed)
-        results[seed] = run_reproduction(folder, config_for(seed), processes=processes, log=log,
-                                         on_run=on_run, executor=executor)
-        with DemoStore(folder / STORE_NAME) as store:
-            runs = load_runs(store, "eval/test")
-        for m, units in test_outcomes(runs, list(results[seed]["table2_boards"]),
-                                      evaluation_seeds(config_for(seed)),
-                                      tag=f"seed{seed}/").items():
+        finished = load_seed(folder, seed, settings)
+        if finished is not None:
+            results[seed], mine, revisions[seed] = finished
+            log(f"=== reproduction seed {seed} ({n + 1} of {len(seeds)}): finished, read from "
+                f"{folder / SEED_FILE}")
+        else:
+            log(f"=== reproduction seed {seed} ({n + 1} of {len(seeds)})")
+            results[seed] = run_reproduction(folder, config_for(seed), processes=processes,
+                                             log=log, on_run=on_run, executor=executor)
+            with DemoStore(folder / STORE_NAME) as store:
+                runs = load_runs(store, "eval/test")
+            mine = test_outcomes(runs, list(results[seed]["table2_boards"]),
+                                 evaluation_seeds(config_for(seed)), tag=f"seed{seed}/")
+            save_seed(folder, seed, settings, results[seed], mine)
+            revisions[seed] = source_revision()
+        for m, units in mine.items():
             outcomes[m].update(units)
     summary = summarise_study(results, outcomes)
+    summary["revisions"] = {str(seed): rev for seed, rev in revisions.items()}
     summary["seconds_this_session"] = time.perf_counter() - started
     write_text_atomic(out / "summary.json",
                       json.dumps(plain_json(summary, nonfinite="keep"), indent=1))
@@ -107,6 +181,7 @@ def summarise_study(results: dict[int, dict], outcomes: dict) -> dict:
             "table2_pooled": {m: _brief(t) for m, t in r["table2_pooled"].items()},
             "table2_one_board": {m: _brief(t) for m, t in r["table2"].items()},
             "table1": r["table1"],
+            "demonstrations": _per_group(r["demonstrations"]["by_leg"]),
             "verdicts": {f"{a}>{b}": {"success": pairs[a, b]["success_verdict"],
                                       "slip": pairs[a, b]["slip_verdict"],
                                       "p_value": pairs[a, b]["p_value"]}
@@ -125,8 +200,20 @@ def summarise_study(results: dict[int, dict], outcomes: dict) -> dict:
                  **compare(outcomes, a, b, seed=0),
                  "per_seed": {s: per_seed[s]["verdicts"][f"{a}>{b}"] for s in per_seed}}
                 for a, b in PAPER_ORDERINGS]
+    against = [{"ordering": f"{NAMES[a]} above {NAMES[b]}", **compare(outcomes, a, b, seed=0)}
+               for a, b in AGAINST_START]
     return {"seeds": list(results), "per_seed": per_seed, "spread": spread,
-            "verdicts": verdicts}
+            "verdicts": verdicts, "against_start": against,
+            "fewer_templates_than_demonstrations": {
+                fs: all(sum(p["table1"][fs][g]["kept"]) < p["demonstrations"][g]
+                        for p in per_seed.values() for g in ("front", "hind"))
+                for fs in ("templates", "both")}}
+
+
+def _per_group(by_leg: dict) -> dict:
+    """Demonstrations per leg group from those per leg (LF, RF, LH, RH)."""
+    return {"front": sum(n for leg, n in by_leg.items() if leg.endswith("F")),
+            "hind": sum(n for leg, n in by_leg.items() if leg.endswith("H"))}
 
 
 def _brief(t: dict) -> dict:
@@ -154,6 +241,10 @@ def study_markdown(summary: dict) -> str:
     for v in summary["verdicts"]:
         per = "; ".join(f"{s}: {x['success']} / {x['slip']}" for s, x in v["per_seed"].items())
         lines.append(f"| {v['ordering']} | {pair_cells(v)} | {per} |")
+    lines += ["", "## Against the hand-tuned reward learning starts from", "",
+              "The same pooled paired runs and tests.", "",
+              f"| ordering | {PAIR_COLUMNS} |", "|" + " --- |" * 11]
+    lines += [f"| {v['ordering']} | {pair_cells(v)} |" for v in summary.get("against_start", [])]
     lines += ["", "## Spread across the seeds (Table II pooled over each seed's test boards)",
               "", "| method | " + " | ".join(f"seed {s}" for s in seeds)
               + " | mean | min - max |", "| --- |" + " --- |" * (len(seeds) + 2)]
@@ -167,17 +258,28 @@ def study_markdown(summary: dict) -> str:
                      + f" | {_pct(sp['success_mean'])} | {_pct(sp['success_min'])} - "
                      f"{_pct(sp['success_max'])} |")
     lines += ["", "## Each seed", "", "| seed | test difficulty | boards | one-board table: "
-              "templates + features | Table I: templates kept (small, medium, large; front / "
-              "hind), templates only | templates + features |", "| --- | --- | --- | --- | --- "
-              "| --- |"]
+              "templates + features | demonstrations (front / hind) | Table I: templates kept "
+              "(small, medium, large; front / hind), templates only | templates + features |",
+              "| --- | --- | --- | --- | --- | --- | --- |"]
     for s in seeds:
         p = summary["per_seed"][s]
         one = p["table2_one_board"]["both"]
         t1 = {fs: " / ".join(",".join(map(str, g["kept"])) for g in p["table1"][fs].values())
               for fs in ("templates", "both")}
         met = "" if p["calibration_met"] else " (rule not met)"
+        demos = p.get("demonstrations", {})
         lines.append(f"| {s} | {p['test_difficulty']:g}{met} | {p['test_boards']} | "
-                     f"{one['successes']} / {one['runs']} | {t1['templates']} | {t1['both']} |")
+                     f"{one['successes']} / {one['runs']} | {demos.get('front', '?')} / "
+                     f"{demos.get('hind', '?')} | {t1['templates']} | {t1['both']} |")
+    fewer = summary.get("fewer_templates_than_demonstrations")
+    if fewer:
+        lines += ["", "Fewer templates kept than demonstrations, every seed and leg group: "
+                  + "; ".join(f"{NAMES[fs]} {'yes' if ok else 'no'}" for fs, ok in fewer.items())
+                  + "."]
+    revisions = summary.get("revisions")
+    if revisions:
+        lines += ["", "Source revision of each seed: " + "; ".join(
+            f"seed {s}: {rev or 'unknown'}" for s, rev in revisions.items()) + "."]
     seconds = summary.get("seconds_this_session")
     if seconds is not None:
         lines += ["", f"This invocation took {seconds / 60:.0f} min (stored runs are not "

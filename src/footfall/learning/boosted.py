@@ -204,6 +204,7 @@ class BoostedRanker(BaseEstimator):
     ----------
     forest_ : :class:`Forest`, the trees;  n_trees_ : int
     cv_error_ : float, the held-out pairwise error at ``n_trees_``
+    feature_importances_ : (d,) float, each column's total split gain (0: no tree reads it)
     path_ : list of PathPoint (``C`` holds the number of trees)
     """
 
@@ -269,7 +270,9 @@ class BoostedRanker(BaseEstimator):
                               self.selection)
         self.n_trees_ = int(trees[best])
         self.cv_error_ = float(errors[:, best].mean())
-        self.forest_ = forest_of(self._train(X, y, sizes, self.n_trees_))
+        booster = self._train(X, y, sizes, self.n_trees_)
+        self.forest_ = forest_of(booster)
+        self.feature_importances_ = np.asarray(booster.feature_importance("gain"), dtype=float)
         self.n_features_in_ = X.shape[1]
         return self
 
@@ -316,6 +319,7 @@ class BoostedLearner(Learner):
     description: str = ("gradient-boosted trees (LightGBM lambdarank, one query per "
                         "demonstration): non-linear, keeps the columns its trees read")
     function_type: type = BoostedFunction
+    ranks_columns: bool = True
     objective: str = "lambdarank"
 
     def fit(self, X, y, groups, *, Cs=10, cv: int = 5, selection: str = "1se",
@@ -342,6 +346,10 @@ class BoostedLearner(Learner):
                      "n_nonzero": int(np.count_nonzero(used))})
         return BoostedFunction(tuple(kept), fitted.forest_.renumbered(np.concatenate(masks)),
                                info)
+
+    def importance(self, fitted: BoostedRanker) -> np.ndarray:
+        """Each column's total split gain in the trees (LightGBM's "gain" importance)."""
+        return fitted.feature_importances_
 
 
 register_learner(BoostedLearner())

@@ -31,12 +31,14 @@ class Learner(ABC):
     Attributes ``name`` (the registry key, ``footfall learn --learner``),
     ``description`` (one line for --help and reports) and ``function_type``
     (the :class:`RankingFunction` class it makes, which reads its arrays back
-    from a model file).
+    from a model file); ``ranks_columns``: whether :meth:`importance` says how
+    much a fit relies on each column (needed to keep to a template budget).
     """
 
     name: str
     description: str
     function_type: type[RankingFunction]
+    ranks_columns: bool = False  # its importance() ranks the columns (a template budget works)
 
     @abstractmethod
     def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray, *, Cs: Any = 10,
@@ -74,6 +76,11 @@ class Learner(ABC):
         """The fitted estimator as a ranking function over ``families`` (whose columns are
         ``X``'s, in order); a sparse learner drops the columns it left at zero
         (:meth:`FeatureFamily.select <footfall.features.family.FeatureFamily.select>`)."""
+
+    def importance(self, fitted: Any) -> np.ndarray | None:
+        """How much the fitted estimator relies on each column, (d,) >= 0 (0: a column it does
+        not read), or None if it cannot say (a template budget then cannot be met)."""
+        return None
 
 
 LEARNERS: Registry[Learner] = Registry("learner")  # every registered learner, by name

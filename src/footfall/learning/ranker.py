@@ -55,6 +55,7 @@ class LinearLearner(Learner):
     path: Callable[[np.ndarray, np.ndarray, int], np.ndarray]  # -> (n,) C values, increasing
     logistic: bool = True  # the loss is the logistic loss (its held-out value is reported)
     function_type: type[RankingFunction] = LinearFunction
+    ranks_columns: bool = True
 
     def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray, *, Cs=10, cv: int = 5,
             selection: str = "1se", units: np.ndarray | None = None) -> FootholdRanker:
@@ -80,6 +81,10 @@ class LinearLearner(Learner):
                 "path": [vars(p) for p in fitted.path_], "n_demonstrations": n_demonstrations,
                 **family_info, "n_nonzero": int(np.count_nonzero(fitted.coef_))}
         return LinearFunction(tuple(kept), tuple(coef), tuple(scale), info)
+
+    def importance(self, fitted: FootholdRanker) -> np.ndarray:
+        """The weights' sizes on standardised columns, |coef_| * scale_ (0: left at zero)."""
+        return np.abs(fitted.coef_ * fitted.scale_)
 
 
 def _linear(name: str) -> LinearLearner:

@@ -90,8 +90,12 @@ def fold_unit(demo: TrainingDemo, folds: str) -> str:
 
 
 def _fit(examples: list[Example], families: Sequence[FeatureFamily], learner: Learner, Cs,
-         cv: int, selection: str = "1se") -> Any:
+         cv: int, selection: str = "1se", columns: np.ndarray | None = None) -> Any:
+    """The learner fitted to the examples' design matrix (only ``columns``, a (d,) bool mask
+    of the families' columns, if given)."""
     X, y, groups = stack(examples, families)
+    if columns is not None:
+        X = X[:, columns]
     units = stack_units(examples)
     if units is None:
         return learner.fit(X, y, groups, Cs=Cs, cv=cv, selection=selection)
@@ -108,6 +112,44 @@ def _tune(examples: list[Example], families: tuple[FeatureFamily, ...], learner:
             return float(_fit(examples, trial, learner, Cs, cv).cv_error_)
         tuned[k] = family.tune(error, log)
     return tuple(tuned)
+
+
+def check_budget(learner: Learner, template_budget: float | None) -> None:
+    """Refuse a template budget for a learner that cannot rank its columns (the kernel ranker)."""
+    if template_budget is not None and not learner.ranks_columns:
+        raise FootfallError(f"learner {learner.name!r} cannot rank its columns, so it cannot keep "
+                            f"to a template budget; give it none (--template-budget none)")
+
+
+def _within_budget(fitted: Any, examples: list[Example], families: tuple[FeatureFamily, ...],
+                   learner: Learner, Cs, cv: int, selection: str, budget: float | None,
+                   log: Callable[[str], None]) -> tuple[Any, tuple[FeatureFamily, ...]]:
+    """The fit, or if it reads more templates than ``budget`` x its demonstrations allow, a fit
+    on the templates the learner relied on most (its :meth:`Learner.importance`), keeping
+    floor(budget x n); the fitted estimator and the families it was fitted on."""
+    if budget is None or not any(f.name == "templates" for f in families):
+        return fitted, families
+    allowed = int(math.floor(budget * len(examples)))
+    importance = learner.importance(fitted)
+    reduced, masks, start = list(families), [], 0
+    for k, family in enumerate(families):
+        stop = start + len(family.columns())
+        keep = np.ones(stop - start, dtype=bool)
+        if family.name == "templates":
+            weight = np.asarray(importance[start:stop], dtype=np.float64)
+            used = int(np.count_nonzero(weight > 0))
+            if used <= allowed:
+                return fitted, families
+            keep[:] = False
+            keep[np.argsort(-weight, kind="stable")[:allowed]] = True
+            reduced[k] = family.select(keep)[0]  # the kept templates, in the library's order
+            log(f"  {used} templates read, more than the budget {allowed} "
+                f"({budget:g} x {len(examples)}): fitting again on the first {allowed}")
+        masks.append(keep)
+        start = stop
+    # the prepared data hold every library template's distances: fit on the kept columns
+    return (_fit(examples, families, learner, Cs, cv, selection, np.concatenate(masks)),
+            tuple(reduced))
 
 
 def _fit_families(unfitted: tuple[FeatureFamily, ...], demos: Sequence[TrainingDemo],
@@ -175,7 +217,7 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
                 training_candidates: int = DEFAULT_TRAINING_CANDIDATES,
                 bandwidth_rms: Sequence[float] | None = None, Cs=10, cv: int = 5, seed: int = 0,
                 selection: str = "1se", family_options: dict[str, dict[str, Any]] | None = None,
-                folds: str = "demonstration",
+                folds: str = "demonstration", template_budget: float | None = None,
                 log: Callable[[str], None] = lambda s: None) -> FootholdModel:
     """Learn front- and hind-leg ranking functions from demonstrations.
 
@@ -186,7 +228,10 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     family's options; ``family_options`` passes any family's own options by
     family name. ``selection`` picks lambda on the path (see
     :class:`footfall.learning.ranker.FootholdRanker`); ``folds`` what the
-    cross-validation folds never split (:data:`FOLDS`). ``trials`` are footholds
+    cross-validation folds never split (:data:`FOLDS`). ``template_budget``: a leg
+    group's function learned from n demonstrations reads at most
+    floor(template_budget x n) templates (fitted again on those its learner
+    relied on most if it read more); None: no budget. ``trials`` are footholds
     of the robot's own runs labelled by what followed
     (:mod:`footfall.learning.trials`): each that went wrong is ranked below
     ``trial_pairs`` that did not, of its board and leg group -- alone (no
@@ -200,6 +245,11 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     check_count(library_size, "library_size", 3)
     check_count(training_candidates, "training_candidates", 1)
     cv = require_int(cv, "cv", 2)
+    if template_budget is not None and (isinstance(template_budget, bool) or not (
+            isinstance(template_budget, (int, float)) and 0 < template_budget < math.inf)):
+        raise FootfallError(f"template_budget must be a share of the demonstrations above 0, "
+                            f"got {template_budget!r}")
+    check_budget(chosen_learner, template_budget)
     config = config or FeatureConfig()
     if not demos and not trials:
         raise FootfallError("no demonstrations or trials to learn from")
@@ -226,6 +276,8 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
         log(f"{group} legs: {len(chosen)} demonstrations and comparisons")
         tuned = _tune(chosen, families, chosen_learner, Cs, cv, log)
         fitted = _fit(chosen, tuned, chosen_learner, Cs, cv, selection)
+        fitted, tuned = _within_budget(fitted, chosen, tuned, chosen_learner, Cs, cv, selection,
+                                       template_budget, log)
         functions[group] = check_function(chosen_learner.function(fitted, tuned, len(chosen)))
         info = functions[group].info
         log(f"  lambda {info.get('lambda', math.nan):.4g}, cv error {fitted.cv_error_:.4f}, "
@@ -239,7 +291,8 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
                          info={"n_demonstrations": len(demos), "seed": seed,
                                "library_size": library_size,
                                "training_candidates": training_candidates,
-                               "selection": selection, "folds": folds, **trial_info,
+                               "selection": selection, "folds": folds,
+                               "template_budget": template_budget, **trial_info,
                                "seconds": time.perf_counter() - started})
 
 

@@ -280,8 +280,10 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
                                        template_budget, log)
         functions[group] = check_function(chosen_learner.function(fitted, tuned, len(chosen)))
         info = functions[group].info
-        log(f"  lambda {info.get('lambda', math.nan):.4g}, cv error {fitted.cv_error_:.4f}, "
-            f"{info.get('n_nonzero', '?')} non-zero weights, templates kept "
+        chosen_point = (f"{info['trees']} trees" if info.get("trees") is not None
+                        else f"lambda {info.get('lambda', math.nan):.4g}")
+        log(f"  {chosen_point}, cv error {fitted.cv_error_:.4f}, "
+            f"{info.get('n_nonzero', '?')} columns read, templates kept "
             f"{info.get('kept_counts', [0] * len(config.scales))}")
     trial_info = {} if not trials else {
         "trial_footholds": len(trials), "trial_comparisons": len(examples) - len(demos),

@@ -115,7 +115,12 @@ def _tune(examples: list[Example], families: tuple[FeatureFamily, ...], learner:
 
 
 def check_budget(learner: Learner, template_budget: float | None) -> None:
-    """Refuse a template budget for a learner that cannot rank its columns (the kernel ranker)."""
+    """Refuse a template budget that is not a positive share, or for a learner that cannot
+    rank its columns (the kernel ranker)."""
+    if template_budget is not None and (isinstance(template_budget, bool) or not (
+            isinstance(template_budget, (int, float)) and 0 < template_budget < math.inf)):
+        raise FootfallError(f"template_budget must be a share of the demonstrations above 0, "
+                            f"got {template_budget!r}")
     if template_budget is not None and not learner.ranks_columns:
         raise FootfallError(f"learner {learner.name!r} cannot rank its columns, so it cannot keep "
                             f"to a template budget; give it none (--template-budget none)")
@@ -210,6 +215,14 @@ def _trial_examples(trials: Sequence[TrialFoothold], families: tuple[FeatureFami
             for g, b in index]
 
 
+def _fitted_line(info: dict[str, Any], cv_error: float, scales: int) -> str:
+    """One log line about a fitted function: its point on the path, error, columns, templates."""
+    point = (f"{info['trees']} trees" if info.get("trees") is not None
+             else f"lambda {info.get('lambda', math.nan):.4g}")
+    return (f"  {point}, cv error {cv_error:.4f}, {info.get('n_nonzero', '?')} columns read, "
+            f"templates kept {info.get('kept_counts', [0] * scales)}")
+
+
 def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = "l1", *,
                 trials: Sequence[TrialFoothold] = (), trial_pairs: int = DEFAULT_PAIRS,
                 config: FeatureConfig | None = None, robot: RobotDescription = LITTLEDOG,
@@ -245,10 +258,6 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     check_count(library_size, "library_size", 3)
     check_count(training_candidates, "training_candidates", 1)
     cv = require_int(cv, "cv", 2)
-    if template_budget is not None and (isinstance(template_budget, bool) or not (
-            isinstance(template_budget, (int, float)) and 0 < template_budget < math.inf)):
-        raise FootfallError(f"template_budget must be a share of the demonstrations above 0, "
-                            f"got {template_budget!r}")
     check_budget(chosen_learner, template_budget)
     config = config or FeatureConfig()
     if not demos and not trials:
@@ -279,12 +288,7 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
         fitted, tuned = _within_budget(fitted, chosen, tuned, chosen_learner, Cs, cv, selection,
                                        template_budget, log)
         functions[group] = check_function(chosen_learner.function(fitted, tuned, len(chosen)))
-        info = functions[group].info
-        chosen_point = (f"{info['trees']} trees" if info.get("trees") is not None
-                        else f"lambda {info.get('lambda', math.nan):.4g}")
-        log(f"  {chosen_point}, cv error {fitted.cv_error_:.4f}, "
-            f"{info.get('n_nonzero', '?')} columns read, templates kept "
-            f"{info.get('kept_counts', [0] * len(config.scales))}")
+        log(_fitted_line(functions[group].info, fitted.cv_error_, len(config.scales)))
     trial_info = {} if not trials else {
         "trial_footholds": len(trials), "trial_comparisons": len(examples) - len(demos),
         "trial_pairs": trial_pairs}

@@ -35,6 +35,7 @@ from footfall.core.params import (
     within,
 )
 from footfall.experiments.ablation import AblationConfig
+from footfall.experiments.curve_walk import CurveWalkConfig
 from footfall.experiments.learning_curve import CurveConfig
 from footfall.experiments.offline import OfflineConfig
 from footfall.experiments.reproduce import ReproduceConfig
@@ -45,7 +46,7 @@ from footfall.sim.simulation import PerturbationConfig
 
 CONFIGS = (Limits, FeatureConfig, PerturbationConfig, WalkConfig, LowLevelConfig, BodyPathConfig,
            FootstepConfig, CogConfig, SwingConfig, PoseConfig, ExpertConfig, ReproduceConfig,
-           OfflineConfig, ReflexConfig, AblationConfig, CurveConfig)
+           OfflineConfig, ReflexConfig, AblationConfig, CurveConfig, CurveWalkConfig)
 """Every declared config of footfall (test_every_declared_config_is_listed keeps it whole)."""
 
 

@@ -15,7 +15,7 @@ from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig
 TINY = ReproduceConfig(
     train_boards=((("rocky", 0.5),),), test_kinds=("rocky",), difficulties=(0.6,),
     calibration_boards=1, calibration_runs=1, test_boards=2, sweep_runs=1, rounds=2, target_demos=1000, corrections_per_run=None, margin=2.0, library_size=30,
-    training_candidates=20, cv=2, final_bandwidth_rms=0.004, eval_runs=2, offline_demos=4,
+    training_candidates=20, cv=2, final_bandwidth_rms=0.004, eval_runs=1, offline_demos=4,
     walk=WalkConfig(max_steps=8),  # eight steps a run: small, but every stage runs
     expert=ExpertConfig())  # the expert who values progress corrects most of eight steps (the
 # walking expert, who wants the foot where this gait puts it, too few of them to learn from)

@@ -13,6 +13,7 @@ from footfall.cli.executors import executor_options, opened_executor
 from footfall.cli.output import emit, json_option, progress_log
 from footfall.core.errors import FootfallError
 from footfall.experiments.ablation import VARIANTS, AblationConfig, ablation_markdown, run_ablation
+from footfall.experiments.curve_walk import CurveWalkConfig, run_curve_walk, walk_markdown
 from footfall.experiments.learning_curve import (
     CurveConfig,
     compare_points,
@@ -77,11 +78,7 @@ def learning_curve(out: str, sizes: str | None, draws: int | None,
     config = CurveConfig.quick(seed) if quick else CurveConfig(seed=seed)
     changes: dict = {}
     if sizes is not None:
-        try:
-            changes["sizes"] = tuple(int(v) for v in sizes.split(","))
-        except ValueError:
-            raise FootfallError(f"--sizes must be whole numbers separated by commas, got "
-                                f"{sizes!r}") from None
+        changes["sizes"] = _sizes_option(sizes)
     for key, value in (("draws", draws), ("test_decisions", test_decisions), ("folds", folds),
                        ("selection", selection), ("library_size", library_size),
                        ("feature_sets", feature_sets or None), ("learners", learners or None)):
@@ -125,6 +122,54 @@ def curve_compare(curve: str, other: str | None, n: int, feature_set: str, learn
     lines.append(f"  above for the first only {r['a_only_above']}, for the second only "
                  f"{r['b_only_above']}: exact McNemar p = {r['p']:.3g}")
     emit(as_json, r, "\n".join(lines))
+
+
+@click.command("curve-walk")
+@click.argument("curve")
+@click.option("--sizes", default=None, metavar="N[,N...]",
+              help="The curve's sizes walked [default: 100,1600].")
+@click.option("--features", "feature_set", default="both", show_default=True,
+              help="The points' feature set.")
+@click.option("--learner", type=LEARNER, default="lambdarank", show_default=True,
+              help="The points' learner.")
+@click.option("--expert", "with_expert", is_flag=True,
+              help="Walk the walking expert choosing every foothold too (a reference; its runs "
+                   "cost several hand-tuned ones).")
+@click.option("--boards", type=click.IntRange(min=1), default=None,
+              help="Walking boards rocky:0.7 steps:0.7, never trained on [default: 4].")
+@click.option("--runs", type=click.IntRange(min=1), default=None,
+              help="Runs on each board, the same seeds for every method [default: 8].")
+@executor_options
+@json_option
+def curve_walk(curve: str, sizes: str | None, feature_set: str, learner: str, with_expert: bool,
+               boards: int | None, runs: int | None, processes: int | None, executor_name: str,
+               ray_address: str | None, as_json: bool) -> None:
+    """Walk a learning curve's points on boards never trained on, paired with the hand-tuned
+    reward: crossings beside the curve's offline measure.
+
+    CURVE is the curve's folder; the runs go to CURVE/walk/ (run again to resume)."""
+    changes: dict = {"feature_set": feature_set, "learner": learner,
+                     "references": ("hand-tuned", "expert") if with_expert else ("hand-tuned",)}
+    if sizes is not None:
+        changes["sizes"] = _sizes_option(sizes)
+    for key, value in (("boards", boards), ("runs", runs)):
+        if value is not None:
+            changes[key] = value
+    config = replace(CurveWalkConfig(), **changes)  # checked: one line for a bad value
+    with opened_executor(executor_name, processes, ray_address) as executor:
+        summary = run_curve_walk(Path(curve), config, log=progress_log(as_json),
+                                 executor=executor)
+    emit(as_json, summary, walk_markdown(summary)
+         + f"wrote {Path(curve) / 'walk' / 'walk.md'} and walk.json")
+
+
+def _sizes_option(sizes: str) -> tuple[int, ...]:
+    """--sizes N[,N...] as a tuple of whole numbers (one line for anything else)."""
+    try:
+        return tuple(int(v) for v in sizes.split(","))
+    except ValueError:
+        raise FootfallError(f"--sizes must be whole numbers separated by commas, got "
+                            f"{sizes!r}") from None
 
 
 def test_kinds_option(f):

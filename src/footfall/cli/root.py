@@ -43,6 +43,9 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "curve-compare": ("footfall.cli.experiments", "curve_compare",
                       "Two learning-curve points on the same held-out decisions, paired: shares "
                       "above the margin and the exact McNemar test."),
+    "curve-walk": ("footfall.cli.experiments", "curve_walk",
+                   "Walk a learning curve's points on boards never trained on, paired with "
+                   "the hand-tuned reward: crossings beside the curve's offline measure."),
     "reproduce": ("footfall.cli.experiments", "reproduce",
                   "The paper's walking experiment end to end: corrections, learning, Tables I "
                   "and II."),

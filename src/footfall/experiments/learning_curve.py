@@ -194,7 +194,8 @@ def balanced_order(front: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return np.concatenate([order, groups[0][k:], groups[1][k:]])
 
 
-def _model_path(out: Path, draw: int, n: int, fs: str, ln: str) -> Path:
+def point_model_path(out: Path, draw: int, n: int, fs: str, ln: str) -> Path:
+    """The saved model of a curve point: draw, size, feature set, learner."""
     return out / "models" / f"{fs}-{ln}-{n}-draw{draw}.npz"
 
 
@@ -281,7 +282,7 @@ def _point_model(out: Path, config: CurveConfig, key: tuple, training: list[Trai
     """The model of point ``key`` (draw, n, feature set, learner): learned from the first n of
     its draw's demonstrations and saved, or read back when saved already."""
     draw, n, fs, ln = key
-    path = _model_path(out, draw, n, fs, ln)
+    path = point_model_path(out, draw, n, fs, ln)
     if not path.exists():
         t0 = time.perf_counter()
         rms = None if config.bandwidth_rms is None else (config.bandwidth_rms,) * 3

@@ -199,6 +199,13 @@ class BoostedRanker(BaseEstimator):
         smallest held-out error, or the smallest.
     random_state : int
         LightGBM's seed (column sampling); training is deterministic.
+    n_jobs : int
+        LightGBM's threads. One by default: footfall runs its work in parallel
+        processes, and LightGBM's OpenMP threads on cores that other processes
+        hold spin instead of working (400 trees on 160 candidates took 12.6 s
+        with two threads on a busy two-core machine, 0.09 s with one; 100
+        demonstrations of 100 candidates, 62 s against 18 s). The trees are
+        the same whatever the number.
 
     Attributes
     ----------
@@ -211,7 +218,7 @@ class BoostedRanker(BaseEstimator):
     def __init__(self, objective: str = "lambdarank", trees: tuple[int, ...] = TREE_PATH,
                  num_leaves: int = 7, learning_rate: float = 0.05, min_data_in_leaf: int = 50,
                  feature_fraction: float = 0.5, lambda_l2: float = 1.0, cv: int = 5,
-                 selection: str = "1se", random_state: int = 0):
+                 selection: str = "1se", random_state: int = 0, n_jobs: int = 1):
         self.objective = objective
         self.trees = trees
         self.num_leaves = num_leaves
@@ -222,6 +229,7 @@ class BoostedRanker(BaseEstimator):
         self.cv = cv
         self.selection = selection
         self.random_state = random_state
+        self.n_jobs = n_jobs
 
     def _params(self) -> dict:
         return {"objective": self.objective, "num_leaves": int(self.num_leaves),
@@ -229,6 +237,7 @@ class BoostedRanker(BaseEstimator):
                 "min_data_in_leaf": int(self.min_data_in_leaf),
                 "feature_fraction": float(self.feature_fraction),
                 "lambda_l2": float(self.lambda_l2), "seed": int(self.random_state),
+                "num_threads": int(self.n_jobs),
                 "deterministic": True, "force_col_wise": True, "verbosity": -1}
 
     def _train(self, X: np.ndarray, y: np.ndarray, sizes: np.ndarray, rounds: int) -> Any:
@@ -251,6 +260,8 @@ class BoostedRanker(BaseEstimator):
             raise FootfallError("trees must be increasing positive numbers")
         if int(self.cv) < 2:
             raise FootfallError("cv needs at least 2 folds")
+        if int(self.n_jobs) < 1:
+            raise FootfallError(f"n_jobs must be at least 1 thread, got {self.n_jobs}")
         order = np.argsort(groups, kind="stable")  # LightGBM reads queries as contiguous runs
         X, y, groups = X[order], y[order], groups[order]
         units = None if units is None else np.asarray(units)[order]

@@ -45,6 +45,18 @@ def test_demonstrations_in_any_row_order_form_their_own_queries():
     assert pairwise_error(b.decision_function(X), y, groups) < 0.1
 
 
+def test_the_trees_do_not_depend_on_the_number_of_threads():
+    """One thread by default (threads spin on busy cores); any number grows the same trees."""
+    X, y, groups = _toy(3)
+    one = BoostedRanker(trees=(10, 40), cv=3).fit(X, y, groups)
+    two = BoostedRanker(trees=(10, 40), cv=3, n_jobs=2).fit(X, y, groups)
+    assert one.get_params()["n_jobs"] == 1 and one.n_trees_ == two.n_trees_
+    for name, array in one.forest_.arrays().items():
+        np.testing.assert_array_equal(array, two.forest_.arrays()[name])
+    with pytest.raises(FootfallError, match="n_jobs must be at least 1"):
+        BoostedRanker(n_jobs=0).fit(X, y, groups)
+
+
 def _stump() -> dict:
     """One tree: a split on column 1 at 0.5, leaves -1 and +2."""
     return {"feature": np.array([1.0, -1, -1]), "threshold": np.array([0.5, 0, 0]),

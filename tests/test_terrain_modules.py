@@ -36,8 +36,12 @@ def module(kind: str, difficulty: float, seed: int) -> HeightMap:
 
 
 # ------------------------------------------------------------------ registry
-def test_registry_holds_the_paper_kinds():
-    assert set(KINDS) == {"flat", "steps", "barrier", "slope", "logs", "rocky"}
+def test_registry_holds_the_paper_kinds_and_the_held_out_ones():
+    from footfall.terrain.kinds import HELD_OUT_KINDS, PAPER_KINDS
+
+    assert PAPER_KINDS == ("flat", "steps", "barrier", "slope", "logs", "rocky")
+    assert HELD_OUT_KINDS == ("stones", "washboard", "scree", "logbarrier", "rolling", "scan")
+    assert set(KINDS) == set(PAPER_KINDS + HELD_OUT_KINDS)
     assert all(callable(g) for _, g in KINDS.items())
 
 
@@ -54,7 +58,7 @@ def test_generators_have_the_documented_signature(kind):
 def test_same_seed_gives_bit_identical_module(kind):
     a = make_module(kind, 0.7, 123)
     b = make_module(kind, 0.7, 123)
-    assert np.array_equal(a.heights, b.heights)
+    assert np.array_equal(a.heights, b.heights, equal_nan=True)  # a scan's no-data cells too
     assert a.content_hash() == b.content_hash()
     assert a.metadata == b.metadata
 
@@ -98,9 +102,10 @@ def test_module_geometry_and_metadata(kind):
 @pytest.mark.parametrize("difficulty", [0.0, 0.6, 1.0])
 def test_heights_are_finite_non_negative_and_crossable(kind, difficulty):
     h = module(kind, difficulty, 1).heights
-    assert np.isfinite(h).all()
-    assert h.min() >= 0.0
-    assert h.max() <= MAX_HEIGHT
+    assert kind == "scan" or not np.isnan(h).any()  # only a scan has no-data cells
+    assert not np.isinf(h).any()
+    assert np.nanmin(h) >= 0.0
+    assert np.nanmax(h) <= MAX_HEIGHT
     # Both ends of the module meet the ground plane, so modules join cleanly.
     assert np.abs(h[0]).max() < EDGE_TOLERANCE
     assert np.abs(h[-1]).max() < EDGE_TOLERANCE
@@ -109,7 +114,7 @@ def test_heights_are_finite_non_negative_and_crossable(kind, difficulty):
 @pytest.mark.parametrize("kind", OBSTACLE_KINDS)
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_max_obstacle_height_grows_with_difficulty(kind, seed):
-    tops = [module(kind, d, seed).heights.max() for d in (0.2, 0.6, 1.0)]
+    tops = [np.nanmax(module(kind, d, seed).heights) for d in (0.2, 0.6, 1.0)]
     assert tops[0] < tops[1] < tops[2]
     assert tops[0] < 0.05  # easy modules have small obstacles ...
     assert tops[2] > 0.06  # ... hard ones real obstacles of several cm

@@ -23,6 +23,7 @@ from footfall.experiments.learning_curve import (
 from footfall.experiments.offline import OfflineConfig, run_offline
 from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
 from footfall.experiments.study import run_study
+from footfall.experiments.terrain_suite import SUITES, SuiteConfig, run_suite, suite_markdown
 from footfall.learning.ranker import SELECTIONS
 from footfall.learning.train import FOLDS
 from footfall.plots.showcase import run_demo
@@ -312,6 +313,41 @@ def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], hard: bo
         summary = run_ablation(Path(out), config, log=progress_log(as_json), executor=executor)
     emit(as_json, summary, ablation_markdown(config, summary)
          + f"wrote {Path(out) / 'ablation.md'} and ablation.json")
+
+
+@click.command("benchmark-terrain")
+@click.option("--suite", type=click.Choice(tuple(SUITES)), default="held-out", show_default=True,
+              help="The held-out kinds (never tuned on) or the training kinds.")
+@click.option("--out", "out", default=None,
+              help="Report folder and store of every run (run again to resume) "
+                   "[default: out/suite-SUITE].")
+@click.option("--kind", "kinds", multiple=True,
+              help="A kind of the suite to walk (repeatable) [default: all of them].")
+@click.option("--who", "who", multiple=True, type=click.Choice(["expert", "hand"]),
+              help="Who chooses the footholds (repeatable) [default: both].")
+@click.option("--boards", type=click.IntRange(min=1), default=None,
+              help="Boards per kind [default: 2].")
+@click.option("--runs", type=click.IntRange(min=1), default=None,
+              help="Runs on each board [default: 8].")
+@click.option("--quick", is_flag=True, help="One board and two hand-tuned runs a kind.")
+@executor_options
+@json_option
+def benchmark_terrain(suite: str, out: str | None, kinds: tuple[str, ...], who: tuple[str, ...],
+                      boards: int | None, runs: int | None, quick: bool, processes: int | None,
+                      executor_name: str, ray_address: str | None, as_json: bool) -> None:
+    """A terrain suite: the expert and the hand-tuned reward on every kind, success with
+    Wilson intervals, slip and the failure taxonomy per kind."""
+    config = SuiteConfig.quick(suite) if quick else SuiteConfig(suite=suite)
+    changes: dict = {}
+    for key, value in (("kinds", kinds or None), ("who", tuple(dict.fromkeys(who)) or None),
+                       ("boards", boards), ("runs", runs)):
+        if value is not None:
+            changes[key] = value
+    config = replace(config, **changes)  # checked: one line for a bad value
+    folder = Path(out or f"out/suite-{suite}")
+    with opened_executor(executor_name, processes, ray_address) as executor:
+        summary = run_suite(folder, config, log=progress_log(as_json), executor=executor)
+    emit(as_json, summary, suite_markdown(summary) + f"wrote {folder / 'suite.md'}")
 
 
 @click.command()

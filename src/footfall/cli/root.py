@@ -53,6 +53,10 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
               "Several whole reproductions and a verdict on each of the paper's orderings."),
     "ablation": ("footfall.cli.experiments", "ablation",
                  "The walking controller's ablation: each part switched off alone, paired runs."),
+    "benchmark-terrain": ("footfall.cli.experiments", "benchmark_terrain",
+                          "A terrain suite: the expert and the hand-tuned reward on every kind, "
+                          "success with Wilson intervals, slip and the failure taxonomy per "
+                          "kind."),
     "demo": ("footfall.cli.experiments", "demo",
              "Build a board, score it densely and draw the terrain, features and templates."),
     "bench": ("footfall.cli.bench", "bench",

@@ -20,7 +20,7 @@ from footfall.core.errors import FootfallError
 
 # Every experiment and purpose, by name. Append only: the position is the stream's spawn key,
 # so reordering these would change every published number.
-EXPERIMENTS = ("reproduce", "offline", "learning curve")
+EXPERIMENTS = ("reproduce", "offline", "learning curve", "terrain suite")
 PURPOSES = (
     "boards",           # terrain boards (training, test, flat, sweep)
     "correction runs",  # the robot's runs whose logs the expert corrects

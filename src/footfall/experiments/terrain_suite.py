@@ -1,0 +1,209 @@
+"""Terrain suites (``footfall benchmark-terrain``): does walking carry over to terrain no one tuned on?
+
+A suite walks the walking expert choosing every foothold and the hand-tuned
+reward over boards of each of its kinds and reports, per kind and pooled,
+success with a 95 % Wilson interval, the slip of the crossings, the failure
+taxonomy (:mod:`footfall.sim.explain`'s cause of each failed run) and the
+paired comparison of the two choosers (exact McNemar: the same boards and run
+seeds).
+
+**The rule.** footfall's parameters -- controller, rewards, expert -- are
+chosen on the *training* kinds only (:data:`footfall.terrain.kinds.PAPER_KINDS`,
+the ``training`` suite). The ``held-out`` suite
+(:data:`footfall.terrain.kinds.HELD_OUT_KINDS`, :mod:`footfall.terrain.heldout`)
+is measured after a change and never tuned on: no parameter is chosen by
+looking at its runs, and its numbers are reported as they come.
+
+**Boards.** Per kind ``boards`` boards ``KIND:D KIND:D`` (two modules of the
+kind, flat ground before and after), D = ``difficulty`` (0.7 by default: the
+test difficulty the reproduction's calibration rule chose with the adopted
+defaults, fixed before any run of the suite), board seeds from the suite's
+stream "boards" at (kind's place in :data:`SUITES`, board), so a kind's boards
+do not depend on which other kinds are walked. Run seeds: the stream
+"evaluation runs", the same on every board and for both choosers.
+
+Runs are stored under ``WHO/KIND/bB/sSEED`` in ``suite.sqlite`` as they arrive;
+a rerun walks only what is missing; other kinds or choosers in the same folder
+add their runs; other boards, runs, difficulty or walking settings are refused.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from footfall.core.atomic import write_text_atomic
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.params import Params, at_least, param, within
+from footfall.core.seeds import SeedStreams
+from footfall.core.stats import mcnemar_exact
+from footfall.data.store import DemoStore
+from footfall.experiments.batch import summarise
+from footfall.experiments.executors import Executor, LocalPool
+from footfall.experiments.reproduce import reproduction_walk
+from footfall.experiments.runs import RunJob, Runner, board_files, claim_folder
+from footfall.expert.synthetic import walking_expert
+from footfall.sim.episode import WalkConfig
+from footfall.terrain.kinds import HELD_OUT_KINDS, PAPER_KINDS
+
+SUITES = {"held-out": HELD_OUT_KINDS, "training": tuple(k for k in PAPER_KINDS if k != "flat")}
+"""The suites by name: their kinds, in order (a kind's place fixes its board seeds)."""
+WHO = ("expert", "hand")  # the walking expert choosing every foothold; the hand-tuned reward
+STORE_NAME = "suite.sqlite"
+
+
+@dataclass(frozen=True)
+class SuiteConfig(Params):
+    """A terrain suite's boards, runs and choosers; written next to its results."""
+
+    suite: str = param("held-out", choices=tuple(SUITES), doc="which kinds: the held-out "
+                       "ones (never tuned on) or the training ones")
+    kinds: tuple[str, ...] | None = param(
+        None, check=lambda v: v is None or (isinstance(v, tuple) and len(v) > 0
+                                            and len(set(v)) == len(v)),
+        must="a tuple of distinct kinds of the suite",
+        doc="the suite's kinds walked; None: all of them")
+    who: tuple[str, ...] = param(WHO, check=lambda v: isinstance(v, tuple) and len(v) > 0
+                                 and set(v) <= set(WHO) and len(set(v)) == len(v),
+                                 must="a tuple of 'expert' and / or 'hand'",
+                                 doc="who chooses the footholds")
+    difficulty: float = param(0.7, unit="-", range=within(0, 1),
+                              doc="difficulty D of every board KIND:D KIND:D")
+    boards: int = param(2, range=at_least(1), doc="boards per kind")
+    runs: int = param(8, range=at_least(1), doc="runs on each board (the same seeds on each)")
+    seed: int = param(0, range=at_least(0), doc="the suite's seed: boards and runs")
+    walk: WalkConfig = param(factory=reproduction_walk,
+                             doc="the walk: the reproduction's (F within its search radius)")
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        unknown = sorted(set(self.kinds or ()) - set(SUITES[self.suite]))
+        if unknown:
+            raise FootfallError(f"the {self.suite} suite has no kind {', '.join(unknown)}; its "
+                                f"kinds are {', '.join(SUITES[self.suite])}")
+
+    @classmethod
+    def quick(cls, suite: str = "held-out") -> SuiteConfig:
+        """A small version for a smoke test: one board and two runs a kind, the hand-tuned
+        reward only."""
+        return cls(suite=suite, who=("hand",), boards=1, runs=2)
+
+    def walked_kinds(self) -> tuple[str, ...]:
+        """The kinds walked, in the suite's order."""
+        return tuple(k for k in SUITES[self.suite] if self.kinds is None or k in self.kinds)
+
+    def board_specs(self) -> dict[str, tuple[tuple, int, bool]]:
+        """Board name ``KIND-bB`` -> (modules, board seed, flat ends) of every walked board."""
+        streams = SeedStreams("terrain suite", self.seed)
+        d = float(self.difficulty)
+        return {f"{kind}-b{b}": (((kind, d), (kind, d)),
+                                 streams.seed_for("boards", SUITES[self.suite].index(kind), b),
+                                 True)
+                for kind in self.walked_kinds() for b in range(self.boards)}
+
+    def run_seeds(self) -> list[int]:
+        """The run seeds of every board."""
+        return SeedStreams("terrain suite", self.seed).seeds("evaluation runs", self.runs)
+
+
+def suite_jobs(config: SuiteConfig, paths: dict[str, Path]) -> list[RunJob]:
+    """Every run, keyed ``WHO/KIND/bB/sSEED``: the hand-tuned reward's first (cheaper)."""
+    expert = walking_expert(config.walk.footstep.lead)
+    jobs = []
+    for who in sorted(config.who, key=lambda w: w == "expert"):
+        for name, path in paths.items():
+            kind, board = name.rsplit("-", 1)
+            jobs += [RunJob(f"{who}/{kind}/{board}/s{s}", str(path), None, s, config.walk,
+                            expert=expert, judge=who == "expert") for s in config.run_seeds()]
+    return jobs
+
+
+def run_suite(out: str | Path, config: SuiteConfig | None = None,
+              processes: int | None = None, log: Callable[[str], None] = print,
+              executor: Executor | None = None) -> dict:
+    """Walk (or resume) the suite into ``out``; return the summary (also suite.json, suite.md)."""
+    config = SuiteConfig() if config is None else config
+    out = Path(out)
+    claim_folder(out, config.to_dict(), "a terrain suite", free=("kinds", "who"))
+    paths = board_files(out, config.board_specs())
+    maps = {name: HeightMap.load(p) for name, p in paths.items()}
+    jobs = suite_jobs(config, paths)
+    with DemoStore(out / STORE_NAME, create=True) as store:
+        Runner(store, {m.content_hash(): m for m in maps.values()},
+               executor or LocalPool(processes), None, log).run(jobs, f"{config.suite} suite")
+        wanted = {j.key for j in jobs}
+        records = {r["key"]: store.run(r["id"]) for r in store.runs() if r["key"] in wanted}
+    if len(records) != len(wanted):  # cannot happen unless the store was edited by hand
+        raise FootfallError(f"{len(wanted) - len(records)} suite runs are missing from the store")
+    summary = summarise_suite(config, records)
+    write_text_atomic(out / "suite.json", json.dumps(summary, indent=1, sort_keys=True))
+    write_text_atomic(out / "suite.md", suite_markdown(summary))
+    return summary
+
+
+def _paired(records: dict, kinds: tuple[str, ...]) -> dict:
+    """The expert against the hand-tuned reward on the units both walked, over ``kinds``."""
+    outcome = {tuple(k.split("/")): bool(r.result["success"]) for k, r in records.items()}
+    units = {u[1:] for u in outcome if u[0] == "expert" and u[1] in kinds} & \
+        {u[1:] for u in outcome if u[0] == "hand" and u[1] in kinds}
+    a = sum(outcome[("expert", *u)] and not outcome[("hand", *u)] for u in units)
+    b = sum(outcome[("hand", *u)] and not outcome[("expert", *u)] for u in units)
+    return {"pairs": len(units), "expert_only": a, "hand_only": b, "p_value": mcnemar_exact(a, b)}
+
+
+def summarise_suite(config: SuiteConfig, records: dict) -> dict:
+    """Per kind and chooser, and pooled over the kinds: Table II's measures and the causes of
+    the failures (:func:`footfall.experiments.batch.summarise`); the choosers paired."""
+    kinds = config.walked_kinds()
+
+    def of(who: str, among: tuple[str, ...]) -> dict:
+        return summarise([r for k, r in sorted(records.items())
+                          if k.split("/")[0] == who and k.split("/")[1] in among]).as_dict()
+
+    rows = {kind: {who: of(who, (kind,)) for who in config.who} for kind in kinds}
+    pooled = {who: of(who, kinds) for who in config.who}
+    paired = {}
+    if set(config.who) == set(WHO):
+        paired = {kind: _paired(records, (kind,)) for kind in kinds}
+        paired["all"] = _paired(records, kinds)
+    return {"config": config.to_dict(), "kinds": rows, "pooled": pooled, "paired": paired}
+
+
+def _cell(s: dict) -> str:
+    lo, hi = s["success_ci"]
+    slip = "-" if s["slip_mean_mm"] is None else f"{s['slip_mean_mm']:.1f}"
+    return f"{s['successes']} / {s['runs']} ({100 * lo:.0f}-{100 * hi:.0f} %) | {slip}"
+
+
+def _causes(s: dict) -> str:
+    failed = s["runs"] - s["successes"]
+    named = sorted(s["causes"].items(), key=lambda x: (-x[1], x[0]))
+    text = ", ".join(f"{n} {c}" for c, n in named)
+    other = failed - sum(s["causes"].values())
+    return (text + (f", {other} unexplained" if other else "")) or "-"
+
+
+def suite_markdown(summary: dict) -> str:
+    """The suite's table (crossings with Wilson intervals, slip, causes) and the paired test."""
+    c = summary["config"]
+    names = {"expert": "expert", "hand": "hand-tuned"}
+    head = ["kind"] + [f"{names[w]}: {what}" for w in c["who"]
+                       for what in ("crossed (95 %)", "slip of crossings [mm]", "failures")]
+    lines = [f"# The {c['suite']} terrain suite", "",
+             f"Boards KIND:{c['difficulty']:g} KIND:{c['difficulty']:g}, {c['boards']} per kind, "
+             f"{c['runs']} runs each (the same seeds for every board and chooser); F within "
+             f"{c['walk']['footstep']['search_radius'] * 100:g} cm.", "",
+             "| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
+    for kind, row in [*summary["kinds"].items(), ("all", summary["pooled"])]:
+        cells = [f"**{kind}**" if kind == "all" else kind]
+        cells += [f"{_cell(row[w])} | {_causes(row[w])}" for w in c["who"]]
+        lines.append("| " + " | ".join(cells) + " |")
+    if summary["paired"]:
+        lines += ["", "Paired, the expert against the hand-tuned reward (exact McNemar):", ""]
+        lines += [f"- {kind}: only the expert crossed {p['expert_only']}, only the hand-tuned "
+                  f"reward {p['hand_only']} of {p['pairs']}, p = {p['p_value']:.3g}"
+                  for kind, p in summary["paired"].items()]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,86 @@
+"""``footfall benchmark-terrain``: a terrain suite's boards, runs, summary and resumption."""
+
+import json
+from dataclasses import replace
+
+import pytest
+
+from cli_helpers import assert_user_error, run
+from footfall.core.errors import FootfallError
+from footfall.data.store import DemoStore
+from footfall.experiments.reproduce import reproduction_walk
+from footfall.experiments.terrain_suite import (
+    STORE_NAME,
+    SUITES,
+    SuiteConfig,
+    run_suite,
+    suite_markdown,
+)
+from footfall.terrain.kinds import HELD_OUT_KINDS, PAPER_KINDS
+
+TINY = SuiteConfig(kinds=("stones", "scan"), boards=2, runs=1,
+                   walk=replace(reproduction_walk(), max_steps=5))
+
+
+def test_the_suites_keep_training_and_held_out_kinds_apart():
+    assert set(SUITES["held-out"]) == set(HELD_OUT_KINDS)
+    assert set(SUITES["training"]) == set(PAPER_KINDS) - {"flat"}
+    assert not set(SUITES["held-out"]) & set(PAPER_KINDS)
+
+
+def test_board_seeds_are_distinct_and_a_kinds_boards_do_not_depend_on_the_others():
+    full = SuiteConfig(boards=3).board_specs()
+    seeds = [s for _, s, _ in full.values()]
+    assert len(set(seeds)) == len(seeds) == 3 * len(HELD_OUT_KINDS)
+    assert SuiteConfig(boards=3, kinds=("scan",)).board_specs() == {
+        k: v for k, v in full.items() if k.startswith("scan-")}
+    assert full["stones-b0"][0] == (("stones", 0.7), ("stones", 0.7))
+    assert SuiteConfig(runs=4).run_seeds() == SuiteConfig(runs=4, kinds=("scan",)).run_seeds()
+
+
+def test_a_kind_outside_the_suite_is_refused():
+    with pytest.raises(FootfallError, match="the held-out suite has no kind rocky"):
+        SuiteConfig(kinds=("rocky",))
+
+
+@pytest.fixture(scope="module")
+def walked(tmp_path_factory):
+    out = tmp_path_factory.mktemp("suite")
+    return out, run_suite(out, TINY, processes=1, log=lambda s: None)
+
+
+def test_both_choosers_walk_every_board_with_the_same_seeds_and_are_paired(walked):
+    out, summary = walked
+    with DemoStore(out / STORE_NAME) as store:
+        keys = sorted(r["key"] for r in store.runs())
+    assert len(keys) == 2 * 2 * TINY.boards * TINY.runs
+    units = {who: sorted(k.split("/", 1)[1] for k in keys if k.startswith(who + "/"))
+             for who in ("expert", "hand")}
+    assert units["expert"] == units["hand"]
+    for kind in ("stones", "scan"):
+        for who in ("expert", "hand"):
+            s = summary["kinds"][kind][who]
+            assert s["runs"] == TINY.boards * TINY.runs and 0 <= s["successes"] <= s["runs"]
+            lo, hi = s["success_ci"]
+            assert 0 <= lo <= s["success_rate"] <= hi <= 1
+            assert sum(s["causes"].values()) <= s["runs"] - s["successes"]
+        assert summary["paired"][kind]["pairs"] == TINY.boards * TINY.runs
+    assert summary["pooled"]["hand"]["runs"] == 2 * TINY.boards * TINY.runs
+    assert summary["paired"]["all"]["pairs"] == 2 * TINY.boards * TINY.runs
+    md = (out / "suite.md").read_text()
+    assert md == suite_markdown(summary) and "| **all** |" in md and "| stones |" in md
+
+
+def test_a_rerun_walks_nothing_and_other_boards_are_refused(walked):
+    out, summary = walked
+    logged: list[str] = []
+    again = run_suite(out, TINY, processes=1, log=logged.append)
+    assert any("already stored" in line for line in logged)
+    assert json.dumps(again, sort_keys=True) == json.dumps(summary, sort_keys=True)
+    with pytest.raises(FootfallError, match="other settings"):
+        run_suite(out, replace(TINY, boards=3), processes=1, log=lambda s: None)
+
+
+def test_the_command_refuses_bad_kinds_in_one_line(tmp_path, capsys):
+    assert_user_error(*run(capsys, "benchmark-terrain", "--kind", "rocky", "--out",
+                           tmp_path)[::2], "has no kind rocky")

@@ -78,7 +78,8 @@ def outcomes_cmd(store_paths: tuple[str, ...], expert_config: str | None, horizo
     expert's value and each of its terms predict it; with --fit, an expert grounded in it."""
     if output is not None and fit is None:
         raise click.UsageError("-o/--output writes the grounded expert: give --fit too")
-    out = writable_path(output) if output is not None else None
+    out = (writable_path(output, inputs=(*store_paths, expert_config)) if output is not None
+           else None)
     report, fitted = outcome_report(store_paths, load_expert(expert_config) if expert_config
                                     else None, horizon, fit)
     if fitted is not None and out is not None:

@@ -72,7 +72,8 @@ def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: st
              explain_plot: str | None, expert: bool, expert_config: str | None,
              search_radius: float | None, as_json: bool) -> None:
     """One run of the simulated robot across a board (success, slip, speed)."""
-    check_picture_outputs(snapshots, video, explain_plot, as_options=True)
+    check_picture_outputs(snapshots, video, explain_plot, as_options=True,
+                          inputs=(terrain_path, model_path, log_path, expert_config))
     outcome = walk_once(terrain_path, seed, model_path=model_path, expert=expert,
                         search_radius=search_radius, snapshots=snapshots, frames=frames,
                         video=video, log_path=log_path, explain_plot=explain_plot,

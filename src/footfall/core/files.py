@@ -14,6 +14,7 @@ import json
 import math
 import os
 import re
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any, Callable, Literal
 
@@ -194,22 +195,37 @@ def checked_json(value: Any, what: str, object_only: bool = False) -> Any:
     return out
 
 
+def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
+    """Whether two paths name one file: the same inode (through symbolic and hard links) when
+    both exist, else the same resolved path."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one is missing (or unreadable): compare where they would be
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
 def writable_path(path: str | os.PathLike, suffixes: tuple[str, ...] = (), *, what: str = "",
-                  kind: str = "file") -> Path:
+                  kind: str = "file", inputs: Iterable[str | os.PathLike | None] = ()) -> Path:
     """``path`` as a file to write, refused before any work whose result could not be kept.
 
     ``suffixes`` (lower case, with the dot, e.g. ``(".mp4",)``), if given, are
     the only file types the writer knows; ``what`` (e.g. ``"--video"``) and
-    ``kind`` (e.g. ``"video"``) name the output in messages.
+    ``kind`` (e.g. ``"video"``) name the output in messages. ``inputs`` are the
+    files the same work reads (None entries are skipped): writing over one of
+    them -- by its name, a symbolic link or a hard link -- would destroy it.
 
     Raises
     ------
     FootfallError
         If ``path`` is a directory, its directory does not exist or cannot be
-        written to, or its suffix is not one of ``suffixes``.
+        written to, its suffix is not one of ``suffixes``, or it is one of ``inputs``.
     """
     p = Path(path)
     lead = f"{what}: " if what else ""
+    for source in inputs:
+        if source is not None and same_file(p, source):
+            raise FootfallError(f"{lead}{p} is also an input ({source}): writing it would "
+                                f"destroy it; choose another output")
     if p.exists() and p.is_dir():
         raise FootfallError(f"{lead}output path is a directory: {p}")
     parent = p.parent

@@ -77,3 +77,20 @@ class SeedStreams:
     def generator(self, purpose: str, *index: int) -> np.random.Generator:
         """A NumPy generator on the stream of ``purpose`` at ``index``."""
         return np.random.default_rng(self.sequence(purpose, *index))
+
+
+def check_seed_span(first: int, count: int, what: str = "--seed") -> None:
+    """Refuse seeds ``first .. first + count - 1`` (a batch's runs) that leave [0, 2**63).
+
+    Every seed is a non-negative 63-bit integer so that a store keeps it exactly; a batch
+    whose last seed would not be is refused before any run, in one line.
+
+    Raises
+    ------
+    FootfallError
+        Naming ``what``, the first seed, the count and the largest seed allowed.
+    """
+    last = int(first) + int(count) - 1
+    if int(first) < 0 or last >= 2 ** SEED_BITS:
+        raise FootfallError(f"{what} {first} with {count} runs reaches seed {last}, beyond the "
+                            f"largest seed {2 ** SEED_BITS - 1}; choose a smaller seed")

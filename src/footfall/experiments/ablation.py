@@ -49,6 +49,7 @@ from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, at_least, param, within
 from footfall.core.registry import Registry
+from footfall.core.seeds import check_seed_span
 from footfall.core.stats import mcnemar_exact
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor, LocalPool
@@ -183,6 +184,11 @@ class AblationConfig(Params):
     walk: WalkConfig = param(factory=lambda: reproduction_walk(),
                              doc="the walk every variant changes: the defaults with F within "
                                  "the reproduction's search radius")
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        for name, (_, _, runs, first) in self.boards().items():  # every run seed within range
+            check_seed_span(first, runs, f"the {name} board's first run seed")
 
     @classmethod
     def quick(cls) -> AblationConfig:

@@ -24,6 +24,7 @@ from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
 from footfall.core.files import plain_json, writable_path
 from footfall.core.heightmap import HeightMap, module_records
+from footfall.core.seeds import check_seed_span
 from footfall.core.stats import wilson_interval
 from footfall.data.runlog import RunRecord
 from footfall.data.schema import SUFFIXES as STORE_SUFFIXES
@@ -96,6 +97,7 @@ def batch_jobs(terrain_path: str | os.PathLike, model_path: str | os.PathLike | 
         raise FootfallError("the expert chooses the footholds itself: give no model with it")
     if isinstance(runs, bool) or not isinstance(runs, int) or runs < 1:
         raise FootfallError(f"runs must be an integer >= 1, got {runs!r}")
+    check_seed_span(seed, runs)
     hmap = HeightMap.load(terrain_path) if hmap is None else hmap
     reward_source(model_path, hmap)  # fail early, in this process, on a bad model
     model = None if model_path is None else str(model_path)
@@ -269,12 +271,16 @@ class WalkOutcome:
         return data
 
 
-def _open_log(log_path: str | os.PathLike | None) -> DemoStore | None:
-    """The log store, opened (and created) before a run, so that a bad path fails first."""
+def _checked_log(log_path: str | os.PathLike | None, inputs: tuple = ()) -> Path | None:
+    """The log store's path, checked before a run without creating it: an existing store must
+    open, a new one is made only when the run is stored (a refused run leaves no file)."""
     if log_path is None:
         return None
-    return DemoStore(writable_path(log_path, STORE_SUFFIXES, what="--log", kind="store"),
-                     create=True)
+    path = writable_path(log_path, STORE_SUFFIXES, what="--log", kind="store", inputs=inputs)
+    if path.exists():
+        with DemoStore(path):
+            pass
+    return path
 
 
 def _path_or_none(path: str | os.PathLike | None) -> str | None:
@@ -283,17 +289,21 @@ def _path_or_none(path: str | os.PathLike | None) -> str | None:
 
 def check_picture_outputs(snapshots: str | os.PathLike | None, video: str | os.PathLike | None,
                           explain_plot: str | os.PathLike | None = None, *,
-                          as_options: bool = False) -> None:
-    """Refuse a snapshots, video or explain-plot path that could not be written, before a run.
+                          as_options: bool = False, inputs: tuple = ()) -> None:
+    """Refuse a snapshots, video or explain-plot path that could not be written, before a run:
+    one of ``inputs`` (the board, the model, the log store) or another of these outputs.
 
     With ``as_options`` the error names them as the command line does (``--snapshots``).
     """
+    written: list = []
     for path, suffixes, option, name, kind in (
             (snapshots, SNAPSHOT_SUFFIXES, "--snapshots", "snapshots", "picture"),
             (video, VIDEO_SUFFIXES, "--video", "video", "video"),
             (explain_plot, SNAPSHOT_SUFFIXES, "--explain-plot", "explain plot", "picture")):
         if path is not None:
-            writable_path(path, suffixes, what=option if as_options else name, kind=kind)
+            writable_path(path, suffixes, what=option if as_options else name, kind=kind,
+                          inputs=(*inputs, *written))
+            written.append(path)
 
 
 def walk_once(terrain_path: str | os.PathLike, seed: int, *,
@@ -323,8 +333,8 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
     judge = chooser_expert(config, expert, expert_config)
     hmap = load_board(terrain_path)
     reward_for = reward_source(model_path, hmap)
-    check_picture_outputs(snapshots, video, explain_plot)
-    store = _open_log(log_path)
+    log = _checked_log(log_path, inputs=(terrain_path, model_path))
+    check_picture_outputs(snapshots, video, explain_plot, inputs=(terrain_path, model_path, log))
     pictures = None
     if snapshots or video:
         pictures = Frames(snapshot_count=frames if snapshots else 0,
@@ -332,6 +342,10 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
     run = Walk(hmap, reward_for, seed, config, frames=pictures,
                judge=expert_judge(judge) if expert else None)
     record = run.run()
+    run_id = None
+    if log is not None:  # stored before any picture: a picture that fails loses no run
+        with DemoStore(log, create=True) as store:
+            run_id = store.add_run(record, terrains=[hmap])
     if explain_plot is not None:
         save_explain_plot(run.trace.series(), record.result.get("explanation"), run.robot,
                           explain_plot, title=f"{Path(terrain_path).name}, seed {seed}: "
@@ -340,10 +354,6 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
         save_strip(pictures.snapshots, snapshots)
     if video:
         save_video(pictures.video, video, pictures.video_fps)
-    run_id = None
-    if store is not None:
-        with store:
-            run_id = store.add_run(record, terrains=[hmap])
     return WalkOutcome(str(terrain_path), _path_or_none(model_path), expert, seed, record, run_id)
 
 
@@ -389,15 +399,17 @@ def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
     """
     config = walk_config(model_path, expert, search_radius)
     hmap = load_board(terrain_path)
-    store = _open_log(log_path)
-    try:
-        jobs = batch_jobs(terrain_path, model_path, runs, seed, config, expert, hmap,
-                          expert_config=expert_config)
+    log = _checked_log(log_path, inputs=(terrain_path, model_path))
+    jobs = batch_jobs(terrain_path, model_path, runs, seed, config, expert, hmap,
+                      expert_config=expert_config)
+    store = DemoStore(log) if log is not None and log.exists() else None  # a new one is made
+    try:  # with the first run kept: a batch refused before any run leaves no file
         records: dict[int, RunRecord] = {}
-        if store is not None:
+        if log is not None:
             keys = batch_run_keys(hmap, model_path, expert, config, [j.seed for j in jobs],
                                   expert_config)
             jobs = [replace(j, key=keys[j.seed]) for j in jobs]
+        if store is not None:
             held = {r["key"]: r["id"] for r in store.runs(key_prefix="walk-many/")}
             records = {j.seed: store.run(held[j.key]) for j in jobs if j.key in held}
         if reused is not None:
@@ -405,7 +417,8 @@ def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
         todo = [j for j in jobs if j.seed not in records]
         executor = executor or LocalPool(min(usable_cores(), max(1, len(todo))))
         for job, record in _walked(executor, todo, None):
-            if store is not None:  # each finished run is kept at once
+            if log is not None:  # each finished run is kept at once
+                store = store or DemoStore(log, create=True)
                 store.add_run(record, terrains=[hmap])
             records[job.seed] = record
             if progress is not None:

@@ -269,7 +269,7 @@ def collect_into_store(terrains: Sequence[str | os.PathLike], path: str | os.Pat
     n = check_count(n, "the number of demonstrations", minimum=1)  # before any file is read
     if steps not in RECORDED_STEPS:
         raise FootfallError(f"steps must be one of {', '.join(RECORDED_STEPS)}, got {steps!r}")
-    out = writable_path(path, STORE_SUFFIXES, what="store", kind="store")
+    out = writable_path(path, STORE_SUFFIXES, what="store", kind="store", inputs=terrains)
     hmaps = [HeightMap.load(p) for p in terrains]
     if out.exists():
         with DemoStore(out):  # refuse a bad store before walking, not after

@@ -379,7 +379,7 @@ def learn_from_store(store: str | os.PathLike | None, path: str | os.PathLike, f
         trials, a store without such demonstrations, trial stores without runs), or bad
         learning settings.
     """
-    out = writable_path(path)
+    out = writable_path(path, inputs=(store, *trials))
     if store is None and not trials:
         raise FootfallError("give a store of demonstrations, trial stores, or both")
     training = []

@@ -120,6 +120,6 @@ def save_relief_of_file(source: str | os.PathLike, path: str | os.PathLike) -> P
     Returns the path written. Raises :class:`FootfallError` for a bad output
     path (checked first) or a file that is not a readable height map.
     """
-    out = writable_path(path, (".png",), kind="picture")
+    out = writable_path(path, (".png",), kind="picture", inputs=(source,))
     save_relief(HeightMap.load(source), out, title=Path(source).name)
     return out

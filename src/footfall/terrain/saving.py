@@ -92,7 +92,7 @@ def save_board(specs: Sequence[str], seed: int, path: str | os.PathLike,
         file that is missing, not a height map, without data or too large, a board
         above the ``max_map_cells`` limit, or a bad seed.
     """
-    out = writable_path(path, MAP_SUFFIXES, kind="height map")
+    out = writable_path(path, MAP_SUFFIXES, kind="height map", inputs=specs)
     return _save(make_board([parse_board_spec(s) for s in specs], seed, flat_ends=flat_ends), out)
 
 
@@ -109,6 +109,6 @@ def save_imported(source: str | os.PathLike, path: str | os.PathLike,
     FootfallError
         For a bad output path or a source the import refuses.
     """
-    out = writable_path(path, MAP_SUFFIXES, kind="height map")
+    out = writable_path(path, MAP_SUFFIXES, kind="height map", inputs=(source,))
     return _save(import_terrain(source, resolution=resolution, z_scale=z_scale, nodata=nodata),
                  out)

@@ -15,6 +15,7 @@ import time
 
 import numpy as np
 
+from footfall.core.seeds import check_seed_span
 from footfall.core.state import nominal_state
 from footfall.expert.collect import collect_demonstrations
 from footfall.expert.synthetic import SyntheticExpert
@@ -29,6 +30,7 @@ LEARNERS = ("l1", "kernel", "lambdarank")
 def bench_rankers(n_demos: int = 100, library_size: int = 1000, repeats: int = 3,
                   seed: int = 0) -> dict:
     """Learning and scoring figures per learner; ratios against the L1 (linear) function."""
+    check_seed_span(seed, 5, "the seed")
     boards = [make_board([(k, d)], seed + i) for i, (k, d) in
               enumerate([("rocky", 0.5), ("rocky", 0.8), ("steps", 0.6), ("barrier", 0.6),
                           ("slope", 0.6)])]

@@ -17,6 +17,7 @@ import time
 import mujoco
 import numpy as np
 
+from footfall.core.seeds import check_seed_span
 from footfall.core.state import nominal_state
 from footfall.features.reward import default_reward
 from footfall.sim.episode import Walk
@@ -52,6 +53,7 @@ def bench_sim(seed: int = 0, difficulty: float = 0.5, bare_seconds: float = 5.0,
                              "mujoco": mujoco.__version__},
                  "physics": dict(physics or {}), "hfield_spacing": hfield_spacing,
                  "foot_contact": foot_contact}
+    check_seed_span(seed, runs)
     board = make_board([("rocky", difficulty)], seed=seed)
     variant = (dict(physics or {}), hfield_spacing, foot_contact)
     rocky, documented = _timed_runs(board, range(seed, seed + runs), variant)

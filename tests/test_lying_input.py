@@ -1,0 +1,97 @@
+"""Input that looks valid but is not: an output that is an input, seeds past their range, and
+commands that fail leaving files behind or losing what they did."""
+
+import os
+
+import pytest
+
+from cli_helpers import assert_user_error, run
+from footfall.core.errors import FootfallError
+from footfall.core.files import same_file, writable_path
+from footfall.data.store import DemoStore
+from footfall.experiments import batch
+from footfall.experiments.ablation import AblationConfig
+from footfall.expert.collect import collect_into_store
+from footfall.terrain.saving import save_board
+
+TOP = 2 ** 63 - 1  # the largest seed a store keeps
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("lying")
+    save_board(["flat", "flat"], 0, folder / "flat.npz")  # 1.22 m: a short run
+    save_board(["flat"], 0, folder / "short.npz", flat_ends=False)  # too short to walk
+    save_board(["rocky:0.5"], 1, folder / "rocky.npz")
+    collect_into_store([folder / "rocky.npz"], folder / "store.sqlite", n=12, seed=0)
+    return folder
+
+
+def test_an_output_that_is_an_input_by_name_or_link_is_refused_and_the_input_kept(files,
+                                                                                  tmp_path,
+                                                                                  capsys):
+    store = tmp_path / "st.npz"  # a store under a model's name: the finding
+    store.write_bytes((files / "store.sqlite").read_bytes())
+    (tmp_path / "soft.npz").symlink_to(store)
+    os.link(store, tmp_path / "hard.npz")
+    before = store.read_bytes()
+    for output in ("st.npz", "soft.npz", "hard.npz"):
+        assert_user_error(*run(capsys, "learn", store, "--features", "terrain", "-o",
+                               tmp_path / output)[::2], "is also an input")
+    assert store.read_bytes() == before
+    board = files / "flat.npz"
+    for args in (["terrain", "show", board, "-o", board],
+                 ["terrain", "import", board, "-o", board],
+                 ["terrain", "board", "flat", board, "--seed", 0, "-o", board],
+                 ["walk", "--terrain", board, "--seed", 0, "--log", board],
+                 ["walk", "--terrain", board, "--seed", 0, "--snapshots", tmp_path / "a.png",
+                  "--explain-plot", tmp_path / "a.png"],
+                 ["walk-many", "--terrain", board, "--runs", 1, "--seed", 0, "--log", board],
+                 ["demos", "collect", "--terrain", board, "-n", 1, "--seed", 0, "-o", board]):
+        assert_user_error(*run(capsys, *args)[::2], "is also an input")
+    assert same_file(board, files / "flat.npz") and batch.load_board(board).shape[0] > 0
+
+
+def test_same_file_sees_through_links_and_missing_files(tmp_path):
+    a = tmp_path / "a"
+    a.write_text("x")
+    (tmp_path / "b").symlink_to(a)
+    assert same_file(a, tmp_path / "b") and same_file(tmp_path / "c", tmp_path / "." / "c")
+    assert not same_file(a, tmp_path / "c")
+    with pytest.raises(FootfallError, match="is also an input"):
+        writable_path(tmp_path / "b", inputs=(None, a))
+
+
+def test_a_batch_whose_last_seed_is_past_the_range_is_refused_before_any_run(files, tmp_path,
+                                                                            capsys):
+    log = tmp_path / "s.sqlite"
+    assert_user_error(*run(capsys, "walk-many", "--terrain", files / "flat.npz", "--runs", 2,
+                           "--seed", TOP, "--log", log)[::2], f"reaches seed {TOP + 1}")
+    assert not log.exists()
+    with pytest.raises(FootfallError, match="the test board's first run seed"):
+        AblationConfig(test_seed=TOP - 2)
+    code, out, _ = run(capsys, "walk-many", "--terrain", files / "flat.npz", "--runs", 1,
+                       "--seed", TOP, "--log", log, "--json")
+    assert code == 0  # the last seed itself is fine, and kept exactly
+    with DemoStore(log) as store:
+        assert [store.run(r["id"]).seed for r in store.runs()] == [TOP]
+
+
+def test_a_refused_walk_leaves_no_store_and_a_walked_run_outlives_its_picture(files, tmp_path,
+                                                                             monkeypatch):
+    log = tmp_path / "new.sqlite"
+    for walk in (lambda: batch.walk_once(files / "short.npz", 0, log_path=log),
+                 lambda: batch.walk_batch(files / "short.npz", 2, 0, log_path=log)):
+        with pytest.raises(FootfallError, match="too short"):
+            walk()
+        assert not log.exists()
+
+    def full_disk(*args, **kwargs):
+        raise FootfallError("no space left on the device")
+
+    monkeypatch.setattr(batch, "save_strip", full_disk)
+    with pytest.raises(FootfallError, match="no space"):
+        batch.walk_once(files / "flat.npz", 1, search_radius=0.03, log_path=log,
+                        snapshots=tmp_path / "snap.png", frames=2)
+    with DemoStore(log) as store:
+        assert [store.run(r["id"]).seed for r in store.runs()] == [1]  # the run was kept

@@ -95,3 +95,25 @@ def test_a_refused_walk_leaves_no_store_and_a_walked_run_outlives_its_picture(fi
                         snapshots=tmp_path / "snap.png", frames=2)
     with DemoStore(log) as store:
         assert [store.run(r["id"]).seed for r in store.runs()] == [1]  # the run was kept
+
+
+def test_a_listed_command_without_its_optional_library_says_what_to_install(capsys,
+                                                                            monkeypatch):
+    import sys
+
+    for name in [m for m in sys.modules if m.startswith("footfall.cli.fuzz")]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setitem(sys.modules, "hypothesis", None)  # as on an install without [test]
+    assert_user_error(*run(capsys, "bench", "fuzz", "--minutes", 0.05)[::2],
+                      "pip install 'footfall[test]'")
+
+
+def test_absurd_but_finite_template_resolutions_are_refused_in_one_line(files, capsys):
+    for value in ("1e-300", "1e300", "0.02"):
+        assert_user_error(*run(capsys, "features", files / "rocky.npz", "--at", 0.3, 0.1,
+                               "--template-resolution", value)[::2],
+                          "template_resolution must be in [0.0001, 0.01]")
+    from footfall.features.config import SCALES, FeatureConfig, Scale
+
+    with pytest.raises(FootfallError, match="no sample beside its centre"):
+        FeatureConfig(template_resolution=0.008, scales=(Scale("tiny", 0.004, 0.004), *SCALES))

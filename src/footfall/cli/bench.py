@@ -122,7 +122,13 @@ def bench_expert_cmd(states: int, as_json: bool) -> None:
 def bench_fuzz_cmd(minutes: float, seed: int, targets: tuple[str, ...], as_json: bool) -> None:
     """Hostile files and arguments at every loader and command: inputs tried, failures found."""
     # The fuzz suite is built on Hypothesis, a test extra: imported only when it runs.
-    from footfall.cli.fuzz.campaign import format_campaign, run_campaign
+    try:
+        from footfall.cli.fuzz.campaign import format_campaign, run_campaign
+    except ModuleNotFoundError as exc:
+        if exc.name != "hypothesis":
+            raise
+        raise FootfallError("the fuzz campaign needs Hypothesis: pip install "
+                            "'footfall[test]'") from None
 
     result = run_campaign(minutes, seed, targets or None, log=progress_log(as_json))
     emit(as_json, result, format_campaign(result))

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import PatchGrid
-from footfall.core.params import Params, above, param, within
+from footfall.core.params import Params, param, within
 
 MAX_SCALE_LENGTH = 1.0  # [m] the longest side of a window: a foothold patch, not a terrain
 MAX_PATCH_SAMPLES = 250_000  # the most samples a window may hold (500 x 500)
@@ -71,7 +71,9 @@ class FeatureConfig(Params):
     """How foothold features are computed; stored with every model (docs/configuration.md)."""
 
     template_resolution: float = param(
-        0.003, unit="m", range=above(0), doc="spacing of the patch samples of every scale")
+        0.003, unit="m", range=within(1e-4, 0.01),
+        doc="spacing of the patch samples of every scale (0.1 mm, finer than any scan, to "
+            "1 cm, at which the small window still has a sample each side of its centre)")
     min_coverage: float = param(
         0.5, unit="-", range=within(0, 1, low_open=True),
         doc="least fraction of a patch's samples on measured terrain for a candidate")
@@ -84,6 +86,11 @@ class FeatureConfig(Params):
     def __post_init__(self) -> None:
         super().__post_init__()
         for scale, grid in zip(self.scales, self.grids):
+            if min(grid.half_counts) < 1:
+                raise FootfallError(
+                    f"feature config: the {scale.name} window has no sample beside its centre "
+                    f"at template_resolution {self.template_resolution:g} m; use at most "
+                    f"{min(scale.length_x, scale.length_y) / 2:g} m")
             if grid.size > MAX_PATCH_SAMPLES:
                 raise FootfallError(
                     f"feature config: the {scale.name} window holds {grid.size:.3g} samples at "

@@ -3,6 +3,7 @@ commands that fail leaving files behind or losing what they did."""
 
 import os
 
+import numpy as np
 import pytest
 
 from cli_helpers import assert_user_error, run
@@ -117,3 +118,36 @@ def test_absurd_but_finite_template_resolutions_are_refused_in_one_line(files, c
 
     with pytest.raises(FootfallError, match="no sample beside its centre"):
         FeatureConfig(template_resolution=0.008, scales=(Scale("tiny", 0.004, 0.004), *SCALES))
+
+
+def test_a_model_that_cannot_tell_candidates_apart_is_not_scored_as_perfect(files, tmp_path,
+                                                                           capsys):
+    from test_bad_models import make_model
+
+    make_model(coef_scale=0.0).save(tmp_path / "zero.npz")  # every candidate valued 0
+    code, out, err = run(capsys, "rank-eval", tmp_path / "zero.npz", files / "store.sqlite",
+                         "--no-expert", "--json")
+    assert code == 0, err
+    import json
+
+    s = json.loads(out)
+    assert s["constant"] == 1.0 and s["tied"] == 1.0
+    assert s["top1"] < 0.05 and s["percentile"] == 0.5  # a coin, not a perfect ranker
+    code, out, _ = run(capsys, "rank-eval", tmp_path / "zero.npz", files / "store.sqlite",
+                       "--no-expert")
+    assert "cannot tell them apart" in out
+
+
+def test_ties_are_expectations_over_the_tied_best():
+    from types import SimpleNamespace
+
+    from footfall.learning.evaluation import _decision
+
+    d = SimpleNamespace(chosen=0, candidates=np.array([[0, 0, 0], [0.005, 0, 0], [0.1, 0, 0],
+                                                       [0.2, 0, 0]], dtype=float))
+    values = np.array([3.0, 2.0, 1.0, 0.0])  # the expert's: its choice is worth 3
+    top1, near, pct, loss, tied, constant = _decision(np.array([5.0, 5.0, 5.0, 1.0]), d, values)
+    assert top1 == pytest.approx(1 / 3) and near == pytest.approx(2 / 3)
+    assert pct == pytest.approx((1 + 0.5 * 2) / 3) and loss == pytest.approx(3 - 2)
+    assert tied == 1.0 and constant == 0.0
+    assert _decision(np.array([9.0, 5.0, 5.0, 1.0]), d, values)[:4] == (1.0, 1.0, 1.0, 0.0)

@@ -167,7 +167,18 @@ def _agreement_text(agreement) -> str:
             f"(95 % CI {_number(s.reward_loss_ci[0])} to {_number(s.reward_loss_ci[1])}), "
             f"above the margin {_number(s.above_margin)}, severe {_number(s.severe)}"
             + ("" if agreement.expert is None else f"; judged by {agreement.expert}")
-            + _outcome_text(agreement.outcomes))
+            + _outcome_text(agreement.outcomes) + _degenerate_text(s))
+
+
+DEGENERATE = 0.5  # [-] a scorer valuing every candidate alike on more decisions is flagged
+
+
+def _degenerate_text(s) -> str:
+    """A warning for a scorer that cannot tell candidates apart (ties counted as ties)."""
+    if not s.constant > DEGENERATE:
+        return ""
+    return (f"\n  warning: it values every candidate alike on {100 * s.constant:.0f} % of the "
+            f"decisions: it cannot tell them apart (ties are counted as ties)")
 
 
 def _outcome_text(outcomes: dict | None) -> str:

@@ -9,7 +9,15 @@ reward loss: the expert's own value of its best candidate minus its value
 of the candidate the model picks (in the expert's value units, 1 unit = 1 cm
 of progress), with a bootstrap confidence interval over demonstrations. The
 loss needs the expert's judgement: evaluation may ask the expert, the learner
-never does. With it come the shares of decisions whose loss is above the
+never does.
+
+**Ties are ties.** A scorer that values several candidates alike at its best
+(a forest's leaves, a constant function) picks any of them with equal
+probability: top-1, within 1 cm and the reward loss are their expectations
+over the tied best, and the percentile counts a candidate valued like the
+expert's choice as half above it. The shares of decisions whose best is tied
+and whose candidates are all valued alike (a scorer that cannot tell them
+apart) are reported with the measures. With it come the shares of decisions whose loss is above the
 correction margin and above the severe threshold (the numbers the walking
 experiment's verdict on the robot's own choices reports).
 
@@ -52,6 +60,8 @@ class RankScores:
     severe: float = float("nan")  # fraction of decisions whose loss is above ``severe_above``
     margin: float = float("nan")  # [value units] the correction margin the shares count above
     severe_above: float = float("nan")  # [value units] the severe threshold
+    tied: float = float("nan")  # fraction of decisions whose best value several candidates share
+    constant: float = float("nan")  # fraction of decisions whose candidates all have one value
 
     def as_dict(self) -> dict:
         """Plain data for JSON (the per-demonstration losses included).
@@ -137,20 +147,23 @@ def rank_scores_many(models: dict, demos: Sequence, terrain: Callable[[str], obj
     return {name: _scores(rows, margin, severe_above) for name, rows in found.items()}
 
 
-def _decision(r: np.ndarray, d, values: np.ndarray | None) -> tuple[bool, bool, float, float]:
-    """Top-1, near, percentile and reward loss (NaN without values) of one decision whose
-    candidates the scorer valued ``r``."""
-    pick = int(np.argmax(r))
+def _decision(r: np.ndarray, d, values: np.ndarray | None) -> tuple[float, ...]:
+    """Top-1, near, percentile, reward loss (NaN without values), tied best and all alike, of
+    one decision whose candidates the scorer valued ``r``: the expectations over the
+    candidates tied at the best (the scorer picks any of them)."""
+    picks = np.flatnonzero(r == r.max())
+    top1 = float(r[d.chosen] == r.max()) / picks.size
+    gaps = np.hypot(*(d.candidates[picks, :2] - d.candidates[d.chosen, :2]).T)
+    near = float(np.mean(gaps <= NEAR + 1e-9))
     others = np.delete(r, d.chosen)
-    near = bool(np.hypot(*(d.candidates[pick, :2] - d.candidates[d.chosen, :2])) <= NEAR + 1e-9)
-    pct = float(np.mean(others < r[d.chosen])) if others.size else 1.0
-    loss = float("nan") if values is None else float(values.max() - values[pick])
-    return bool(pick == d.chosen or r[pick] == r[d.chosen]), near, pct, loss
+    pct = (float(np.mean((others < r[d.chosen]) + 0.5 * (others == r[d.chosen])))
+           if others.size else 1.0)
+    loss = float("nan") if values is None else float(values.max() - np.mean(values[picks]))
+    return top1, near, pct, loss, float(picks.size > 1), float(picks.size == r.size > 1)
 
 
-def _scores(rows: list[tuple[bool, bool, float, float]], margin: float,
-            severe_above: float) -> RankScores:
-    top1, near, pct, loss = (np.array(c, dtype=float) for c in zip(*rows))
+def _scores(rows: list[tuple[float, ...]], margin: float, severe_above: float) -> RankScores:
+    top1, near, pct, loss, tied, constant = (np.array(c, dtype=float) for c in zip(*rows))
     has_loss = not np.isnan(loss).any()
     losses = loss if has_loss else np.zeros(0)
     return RankScores(len(rows), float(np.mean(top1)), float(np.mean(pct)),
@@ -161,7 +174,8 @@ def _scores(rows: list[tuple[bool, bool, float, float]], margin: float,
                       losses=tuple(float(v) for v in losses),
                       above_margin=_share_above(losses, margin),
                       severe=_share_above(losses, severe_above), margin=float(margin),
-                      severe_above=float(severe_above))
+                      severe_above=float(severe_above), tied=float(np.mean(tied)),
+                      constant=float(np.mean(constant)))
 
 
 def _share_above(losses: np.ndarray, threshold: float) -> float:

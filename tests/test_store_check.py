@@ -211,11 +211,11 @@ def test_collect_refuses_a_store_with_a_trigger_before_anything(clean, board_fil
 
 
 def test_walk_many_log_refuses_an_unknown_table(clean):
-    from footfall.experiments.batch import _open_log
+    from footfall.experiments.batch import _checked_log
 
     tamper(clean, "CREATE TABLE notes (text TEXT)")
     with pytest.raises(FootfallError, match="unknown table 'notes'"):
-        _open_log(clean)
+        _checked_log(clean)  # an existing log store is checked before any run
 
 
 def test_collect_n_is_bounded_up_front(tmp_path, capsys):

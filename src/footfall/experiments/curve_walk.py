@@ -52,8 +52,9 @@ from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor, LocalPool
 from footfall.experiments.learning_curve import point_model_path, read_curve
 from footfall.experiments.paired import RunOutcome, compare
-from footfall.experiments.reproduce import reproduction_walk
+from footfall.experiments.reproduce import is_board_spec, reproduction_walk
 from footfall.experiments.runs import RunJob, Runner, board_files, claim_folder
+from footfall.experiments.workspace import Spec
 from footfall.expert.corrections import DEFAULT_MARGIN, step_verdicts
 from footfall.expert.synthetic import SyntheticExpert, walking_expert
 from footfall.learning.learner import LEARNERS
@@ -62,15 +63,6 @@ from footfall.sim.episode import WalkConfig
 FOLDER = "walk"  # inside the curve's folder
 STORE_NAME = "walks.sqlite"
 REFERENCES = ("hand-tuned", "expert")  # the reward learning starts from; the teacher choosing
-Spec = tuple[tuple[str, float], ...]  # a board: (kind, difficulty) of each module
-
-
-def _is_spec(value: object) -> bool:
-    return (isinstance(value, tuple) and len(value) > 0
-            and all(isinstance(m, tuple) and len(m) == 2 and isinstance(m[0], str)
-                    and isinstance(m[1], (int, float)) and 0 <= m[1] <= 1 for m in value))
-
-
 @dataclass(frozen=True)
 class CurveWalkConfig(Params):
     """Which curve points walk, where and how often; written next to the runs."""
@@ -88,8 +80,8 @@ class CurveWalkConfig(Params):
         must="'hand-tuned', optionally with 'expert'",
         doc="the references walked on the same units (the expert's runs cost several "
             "hand-tuned ones)")
-    board: Spec = param((("rocky", 0.7), ("steps", 0.7)), check=_is_spec,
-                        must="a tuple of (kind, difficulty in [0, 1])",
+    board: Spec = param((("rocky", 0.7), ("steps", 0.7)), check=is_board_spec,
+                        must="a tuple of (known kind, difficulty in [0, 1])",
                         doc="the modules of every walking board")
     boards: int = param(4, range=at_least(1), doc="walking boards (seeds of their own)")
     runs: int = param(8, range=at_least(1), doc="runs on each board (the same seeds on each)")

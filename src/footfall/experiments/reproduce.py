@@ -90,7 +90,7 @@ from footfall.terrain import KINDS
 STORE_NAME = "reproduce.sqlite"
 
 
-def _is_spec(value: object) -> bool:
+def is_board_spec(value: object) -> bool:
     """A board: a non-empty tuple of (kind, difficulty) with a known kind and 0 <= d <= 1."""
     return isinstance(value, tuple) and len(value) > 0 and all(
         isinstance(m, tuple) and len(m) == 2 and m[0] in KINDS
@@ -117,7 +117,7 @@ class ReproduceConfig(Params):
     train_boards: tuple[Spec, ...] = param(
         ((("rocky", 0.4),), (("rocky", 0.6),), (("steps", 0.5),), (("barrier", 0.5),),
          (("slope", 0.5),), (("logs", 0.5),)),
-        check=lambda v: isinstance(v, tuple) and len(v) > 0 and all(map(_is_spec, v)),
+        check=lambda v: isinstance(v, tuple) and len(v) > 0 and all(map(is_board_spec, v)),
         must="a non-empty tuple of boards, each a tuple of (kind, difficulty in [0, 1])",
         doc="the training boards the robot is corrected on")
     test_kinds: tuple[str, ...] = param(

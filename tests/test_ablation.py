@@ -51,6 +51,9 @@ def test_each_variant_changes_only_its_part():
     rebased = config.variant_walk("with-rebase")
     assert rebased == replace(base, reflexes=replace(base.reflexes, rebase_distance=0.03))
     assert base.reflexes.rebase_distance is None
+    checked = config.variant_walk("with-friction-check")
+    assert checked == replace(base, footstep=replace(base.footstep, friction_safety=1.5))
+    assert base.footstep.friction_safety is None
     none = config.variant_walk("none")
     assert not any(getattr(none.reflexes, r) for r in
                    ("lift_off_gate", "touchdown_check", "tilt_reflex", "slip_reflex"))

@@ -251,6 +251,9 @@ def test_cli_walk_expert_and_model_together_is_one_line_and_exit_2(tmp_path, cap
     code, _, err = run(capsys, "walk-many", "--terrain", board, "--seed", "0", "--runs", "2",
                        "--search-radius", "0")
     assert_user_error(code, err, "search_radius must be > 0")
+    code, _, err = run(capsys, "walk", "--terrain", board, "--seed", "0",
+                       "--friction-safety", "0.5")
+    assert_user_error(code, err, "friction_safety must be >= 1")
 
 
 def test_cli_walk_many_in_a_log_prints_progress_lines_on_stderr(tmp_path, capsys):
@@ -294,3 +297,8 @@ def test_cli_walk_many_with_a_log_walks_only_the_runs_it_does_not_hold(tmp_path,
     assert code == 0 and "already" not in err  # other settings: another run
     with DemoStore(log) as store:
         assert len(store.runs()) == 4
+    code, _, err = run(capsys, *common, "--runs", "1", "--friction-safety", "1.5")
+    assert code == 0 and "already" not in err  # the friction check: another run
+    with DemoStore(log) as store:
+        runs = store.runs()
+        assert len(runs) == 5 and runs[-1]["settings"]["walk"]["footstep"]["friction_safety"] == 1.5

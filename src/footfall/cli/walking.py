@@ -19,7 +19,12 @@ MODEL_OPTION = click.option("--model", "model_path", default=None,
 
 
 def _chooser_options(f):
-    """--expert and --search-radius: who chooses the footholds, and among which."""
+    """--expert, --search-radius and --friction-safety: who chooses the footholds, and among
+    which."""
+    f = click.option("--friction-safety", type=float, default=None,
+                     help="Drop the footholds where the ball foot's contact tilts past "
+                          "atan(friction / this) within 5 mm (the friction check, e.g. 1.5); "
+                          "default: no check.")(f)
     f = click.option("--search-radius", type=float, default=None,
                      help="Candidate set F of a step: the footholds within this many metres of "
                           "the gait-nominal position (the reproduction uses 0.03); "
@@ -70,12 +75,13 @@ def _run_text(result: dict) -> str:
 def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: str | None,
              frames: int, video: str | None, log_path: str | None, explain: bool,
              explain_plot: str | None, expert: bool, expert_config: str | None,
-             search_radius: float | None, as_json: bool) -> None:
+             search_radius: float | None, friction_safety: float | None, as_json: bool) -> None:
     """One run of the simulated robot across a board (success, slip, speed)."""
     check_picture_outputs(snapshots, video, explain_plot, as_options=True,
                           inputs=(terrain_path, model_path, log_path, expert_config))
     outcome = walk_once(terrain_path, seed, model_path=model_path, expert=expert,
-                        search_radius=search_radius, snapshots=snapshots, frames=frames,
+                        search_radius=search_radius, friction_safety=friction_safety,
+                        snapshots=snapshots, frames=frames,
                         video=video, log_path=log_path, explain_plot=explain_plot,
                         expert_config=_expert_settings(expert_config))
     text = _run_text(outcome.record.result)
@@ -99,7 +105,8 @@ def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: st
 @json_option
 def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: int,
                   log_path: str | None, expert: bool, expert_config: str | None,
-                  search_radius: float | None, processes: int | None, executor_name: str,
+                  search_radius: float | None, friction_safety: float | None,
+                  processes: int | None, executor_name: str,
                   ray_address: str | None, as_json: bool) -> None:
     """N runs in parallel: success rate (Wilson 95 % CI), slip, speed."""
     todo = {"runs": runs}
@@ -114,7 +121,8 @@ def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: in
                        failed=lambda record: not record.result["success"],
                        log_lines=True) as step):
         batch = walk_batch(terrain_path, runs, seed, model_path=model_path, expert=expert,
-                           search_radius=search_radius, log_path=log_path, progress=step,
+                           search_radius=search_radius, friction_safety=friction_safety,
+                           log_path=log_path, progress=step,
                            executor=executor, reused=reused,
                            expert_config=_expert_settings(expert_config))
     s = batch.summary

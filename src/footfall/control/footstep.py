@@ -9,6 +9,9 @@ The planner predicts the body pose at the touch-down of each of the next
 five steps of the crawl gait by advancing along the :class:`BodyPath`, and
 picks the first foothold of the five-step sequence with the largest summed
 reward (see :meth:`FootstepPlanner.plan` for the approximation).
+
+With ``friction_safety`` set, every step's candidates lose the footholds where
+a ball foot would not hold (:class:`~footfall.features.footing.FrictionCheck`).
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from footfall.core.state import RobotState, feet_pitch
 from footfall.features.candidates import lattice, reachable_footholds, reaches
 from footfall.features.dense import ScoreGrid
 from footfall.features.family import Candidates
+from footfall.features.footing import FrictionCheck
 from footfall.features.reward import default_reward
 from footfall.features.scorer import FootholdScorer, RewardFor
 from footfall.features.spread import reward_spread, spread_key
@@ -84,6 +88,14 @@ class FootstepConfig(Params):
     heading_tolerance: float = param(0.25, unit="rad", range=above(0),
                                      doc="body headings within this of GRID_YAW score footholds "
                                          "from the grids; beyond it, exact patches (slow)")
+    friction_safety: float | None = param(None, unit="-", range=at_least(1),
+                                          doc="friction check: a foothold whose ball-foot "
+                                              "contact tilts more than atan(foot friction / this) "
+                                              "anywhere within footing_margin is dropped from F "
+                                              "(unless none holds); None: no check")
+    footing_margin: float = param(0.005, unit="m", range=at_least(0),
+                                  doc="the friction check's footholds hold within this of them "
+                                      "(one lattice spacing: the tilt between lattice points)")
 
     @property
     def lead(self) -> float:
@@ -133,6 +145,19 @@ def _diverse_best(score: np.ndarray, points: np.ndarray, count: int, separation:
         free &= np.sum((points[ranked] - points[ranked[k]]) ** 2, axis=1) >= separation ** 2
         free[k] = False
     return np.array(chosen, dtype=np.int64)
+
+
+def path_heading(path: BodyPath, s: np.ndarray, horizon: float) -> np.ndarray:
+    """Body heading [rad] at arc length s [m] (...): toward the path point ``horizon`` [m] ahead.
+
+    Within ``horizon`` of the path's end, the heading of the last chord that
+    long (of the path's end segment if the path is shorter).
+    """
+    s = np.asarray(s, dtype=np.float64)
+    h = min(horizon, path.length)
+    a = np.clip(s, 0.0, path.length - h)
+    d = path.point_at(a + h) - path.point_at(a)
+    return np.arctan2(d[..., 1], d[..., 0])
 
 
 @dataclass(frozen=True, eq=False)
@@ -188,6 +213,8 @@ class FootstepPlanner:
         self.grids_ = dict(grids)
         self._posed = {name: r.has_state_part for name, r in self.rewards_.items()}
         self.bias_ = self._bias_weights()
+        self.friction_ = None if config.friction_safety is None else FrictionCheck.of(
+            hmap, config.spacing, robot, config.friction_safety, config.footing_margin)
 
     def _bias_weights(self) -> dict[str, float]:
         """Path bias [reward/m] per leg: ``bias_weight`` scaled to each reward's spread.
@@ -211,6 +238,10 @@ class FootstepPlanner:
         reward = self.rewards_[leg]
         return reward.terrain_values(Candidates(self.hmap, footholds, yaw,
                                                 self.robot.leg(leg).mirrored, reward.config))
+
+    def _holding(self, footholds: np.ndarray, usable: np.ndarray) -> np.ndarray:
+        """``usable`` (n,) bool less the footholds (n, 3) [m] the friction check drops."""
+        return usable if self.friction_ is None else self.friction_.keep(footholds, usable)
 
     def _pose(self, state: RobotState, footholds: np.ndarray) -> np.ndarray:
         """State part of the swing leg's reward (n,) for the state (0 if it has no pose weights)."""
@@ -280,19 +311,6 @@ class FootstepPlanner:
         z = z[~np.isnan(z)]
         return float(np.median(z)) if z.size else math.nan
 
-    def heading(self, s: np.ndarray) -> np.ndarray:
-        """Body heading [rad] at arc length s [m] (...): toward the path point heading_horizon ahead.
-
-        Within ``heading_horizon`` of the path's end, the heading of the last
-        chord that long (of the path's end segment if the path is shorter).
-        """
-        path = self.path
-        s = np.asarray(s, dtype=np.float64)
-        h = min(self.config.heading_horizon, path.length)
-        a = np.clip(s, 0.0, path.length - h)
-        d = path.point_at(a + h) - path.point_at(a)
-        return np.arctan2(d[..., 1], d[..., 0])
-
     # ---------------------------------------------------------------- plan
     def plan(self, state: RobotState) -> FootstepPlan:
         """The foothold of ``state.swing_leg`` that maximises the reward over the next steps.
@@ -355,9 +373,9 @@ class FootstepPlanner:
         s0 = float(path.closest(state.body_position[:2]))
         s = np.minimum(s0 + cfg.step_advance * np.arange(1, cfg.lookahead + 1), path.length)
         body_xy = path.point_at(s)
-        body_yaw = self.heading(s)
+        body_yaw = path_heading(path, s, cfg.heading_horizon)
         s_mid = np.minimum(s + cfg.lead, path.length)
-        mid_xy, mid_yaw = path.point_at(s_mid), self.heading(s_mid)
+        mid_xy, mid_yaw = path.point_at(s_mid), path_heading(path, s_mid, cfg.heading_horizon)
         nominal = np.array([robot.nominal_foot(leg)[:2] for leg in legs])  # (K, 2)
         c, sn = np.cos(mid_yaw), np.sin(mid_yaw)
         targets = mid_xy + np.column_stack([c * nominal[:, 0] - sn * nominal[:, 1],
@@ -381,7 +399,7 @@ class FootstepPlanner:
         cand = reachable_footholds(self.hmap, st0, self.robot, cfg.spacing,
                                    self.rewards_[leg0].config if exact else None)
         terrain = self._terrain(leg0, cand, yaw0)
-        keep = np.isfinite(terrain)
+        keep = self._holding(cand, np.isfinite(terrain))
         if cfg.search_radius is not None:  # F: the footholds near the gait-nominal position, or,
             # where none near it is usable (a step edge, a gap), every reachable one
             near = np.sum((cand[:, :2] - target) ** 2, axis=1) <= cfg.search_radius ** 2
@@ -426,7 +444,8 @@ class FootstepPlanner:
                 dist = np.linalg.norm(near[:, :2] - target, axis=1)
                 near = near[np.argsort(dist, kind="stable")[:2 * cfg.lookahead_candidates]]
             t = self._terrain(leg, near, yaw)
-            near, t = near[np.isfinite(t)], t[np.isfinite(t)]
+            keep = self._holding(near, np.isfinite(t))
+            near, t = near[keep], t[keep]
             if near.shape[0] == 0:
                 break
             t = t - self.bias_[leg] * np.linalg.norm(near[:, :2] - target, axis=1)

@@ -130,6 +130,9 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
     register_variant("with-rebase", "with the stance re-based after a recovery that leaves the "
                      "body more than 30 mm off (off by default)",
                      lambda w: _reflexes(w, rebase_distance=0.03)),
+    register_variant("with-friction-check", "with footholds dropped where a ball foot's "
+                     "contact tilts past atan(friction / 1.5) within 5 mm (off by default)",
+                     lambda w: replace(w, footstep=replace(w.footstep, friction_safety=1.5))),
 ))  # the controller's own variants, in table order: an ablation walks them all by default
 
 

@@ -1,0 +1,137 @@
+"""The friction check: a ball foot's contact tilt on scripted maps, and the planner's use of it."""
+
+import math
+
+import numpy as np
+import pytest
+
+from footfall.control.body_path import BodyPath, terrain_grids
+from footfall.control.footstep import FootstepConfig, FootstepPlanner
+from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
+from footfall.core.robot import LITTLEDOG
+from footfall.core.state import nominal_state
+from footfall.features.footing import contact_tilt, footing_grid, tilt_limit
+from footfall.features.reward import default_reward
+from footfall.terrain.modules import make_module
+
+R = LITTLEDOG.foot_radius  # [m] 0.01
+
+
+def plane(slope: float, res: float = 0.0005, size: float = 0.1) -> HeightMap:
+    """A plane rising along x with ``slope`` [rad]."""
+    n = int(round(size / res)) + 1
+    x = np.arange(n) * res
+    return HeightMap(np.repeat((np.tan(slope) * x)[:, None], n, axis=1), res, (0.0, 0.0))
+
+
+def ledge(res: float = 0.0005) -> HeightMap:
+    """A 5 cm high plateau for x < 0.05 m, the ground at 0 beyond it."""
+    n = 201
+    x = np.arange(n) * res
+    return HeightMap(np.repeat(np.where(x < 0.05, 0.05, 0.0)[:, None], n, axis=1), res)
+
+
+def test_flat_ground_has_no_tilt():
+    hmap = plane(0.0)
+    centres = hmap.index_to_position(np.random.default_rng(0).integers(40, 160, (50, 2)))
+    np.testing.assert_array_equal(contact_tilt(hmap, centres, R), 0.0)
+    # between cell centres the contact is the nearest cell: off by at most half a diagonal
+    pts = np.random.default_rng(0).uniform(0.02, 0.08, (50, 2))
+    assert np.all(contact_tilt(hmap, pts, R) <= np.arcsin(0.5 * math.sqrt(2) * 0.0005 / R))
+
+
+@pytest.mark.parametrize("slope", [0.1, 0.4, 0.7, 1.0])
+def test_on_a_plane_the_tilt_is_its_slope(slope):
+    pts = np.random.default_rng(1).uniform(0.03, 0.07, (40, 2))
+    # the contact is a cell, so the tilt is the slope to about one cell in the foot's radius
+    np.testing.assert_allclose(contact_tilt(plane(slope), pts, R), slope, atol=0.06)
+
+
+def test_a_ball_over_an_edge_hangs_on_its_corner():
+    hmap = ledge()
+    d = np.array([0.001, 0.003, 0.005, 0.007, 0.009])  # [m] beyond the edge
+    pts = np.column_stack([0.0495 + d, np.full(d.size, 0.05)])  # the corner cell is at 0.0495
+    np.testing.assert_allclose(contact_tilt(hmap, pts, R), np.arcsin(d / R), atol=1e-9)
+    on_top = contact_tilt(hmap, np.array([[0.02, 0.05], [0.035, 0.05]]), R)
+    np.testing.assert_allclose(on_top, 0.0, atol=1e-9)  # away from the edge the plateau is flat
+    beyond = contact_tilt(hmap, np.array([[0.0495 + R + 0.002, 0.05]]), R)
+    np.testing.assert_allclose(beyond, 0.0, atol=1e-9)  # clear of the corner: on the ground
+
+
+def test_cells_without_data_do_not_hold_the_foot():
+    heights = np.asarray(ledge().heights, dtype=np.float64).copy()
+    heights[:100] = np.nan  # the plateau's edge, and all behind it, unknown
+    hmap = HeightMap(heights, 0.0005)
+    np.testing.assert_allclose(contact_tilt(hmap, np.array([[0.052, 0.05]]), R), 0.0, atol=1e-9)
+    assert np.isnan(contact_tilt(hmap, np.array([[0.02, 0.05]]), R)[0])  # nothing under it
+    grid = footing_grid(hmap, 0.005, R, 0.0)
+    assert grid.at(np.array([0.02, 0.05])) == pytest.approx(math.pi / 2)  # cannot stand there
+
+
+def test_the_limit_is_the_friction_cone_reduced_by_the_safety_factor():
+    assert tilt_limit(0.8, 1.0) == pytest.approx(math.atan(0.8))
+    assert tilt_limit(0.8, 1.5) == pytest.approx(math.atan(0.8 / 1.5))
+    for bad in ((0.0, 1.5), (0.8, 0.0), (-1.0, 1.0), (math.nan, 1.0)):
+        with pytest.raises(FootfallError):
+            tilt_limit(*bad)
+    with pytest.raises(FootfallError):
+        contact_tilt(plane(0.0), np.zeros((1, 2)), 0.0)
+
+
+def test_the_grid_is_the_worst_tilt_within_the_margin_of_every_lattice_point():
+    hmap = make_module("rocky", 0.8, seed=3)
+    exact = footing_grid(hmap, 0.005, R, 0.0)
+    # the strided lattice path is the per-point definition
+    xx, yy = np.meshgrid(exact.x, exact.y, indexing="ij")
+    pts = np.column_stack([xx.ravel(), yy.ravel()])
+    np.testing.assert_allclose(exact.tilt, contact_tilt(hmap, pts, R).reshape(exact.tilt.shape),
+                               atol=1e-12)
+    # a lattice that does not fall on cells takes the per-point path
+    odd = footing_grid(hmap, 0.0045, R, 0.0)
+    xx, yy = np.meshgrid(odd.x, odd.y, indexing="ij")
+    pts = np.column_stack([xx.ravel(), yy.ravel()])
+    np.testing.assert_array_equal(odd.tilt, contact_tilt(hmap, pts, R).reshape(odd.tilt.shape))
+    margin = footing_grid(hmap, 0.005, R, 0.005)
+    t = exact.tilt
+    worst = t.copy()  # one spacing: the four neighbours
+    worst[1:] = np.maximum(worst[1:], t[:-1])
+    worst[:-1] = np.maximum(worst[:-1], t[1:])
+    worst[:, 1:] = np.maximum(worst[:, 1:], t[:, :-1])
+    worst[:, :-1] = np.maximum(worst[:, :-1], t[:, 1:])
+    np.testing.assert_array_equal(margin.tilt[1:-1, 1:-1], worst[1:-1, 1:-1])
+    assert footing_grid(hmap, 0.005, R, 0.005) is margin  # once per map and settings
+
+
+def step_map() -> HeightMap:
+    """Flat ground with a 4 cm high, 6 cm deep block across the path at x in [0.40, 0.46] m."""
+    x = np.arange(901) * 0.001
+    heights = np.repeat(np.where((x >= 0.40) & (x <= 0.46), 0.04, 0.0)[:, None], 601, axis=1)
+    return HeightMap(heights, 0.001, (0.0, -0.3))
+
+
+def test_the_planner_drops_footholds_that_would_not_hold_unless_none_would():
+    hmap = step_map()
+    reward = default_reward()
+    grids = terrain_grids(hmap, lambda leg: reward)
+    path = BodyPath.straight((0.2, 0.0), (0.8, 0.0))
+    state = nominal_state(hmap, (0.3, 0.0), 0.0, "LF")
+    checked = FootstepPlanner(hmap, lambda leg: reward, path, grids=grids,
+                              config=FootstepConfig(friction_safety=1.5))
+    plain = FootstepPlanner(hmap, lambda leg: reward, path, grids=grids)
+    a, b = checked.plan(state), plain.plan(state)
+    limit = math.atan(LITTLEDOG.foot_friction / 1.5)
+    tilt = checked.friction_.grid.at(b.candidates[:, :2])
+    assert np.any(tilt > limit)  # the block's edges are in reach
+    np.testing.assert_array_equal(a.candidates, b.candidates[tilt <= limit])
+    assert checked.friction_.holds(a.foothold[:2])
+    assert checked.friction_.limit == pytest.approx(limit)
+    # on ground where nothing holds, the check drops nothing: the foot must go somewhere
+    steep = HeightMap(np.repeat((np.arange(901) * 0.001)[:, None], 601, axis=1), 0.001,
+                      (0.0, -0.3))  # 45 degrees everywhere
+    grids = terrain_grids(steep, lambda leg: reward)
+    state = nominal_state(steep, (0.3, 0.0), 0.0, "LF")
+    a = FootstepPlanner(steep, lambda leg: reward, path, grids=grids,
+                        config=FootstepConfig(friction_safety=1.5)).plan(state)
+    b = FootstepPlanner(steep, lambda leg: reward, path, grids=grids).plan(state)
+    np.testing.assert_array_equal(a.candidates, b.candidates)

@@ -1,7 +1,13 @@
 """Run logs in the store: round trip, atomicity, keys, and upgrading a version-1 store."""
 
+import json
 import math
 import sqlite3
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -105,3 +111,48 @@ def test_a_version_1_store_is_upgraded_in_place_without_losing_anything(tmp_path
         assert len(store.demonstrations()) == 1
         store.add_run(_run(hm))
         assert len(store.runs()) == 1
+
+
+def test_four_processes_creating_and_appending_to_one_new_store_lose_and_double_nothing(
+        tmp_path):
+    # All four start on a store that does not exist yet, at once (a start file releases them):
+    # each creates it, stores two runs of its own and the same six runs as the others (two
+    # batches walking the same runs). No process fails, every run is stored once, and each
+    # shared run is stored by exactly one process and found stored by the other three.
+    path, start = tmp_path / "new.sqlite", tmp_path / "go"
+    script = textwrap.dedent(f"""
+        import json, sys, time
+        from pathlib import Path
+        sys.path.insert(0, {str(Path(__file__).parent)!r})
+        from test_runlog import _run
+        from test_store import terrain
+        from footfall.data.store import DemoStore
+        w = int(sys.argv[1])
+        hm = terrain()
+        runs = [_run(hm, key=f"shared:{{k}}", seed=k) for k in range(6)]
+        runs += [_run(hm, key=f"own:{{w}}:{{k}}", seed=10 + k) for k in range(2)]
+        while not Path({str(start)!r}).exists():
+            time.sleep(0.001)
+        added = []
+        with DemoStore({str(path)!r}, create=True) as store:
+            for run in runs:
+                added.append(store.add_run_if_new(run, terrains=[hm])[1])
+        print(json.dumps(added))
+    """)
+    procs = [subprocess.Popen([sys.executable, "-c", script, str(w)], stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True) for w in range(4)]
+    time.sleep(2.0)  # every process imported and waiting
+    start.touch()
+    added = []
+    for p in procs:
+        out, err = p.communicate(timeout=120)
+        assert p.returncode == 0, err
+        added.append(json.loads(out))
+    assert [a[6:] for a in added] == [[True, True]] * 4  # each its own runs
+    assert [sum(a[k] for a in added) for k in range(6)] == [1] * 6  # each shared run once
+    with DemoStore(path) as store:
+        keys = [r["key"] for r in store.runs()]
+        store.check()
+    assert sorted(keys) == sorted([f"shared:{k}" for k in range(6)]
+                                  + [f"own:{w}:{k}" for w in range(4) for k in range(2)])
+    assert [p.name for p in tmp_path.iterdir() if p.name.endswith(".new")] == []

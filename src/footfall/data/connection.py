@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import numbers
 import os
+import secrets
 import sqlite3
 from collections.abc import Iterator
 from pathlib import Path
@@ -65,6 +66,7 @@ class StoreConnection:
                 raise FootfallError(f"no such file: {self.path}")
             if not self.path.parent.is_dir():
                 raise FootfallError(f"output directory does not exist: {self.path.parent}")
+            _create_store(self.path)
         else:
             schema.check_header(self.path)
 
@@ -200,6 +202,39 @@ class StoreConnection:
         if isinstance(i, bool) or not isinstance(i, numbers.Integral):
             raise FootfallError(f"demonstration ids are integers, got {i!r}")
         return int(i)
+
+
+def _create_store(path: Path) -> None:
+    """Make a new store at ``path`` whole or not at all: its schema is written to a temporary
+    file beside it, which is then hard-linked to ``path``. A link never replaces a file, so
+    of processes creating the same store at once one links its file and the others find a
+    complete store there (never an empty or half-made file) and open it. Where the file
+    system has no hard links, the store is made in place (one creator at a time)."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.new")
+    try:
+        try:
+            con = sqlite3.connect(tmp, isolation_level=None)
+        except sqlite3.Error as exc:
+            raise FootfallError(f"{path}: cannot create ({one_line(exc)})") from None
+        try:
+            con.execute("PRAGMA journal_mode = WAL")  # recorded in the file's header
+            con.execute("BEGIN IMMEDIATE")
+            schema.create(con, f"footfall {__version__}")
+            con.execute("COMMIT")
+        except sqlite3.Error as exc:
+            raise FootfallError(f"{path}: cannot create ({one_line(exc)})") from None
+        finally:
+            con.close()
+        try:
+            os.link(tmp, path)
+        except FileExistsError:
+            pass  # another process made it first: opened as it stands
+        except OSError:
+            if not path.exists():  # no hard links here: in place, as a single creator would
+                os.replace(tmp, path)
+    finally:
+        for leftover in (tmp, Path(f"{tmp}-wal"), Path(f"{tmp}-shm")):
+            leftover.unlink(missing_ok=True)
 
 
 def one_line(exc: BaseException) -> str:

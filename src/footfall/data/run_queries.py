@@ -51,19 +51,35 @@ class RunQueries(TerrainQueries):
             If the terrain is missing or a run with the same key is stored;
             nothing is written then.
         """
+        return self._add_run(run, terrains, demonstrations, stored_ok=False)[0]
+
+    def add_run_if_new(self, run: RunRecord, terrains: Iterable[HeightMap] = ()
+                       ) -> tuple[int, bool]:
+        """Store ``run`` unless a run with its key is stored already -- by another process
+        walking the same run at the same time, say: (the stored run's id, whether this call
+        stored it). Otherwise as :meth:`add_run`."""
+        if not isinstance(run, RunRecord) or run.key is None:
+            raise FootfallError("add_run_if_new needs a RunRecord with a key")
+        return self._add_run(run, terrains, (), stored_ok=True)
+
+    def _add_run(self, run: RunRecord, terrains: Iterable[HeightMap],
+                 demonstrations: Iterable[Demonstration], stored_ok: bool) -> tuple[int, bool]:
         if not isinstance(run, RunRecord):
             raise FootfallError(f"expected a RunRecord, got {type(run).__name__}")
         terrains = list(terrains)
         demos = as_demonstrations(demonstrations)
         with self._write_after_terrains(terrains) as con:
             self._require_terrain(con, run.terrain_hash, "runs")
-            if run.key is not None and con.execute("SELECT 1 FROM runs WHERE key = ?",
-                                                   (run.key,)).fetchone() is not None:
+            held = None if run.key is None else con.execute(
+                "SELECT id FROM runs WHERE key = ?", (run.key,)).fetchone()
+            if held is not None:
+                if stored_ok:
+                    return int(held[0]), False
                 raise FootfallError(f"a run with key {run.key!r} is already in the store")
             run_id = _insert_run(con, run)
             for d in demos:
                 self._insert_demonstration(con, d)
-        return run_id
+        return run_id, True
 
     def runs(self, key_prefix: str | None = None) -> list[dict[str, Any]]:
         """Every stored run without its steps: id, key, terrain_hash, seed, settings, result, n_steps.

@@ -424,7 +424,9 @@ def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
         for job, record in _walked(executor, todo, None):
             if log is not None:  # each finished run is kept at once
                 store = store or DemoStore(log, create=True)
-                store.add_run(record, terrains=[hmap])
+                run_id, added = store.add_run_if_new(record, terrains=[hmap])
+                if not added:  # another batch on the store walked it meanwhile: theirs
+                    record = store.run(run_id)
             records[job.seed] = record
             if progress is not None:
                 progress(record)

@@ -119,6 +119,18 @@ CORRUPT_ROWS = [  # (statement, the problem's words: table, row key, column)
      "run_steps row (run 1, k 1): t_liftoff is not a number (got text 'soon')"),
     ("UPDATE terrains SET resolution = 'fine'",
      "is not a number (got text 'fine')"),
+    # sources that name a run's step must name a stored one
+    ("UPDATE demonstrations SET source = 'run:999:step:3' WHERE id = 1",
+     "demonstrations row 1: its source 'run:999:step:3' names a run step that is not in the "
+     "store"),
+    ("UPDATE demonstrations SET source = 'run:run-a:step:2' WHERE id = 1",
+     "demonstrations row 1: its source 'run:run-a:step:2' names a run step"),
+    ("UPDATE demonstrations SET source = 'human:run:1:step:7' WHERE id = 2",
+     "demonstrations row 2: its source 'human:run:1:step:7' names a run step"),
+    ("UPDATE demonstrations SET source = 'run:run-a:step:1' WHERE id = 1", None),  # by key
+    ("UPDATE demonstrations SET source = 'run:1:step:0' WHERE id = 1", None),  # by id
+    ("UPDATE demonstrations SET source = 'human:run:1:step:1' WHERE id = 1", None),
+    ("UPDATE demonstrations SET source = 'walker:test' WHERE id = 1", None),  # names no run
 ]
 
 
@@ -135,6 +147,23 @@ def test_a_corrupt_row_is_named_by_table_and_key(clean, capsys, statement, probl
     assert any(problem in line for line in out.splitlines())
     code, _, err = run(capsys, "demos", "info", clean)  # it checks the file: every row
     assert_user_error(code, err, problem)
+
+
+def test_a_label_beyond_its_step_s_candidates_is_a_problem(clean, capsys):
+    with DemoStore(clean) as store:
+        store.add_label(1, 1, "ada", "fine")
+    assert run(capsys, "store", "check", clean)[0] == 0
+    tamper(clean, "UPDATE labels SET chosen = 99999")
+    code, _, err = run(capsys, "store", "check", clean)
+    assert_user_error(code, err, "labels row 1: chosen 99999 is not one of its step's 3 "
+                                 "candidates")
+
+
+def test_a_run_whose_steps_do_not_match_its_count_is_not_read_back(clean):
+    tamper(clean, "DELETE FROM run_steps WHERE k = 1")
+    with DemoStore(clean) as store, pytest.raises(FootfallError,
+                                                  match="n_steps is 2 but 1 steps are stored"):
+        store.run(1)
 
 
 def test_readers_refuse_a_corrupt_row_with_its_key(clean, capsys):

@@ -142,6 +142,7 @@ def _check_rows(con: sqlite3.Connection, report: StoreReport, version: int) -> N
                 report.problems.append(f"meta row {key!r}: {column} is not text")
     hashes: set[Any] = set()
     demo_ids: set[Any] = set()
+    sources: list[tuple[Any, Any]] = []  # (demonstration id, source)
     with _sqlite_errors(report, "table terrains"):
         for row in con.execute(f"SELECT {rows.TERRAIN_COLUMNS} FROM terrains ORDER BY rowid"):
             report.terrains += 1
@@ -152,28 +153,62 @@ def _check_rows(con: sqlite3.Connection, report: StoreReport, version: int) -> N
                                "ORDER BY id"):
             report.demonstrations += 1
             demo_ids.add(row[0])
-            if _row(report, "demonstrations", repr(row[0]), rows.demonstration, row):
+            if _row(report, "demonstrations", repr(row[0]), rows.demonstration, row) is not None:
                 _reference(report, "demonstrations", row[0], row[1], hashes)
-    steps: set[tuple[Any, Any]] = set()
+                sources.append((row[0], row[11]))
+    steps: dict[tuple[Any, Any], int | None] = {}
+    keys: dict[Any, Any] = {}
     if version >= 2:
-        steps = _check_runs(con, report, hashes)
+        steps, keys = _check_runs(con, report, hashes)
+        _check_sources(report, sources, steps, keys)
     if version >= 3:
         _check_labels(con, report, steps, demo_ids)
 
 
-def _check_labels(con: sqlite3.Connection, report: StoreReport, steps: set[tuple[Any, Any]],
-                  demo_ids: set[Any]) -> None:
+def run_step_of(source: str) -> tuple[str, str, str] | None:
+    """(kind, run, step) of a demonstration source that names a run's step --
+    ``run:<run key or id>:step:<k>`` (an expert's correction, a rank-eval decision) or
+    ``human:run:<run id>:step:<k>`` (a person's label) -- as text; None for every other
+    source (the walker's, a collection's: they name no run)."""
+    for kind, prefix in (("run", "run:"), ("human", "human:run:")):
+        if source.startswith(prefix) and ":step:" in source:
+            run, step = source[len(prefix):].rsplit(":step:", 1)
+            return kind, run, step
+    return None
+
+
+def _check_sources(report: StoreReport, sources: list[tuple[Any, Any]],
+                   steps: dict[tuple[Any, Any], int | None], keys: dict[Any, Any]) -> None:
+    """Every demonstration whose source names a run's step names one that is stored."""
+    for demo_id, source in sources:
+        named = run_step_of(source)
+        if named is None:
+            continue
+        kind, run, step = named
+        number = int(run) if run.isdigit() else None  # a run's id
+        run_id = number if kind == "human" else keys.get(run, number)  # or its key
+        if run_id is None or not step.isdigit() or (run_id, int(step)) not in steps:
+            report.problems.append(f"demonstrations row {demo_id!r}: its source {source!r} "
+                                   f"names a run step that is not in the store")
+
+
+def _check_labels(con: sqlite3.Connection, report: StoreReport,
+                  steps: dict[tuple[Any, Any], int | None], demo_ids: set[Any]) -> None:
     """People's labels: each row sound, on a stored run step, a foothold label with its
     demonstration (a "fine" verdict has none)."""
     with _sqlite_errors(report, "table labels"):
         for row in con.execute(f"SELECT {LABEL_COLUMNS} FROM labels ORDER BY id"):
             report.labels += 1
-            if not _row(report, "labels", repr(row[0]), checked_label, row):
+            label = _row(report, "labels", repr(row[0]), checked_label, row)
+            if label is None:
                 continue
-            label = checked_label(row)
             if (label.run_id, label.k) not in steps:
                 report.problems.append(f"labels row {label.id}: run {label.run_id} has no step "
                                        f"{label.k} in the store")
+            elif not 0 <= label.chosen < (steps[label.run_id, label.k] or 0):
+                report.problems.append(f"labels row {label.id}: chosen {label.chosen} is not "
+                                       f"one of its step's {steps[label.run_id, label.k]} "
+                                       f"candidates")
             if (label.verdict == "foothold") != (label.demonstration_id in demo_ids):
                 report.problems.append(f"labels row {label.id}: a {label.verdict!r} label "
                                        + ("without its demonstration" if label.verdict ==
@@ -181,46 +216,51 @@ def _check_labels(con: sqlite3.Connection, report: StoreReport, steps: set[tuple
 
 
 def _check_runs(con: sqlite3.Connection, report: StoreReport, hashes: set[Any]
-                ) -> set[tuple[Any, Any]]:
-    """The run logs: each run's row, its terrain, its steps numbered 0 .. n_steps - 1."""
+                ) -> tuple[dict[tuple[Any, Any], int | None], dict[Any, Any]]:
+    """The run logs: each run's row, its terrain, its steps numbered 0 .. n_steps - 1.
+    Returns the stored steps, (run id, k) -> its number of candidates (None: unreadable),
+    and the runs' ids by key."""
     n_steps: dict[Any, Any] = {}
+    keys: dict[Any, Any] = {}
     with _sqlite_errors(report, "table runs"):
         for row in con.execute(f"SELECT {rows.RUN_COLUMNS} FROM runs ORDER BY id"):
             report.runs += 1
             n_steps[row[0]] = row[6]
-            if _row(report, "runs", repr(row[0]), rows.run_head, row):
+            if row[1] is not None:
+                keys[row[1]] = row[0]
+            if _row(report, "runs", repr(row[0]), rows.run_head, row) is not None:
                 _reference(report, "runs", row[0], row[2], hashes)
     found: dict[Any, list[Any]] = {}
-    stored: set[tuple[Any, Any]] = set()
+    stored: dict[tuple[Any, Any], int | None] = {}
     with _sqlite_errors(report, "table run_steps"):
         for row in con.execute(f"SELECT run_id, {rows.STEP_COLUMNS} FROM run_steps "
                                "ORDER BY run_id, k"):
             report.run_steps += 1
             run_id, step = row[0], row[1:]
             where = f"(run {run_id!r}, k {step[0]!r})"
-            _row(report, "run_steps", where, rows.run_step, step)
+            sound = _row(report, "run_steps", where, rows.run_step, step)
             if run_id not in n_steps:
                 report.problems.append(f"run_steps row {where}: run {run_id!r} is not in "
                                        f"the store")
             found.setdefault(run_id, []).append(step[0])
-            stored.add((run_id, step[0]))
+            stored[run_id, step[0]] = None if sound is None else sound.candidates.shape[0]
     for run_id, n in n_steps.items():
         ks = found.get(run_id, [])
         if isinstance(n, int) and ks != list(range(n)):
             report.problems.append(f"runs row {run_id!r}: n_steps is {n} but its steps are "
                                    f"numbered {_range(ks)}")
-    return stored
+    return stored, keys
 
 
 def _row(report: StoreReport, table: str, key: str, decode: Callable[[tuple], Any],
-         row: tuple) -> bool:
-    """Decode one row; a problem naming the table and the row's key if it is not sound."""
+         row: tuple) -> Any:
+    """The decoded row; None and a problem naming the table and the row's key if it is not
+    sound."""
     try:
-        decode(row)
+        return decode(row)
     except FootfallError as exc:
         report.problems.append(f"{table} row {key}: {exc}")
-        return False
-    return True
+        return None
 
 
 def _reference(report: StoreReport, table: str, key: Any, terrain_hash: Any,

@@ -117,6 +117,9 @@ class RunQueries(TerrainQueries):
             raise NotFound(f"run {run_id} is not in the store")
         try:
             run = rows.run_head(head)
+            if run["n_steps"] != len(steps):
+                raise FootfallError(f"n_steps is {run['n_steps']} but {len(steps)} steps are "
+                                    f"stored; `footfall store check` lists every problem")
             return RunRecord(run["terrain_hash"], run["seed"], run["settings"], run["result"],
                              tuple(rows.run_step(row) for row in steps), run["key"], run_id)
         except FootfallError as exc:

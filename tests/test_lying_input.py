@@ -9,6 +9,7 @@ import pytest
 from cli_helpers import assert_user_error, run
 from footfall.core.errors import FootfallError
 from footfall.core.files import same_file, writable_path
+from footfall.core.heightmap import HeightMap
 from footfall.data.store import DemoStore
 from footfall.experiments import batch
 from footfall.experiments.ablation import AblationConfig
@@ -151,3 +152,30 @@ def test_ties_are_expectations_over_the_tied_best():
     assert pct == pytest.approx((1 + 0.5 * 2) / 3) and loss == pytest.approx(3 - 2)
     assert tied == 1.0 and constant == 0.0
     assert _decision(np.array([9.0, 5.0, 5.0, 1.0]), d, values)[:4] == (1.0, 1.0, 1.0, 0.0)
+
+
+def _lying_board(source, path, **change):
+    """The board at ``source`` saved to ``path`` with some of its fields changed."""
+    hm = HeightMap.load(source)
+    fields = {"heights": hm.heights, "resolution": hm.resolution, "origin": hm.origin,
+              "metadata": hm.metadata, **change}
+    HeightMap(**fields).save(path)
+    return path
+
+
+def test_a_board_whose_records_disagree_with_its_map_is_refused_in_one_line(files, tmp_path,
+                                                                           capsys):
+    flat = HeightMap.load(files / "flat.npz")
+    moved = [dict(m, x_start=m["x_start"] + 50.0, x_end=m["x_end"] + 50.0)
+             for m in flat.metadata["modules"]]
+    for change, message in (
+            ({"resolution": 0.002}, "its modules end at 1.22 m but the map is 2.44 m long "
+                                    "(1220 cells of 0.002 m)"),
+            ({"metadata": {**flat.metadata, "modules": moved}},
+             "module 0 starts at 50 m, not where the map starts (0 m)"),
+            ({"origin": (999_000.0, flat.origin[1])},
+             "m from its frame's origin; a board that is walked must lie within 1000 m")):
+        board = _lying_board(files / "flat.npz", tmp_path / "lie.npz", **change)
+        code, _, err = run(capsys, "walk", "--terrain", board, "--seed", "0")
+        assert_user_error(code, err, message)
+    assert batch.load_board(files / "flat.npz").shape == flat.shape  # the true board walks

@@ -188,6 +188,46 @@ def module_records(metadata: Any, what: str = "metadata") -> list[dict]:
     return modules
 
 
+MAX_BOARD_OFFSET = 1000.0  # [m] a board that is walked lies within this of its frame's origin
+
+
+def board_records(hmap: HeightMap, what: str = "the board") -> list[dict]:
+    """The module records of a board that is walked, checked against its map.
+
+    A board's records give each module's x range [m] from the map's start
+    (:func:`module_records`); a walk reads its start and goal from them. They
+    must tile the map: the first starts at 0, each starts where the one before
+    ends, the last ends at the map's length -- all to within one cell. A
+    resolution that disagrees with the records (a 1 mm board saved as 2 mm)
+    or records that lie off the map are refused here, as is a board farther
+    than :data:`MAX_BOARD_OFFSET` from its frame's origin (the simulator's
+    contacts lose precision there). Returns ``[]`` for a map without records.
+
+    Raises
+    ------
+    FootfallError
+        Naming ``what`` and the disagreement.
+    """
+    x0, x1, y0, y1 = hmap.bounds
+    if max(abs(x0), abs(x1), abs(y0), abs(y1)) > MAX_BOARD_OFFSET:
+        raise FootfallError(f"{what} lies {max(abs(x0), abs(x1), abs(y0), abs(y1)):g} m from "
+                            f"its frame's origin; a board that is walked must lie within "
+                            f"{MAX_BOARD_OFFSET:g} m of it (move its origin)")
+    modules = module_records(hmap.metadata, f"{what}: metadata")
+    length, tol = x1 - x0, hmap.resolution + 1e-9
+    ends = [0.0] + [float(m["x_end"]) for m in modules]
+    for k, m in enumerate(modules):
+        if abs(float(m["x_start"]) - ends[k]) > tol:
+            raise FootfallError(f"{what}: module {k} starts at {float(m['x_start']):g} m, not "
+                                f"where " + ("the map starts (0 m)" if k == 0 else
+                                             f"module {k - 1} ends ({ends[k]:g} m)"))
+    if modules and abs(ends[-1] - length) > tol:
+        raise FootfallError(f"{what}: its modules end at {ends[-1]:g} m but the map is "
+                            f"{length:g} m long ({hmap.shape[0]} cells of {hmap.resolution:g} m):"
+                            f" its resolution or its module records are wrong")
+    return modules
+
+
 def _check_module_record(record: Any, what: str) -> None:
     """One module record: {"kind", "x_start", "x_end"[, "difficulty", "seed"]} of the right types."""
     if not isinstance(record, dict):

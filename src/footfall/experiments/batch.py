@@ -23,7 +23,7 @@ from footfall.core.atomic import atomic_path
 from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
 from footfall.core.files import plain_json, writable_path
-from footfall.core.heightmap import HeightMap, module_records
+from footfall.core.heightmap import HeightMap, board_records
 from footfall.core.seeds import check_seed_span
 from footfall.core.stats import wilson_interval
 from footfall.data.runlog import RunRecord
@@ -230,7 +230,7 @@ def load_board(path: str | os.PathLike) -> HeightMap:
     if not Path(path).exists():
         raise FootfallError(f"no such terrain file: {path}")
     hmap = HeightMap.load(path)
-    module_records(hmap.metadata, f"{path}: metadata")  # what a walk relies on, checked by field
+    board_records(hmap, str(path))  # what a walk relies on: by field, and against the map
     return hmap
 
 

@@ -54,6 +54,9 @@ def test_each_variant_changes_only_its_part():
     checked = config.variant_walk("with-friction-check")
     assert checked == replace(base, footstep=replace(base.footstep, friction_safety=1.5))
     assert base.footstep.friction_safety is None
+    margin = config.variant_walk("with-joint-margin")
+    assert margin == replace(base, footstep=replace(base.footstep, joint_margin=0.1))
+    assert base.footstep.joint_margin is None
     none = config.variant_walk("none")
     assert not any(getattr(none.reflexes, r) for r in
                    ("lift_off_gate", "touchdown_check", "tilt_reflex", "slip_reflex"))

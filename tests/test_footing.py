@@ -1,6 +1,7 @@
 """The friction check: a ball foot's contact tilt on scripted maps, and the planner's use of it."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -9,8 +10,10 @@ from footfall.control.body_path import BodyPath, terrain_grids
 from footfall.control.footstep import FootstepConfig, FootstepPlanner
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
+from footfall.core.kinematics import inverse_kinematics, world_to_body
 from footfall.core.robot import LITTLEDOG
 from footfall.core.state import nominal_state
+from footfall.features.candidates import joint_margins
 from footfall.features.footing import contact_tilt, footing_grid, tilt_limit
 from footfall.features.reward import default_reward
 from footfall.terrain.modules import make_module
@@ -135,3 +138,43 @@ def test_the_planner_drops_footholds_that_would_not_hold_unless_none_would():
                         config=FootstepConfig(friction_safety=1.5)).plan(state)
     b = FootstepPlanner(steep, lambda leg: reward, path, grids=grids).plan(state)
     np.testing.assert_array_equal(a.candidates, b.candidates)
+
+
+def test_the_planner_keeps_the_swing_leg_s_joints_off_their_limits_now_and_a_stride_on():
+    hmap = step_map()
+    reward = default_reward()
+    grids = terrain_grids(hmap, lambda leg: reward)
+    path = BodyPath.straight((0.2, 0.0), (0.8, 0.0))
+    state = nominal_state(hmap, (0.3, 0.0), 0.0, "LF")
+    plain = FootstepPlanner(hmap, lambda leg: reward, path, grids=grids).plan(state)
+    margin = 0.3  # [rad]
+    kept = FootstepPlanner(hmap, lambda leg: reward, path, grids=grids,
+                           config=FootstepConfig(joint_margin=margin)).plan(state)
+    touchdown = plain.state
+    stride = replace(touchdown, body_position=touchdown.body_position
+                     + np.r_[plain.body_xy[-1] - plain.body_xy[0], 0.0])
+    now = joint_margins(touchdown, plain.candidates)
+    later = joint_margins(stride, plain.candidates)
+    assert np.all(now >= 0)  # every candidate is reachable at touch-down ...
+    clear = np.fmin(now, later) >= margin  # NaN (out of reach a stride on): not clear
+    assert 0 < clear.sum() < clear.size  # ... and some come near a limit
+    np.testing.assert_array_equal(kept.candidates, plain.candidates[clear])
+    assert np.min(joint_margins(touchdown, kept.foothold[None])) >= margin
+    # a margin no foothold meets drops nothing
+    none = FootstepPlanner(hmap, lambda leg: reward, path, grids=grids,
+                           config=FootstepConfig(joint_margin=3.0)).plan(state)
+    np.testing.assert_array_equal(none.candidates, plain.candidates)
+
+
+def test_joint_margins_are_the_distance_of_the_nearest_joint_from_its_limit():
+    hmap = plane(0.0, res=0.001, size=0.6)
+    state = nominal_state(hmap, (0.3, 0.3), 0.0, "RH")
+    leg = LITTLEDOG.leg("RH")
+    foot = state.feet[LITTLEDOG.legs.index(leg)][None]
+    centre = foot + (0.0, 0.0, LITTLEDOG.foot_radius)
+    q, ok = inverse_kinematics(leg, world_to_body(centre, state.body_position, state.body_rpy),
+                               LITTLEDOG)
+    assert ok[0]
+    lo, hi = np.array(leg.limits).T
+    assert joint_margins(state, foot)[0] == pytest.approx(np.min(np.minimum(q[0] - lo, hi - q[0])))
+    assert np.isnan(joint_margins(state, foot + (1.0, 0.0, 0.0))[0])  # out of reach

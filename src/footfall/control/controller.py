@@ -43,7 +43,6 @@ from footfall.control.footstep import (
     FootstepConfig,
     FootstepPlan,
     FootstepPlanner,
-    JudgedFootstepPlanner,
     NoFootholdError,
 )
 from footfall.control.journal import (
@@ -55,6 +54,7 @@ from footfall.control.journal import (
     StepPlanned,
     TouchDown,
 )
+from footfall.control.judged import JudgedFootstepPlanner
 from footfall.control.legs import Legs
 from footfall.control.lowlevel import LowLevelConfig
 from footfall.control.measurements import JointTargets, Measurements

@@ -28,12 +28,12 @@ from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, above, at_least, param
 from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState, feet_pitch
-from footfall.features.candidates import lattice, reachable_footholds, reaches
+from footfall.features.candidates import joint_margins, lattice, reachable_footholds, reaches
 from footfall.features.dense import ScoreGrid
 from footfall.features.family import Candidates
 from footfall.features.footing import FrictionCheck
 from footfall.features.reward import default_reward
-from footfall.features.scorer import FootholdScorer, RewardFor
+from footfall.features.scorer import RewardFor
 from footfall.features.spread import reward_spread, spread_key
 
 GRID_YAW = 0.0  # [rad] heading the planner's dense reward grids are computed for (+x)
@@ -93,6 +93,11 @@ class FootstepConfig(Params):
                                               "contact tilts more than atan(foot friction / this) "
                                               "anywhere within footing_margin is dropped from F "
                                               "(unless none holds); None: no check")
+    joint_margin: float | None = param(None, unit="rad", range=above(0),
+                                       doc="joint-limit margin: a foothold whose swing leg has "
+                                           "a joint nearer its limit than this at touch-down or "
+                                           "at its next lift-off (the body a stride on) is "
+                                           "dropped from F (unless every one is); None: no check")
     footing_margin: float = param(0.005, unit="m", range=at_least(0),
                                   doc="the friction check's footholds hold within this of them "
                                       "(one lattice spacing: the tilt between lattice points)")
@@ -400,6 +405,12 @@ class FootstepPlanner:
                                    self.rewards_[leg0].config if exact else None)
         terrain = self._terrain(leg0, cand, yaw0)
         keep = self._holding(cand, np.isfinite(terrain))
+        if cfg.joint_margin is not None:  # at touch-down and at lift-off a stride on
+            later = replace(st0, body_position=st0.body_position + np.r_[
+                ahead.body_xy[-1] - ahead.body_xy[0], 0.0])
+            clear = np.fmin(joint_margins(st0, cand, self.robot),
+                            joint_margins(later, cand, self.robot)) >= cfg.joint_margin
+            keep = keep & clear if np.any(keep & clear) else keep
         if cfg.search_radius is not None:  # F: the footholds near the gait-nominal position, or,
             # where none near it is usable (a step edge, a gap), every reachable one
             near = np.sum((cand[:, :2] - target) ** 2, axis=1) <= cfg.search_radius ** 2
@@ -465,35 +476,3 @@ class FootstepPlanner:
             chosen.append(near[pick])
         return value, chosen
 
-
-class JudgedFootstepPlanner(FootstepPlanner):
-    """The footstep planner with a judge in place of the reward function and the path bias.
-
-    The judge -- the synthetic expert wrapped as a scorer
-    (:class:`footfall.expert.scorer.ExpertScorer`), say -- values every
-    candidate of every step, the look-ahead included; it carries its own
-    preference for the path (the walking expert's stance term), so there is no
-    separate bias. Walking with the expert as its own footstep chooser bounds
-    what a function learned from its demonstrations can do. Which lattice
-    points are usable is the judge's terrain part (for the expert: data, inside
-    the map, feature patches covered, as for the hand-tuned reward, so the
-    candidate sets are the reward planner's). Every candidate is judged
-    (``pose_candidates`` and ``lookahead_candidates`` do not apply): about
-    0.5 s per step with the synthetic expert, a hundred times the reward
-    planner's time.
-    """
-
-    def __init__(self, hmap: HeightMap, judge: FootholdScorer, path: BodyPath,
-                 robot: RobotDescription = LITTLEDOG, config: FootstepConfig = FootstepConfig(),
-                 grids: dict[str, ScoreGrid] | None = None) -> None:
-        if not isinstance(judge, FootholdScorer):
-            raise FootfallError(f"a judged footstep planner needs a FootholdScorer, "
-                                f"got {type(judge).__name__}")
-        config = replace(config, pose_candidates=None, lookahead_candidates=1 << 30)
-        self.judge = judge
-        super().__init__(hmap, lambda leg: judge, path, robot, config, grids)
-        self._posed = {name: True for name in LEG_NAMES}  # every candidate judged whole
-
-    def _bias_weights(self) -> dict[str, float]:
-        """No path bias: the judge carries its own preference for the path."""
-        return {name: 0.0 for name in LEG_NAMES}

@@ -133,6 +133,10 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
     register_variant("with-friction-check", "with footholds dropped where a ball foot's "
                      "contact tilts past atan(friction / 1.5) within 5 mm (off by default)",
                      lambda w: replace(w, footstep=replace(w.footstep, friction_safety=1.5))),
+    register_variant("with-joint-margin", "with footholds dropped where the swing leg comes "
+                     "within 0.1 rad of a joint limit at touch-down or a stride on (off by "
+                     "default)",
+                     lambda w: replace(w, footstep=replace(w.footstep, joint_margin=0.1))),
 ))  # the controller's own variants, in table order: an ablation walks them all by default
 
 

@@ -12,7 +12,12 @@ import numpy as np
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.core.kinematics import body_to_world, inverse_kinematics, world_to_body
+from footfall.core.kinematics import (
+    body_to_world,
+    inverse_kinematics,
+    joint_limit_margin,
+    world_to_body,
+)
 from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState
 from footfall.features.config import FeatureConfig
@@ -43,6 +48,18 @@ def reaches(state: RobotState, footholds: np.ndarray, robot: RobotDescription = 
     _, ok = inverse_kinematics(leg, world_to_body(centre, state.body_position, state.body_rpy),
                                robot)
     return ok
+
+
+def joint_margins(state: RobotState, footholds: np.ndarray, robot: RobotDescription = LITTLEDOG
+                  ) -> np.ndarray:
+    """Smallest distance [rad] of any joint of the swing leg of ``state`` from its limits with
+    the ball-foot centre on each contact point (n, 3) [m] -> (n,), at the state's body pose;
+    negative outside the limits, NaN where the leg cannot reach the point."""
+    leg = robot.leg(state.swing_leg)
+    centre = np.asarray(footholds, dtype=np.float64) + (0.0, 0.0, robot.foot_radius)
+    q, _ = inverse_kinematics(leg, world_to_body(centre, state.body_position, state.body_rpy),
+                              robot)
+    return joint_limit_margin(leg, q)
 
 
 def reachable_footholds(hmap: HeightMap, state: RobotState, robot: RobotDescription = LITTLEDOG,

@@ -113,15 +113,18 @@ def step_map() -> HeightMap:
     return HeightMap(heights, 0.001, (0.0, -0.3))
 
 
+def planner(hmap: HeightMap, **config) -> FootstepPlanner:
+    """The hand-tuned reward's planner along the board's centre line, with ``config``."""
+    reward = default_reward()
+    return FootstepPlanner(hmap, lambda leg: reward, BodyPath.straight((0.2, 0.0), (0.8, 0.0)),
+                           grids=terrain_grids(hmap, lambda leg: reward),
+                           config=FootstepConfig(**config))
+
+
 def test_the_planner_drops_footholds_that_would_not_hold_unless_none_would():
     hmap = step_map()
-    reward = default_reward()
-    grids = terrain_grids(hmap, lambda leg: reward)
-    path = BodyPath.straight((0.2, 0.0), (0.8, 0.0))
     state = nominal_state(hmap, (0.3, 0.0), 0.0, "LF")
-    checked = FootstepPlanner(hmap, lambda leg: reward, path, grids=grids,
-                              config=FootstepConfig(friction_safety=1.5))
-    plain = FootstepPlanner(hmap, lambda leg: reward, path, grids=grids)
+    checked, plain = planner(hmap, friction_safety=1.5), planner(hmap)
     a, b = checked.plan(state), plain.plan(state)
     limit = math.atan(LITTLEDOG.foot_friction / 1.5)
     tilt = checked.friction_.grid.at(b.candidates[:, :2])
@@ -132,24 +135,18 @@ def test_the_planner_drops_footholds_that_would_not_hold_unless_none_would():
     # on ground where nothing holds, the check drops nothing: the foot must go somewhere
     steep = HeightMap(np.repeat((np.arange(901) * 0.001)[:, None], 601, axis=1), 0.001,
                       (0.0, -0.3))  # 45 degrees everywhere
-    grids = terrain_grids(steep, lambda leg: reward)
     state = nominal_state(steep, (0.3, 0.0), 0.0, "LF")
-    a = FootstepPlanner(steep, lambda leg: reward, path, grids=grids,
-                        config=FootstepConfig(friction_safety=1.5)).plan(state)
-    b = FootstepPlanner(steep, lambda leg: reward, path, grids=grids).plan(state)
+    a = planner(steep, friction_safety=1.5).plan(state)
+    b = planner(steep).plan(state)
     np.testing.assert_array_equal(a.candidates, b.candidates)
 
 
 def test_the_planner_keeps_the_swing_leg_s_joints_off_their_limits_now_and_a_stride_on():
     hmap = step_map()
-    reward = default_reward()
-    grids = terrain_grids(hmap, lambda leg: reward)
-    path = BodyPath.straight((0.2, 0.0), (0.8, 0.0))
     state = nominal_state(hmap, (0.3, 0.0), 0.0, "LF")
-    plain = FootstepPlanner(hmap, lambda leg: reward, path, grids=grids).plan(state)
+    plain = planner(hmap).plan(state)
     margin = 0.3  # [rad]
-    kept = FootstepPlanner(hmap, lambda leg: reward, path, grids=grids,
-                           config=FootstepConfig(joint_margin=margin)).plan(state)
+    kept = planner(hmap, joint_margin=margin).plan(state)
     touchdown = plain.state
     stride = replace(touchdown, body_position=touchdown.body_position
                      + np.r_[plain.body_xy[-1] - plain.body_xy[0], 0.0])
@@ -161,8 +158,7 @@ def test_the_planner_keeps_the_swing_leg_s_joints_off_their_limits_now_and_a_str
     np.testing.assert_array_equal(kept.candidates, plain.candidates[clear])
     assert np.min(joint_margins(touchdown, kept.foothold[None])) >= margin
     # a margin no foothold meets drops nothing
-    none = FootstepPlanner(hmap, lambda leg: reward, path, grids=grids,
-                           config=FootstepConfig(joint_margin=3.0)).plan(state)
+    none = planner(hmap, joint_margin=3.0).plan(state)
     np.testing.assert_array_equal(none.candidates, plain.candidates)
 
 

@@ -165,7 +165,7 @@ def _check_rows(con: sqlite3.Connection, report: StoreReport, version: int) -> N
         _check_labels(con, report, steps, demo_ids)
 
 
-def run_step_of(source: str) -> tuple[str, str, str] | None:
+def _run_step_of(source: str) -> tuple[str, str, str] | None:
     """(kind, run, step) of a demonstration source that names a run's step --
     ``run:<run key or id>:step:<k>`` (an expert's correction, a rank-eval decision) or
     ``human:run:<run id>:step:<k>`` (a person's label) -- as text; None for every other
@@ -181,7 +181,7 @@ def _check_sources(report: StoreReport, sources: list[tuple[Any, Any]],
                    steps: dict[tuple[Any, Any], int | None], keys: dict[Any, Any]) -> None:
     """Every demonstration whose source names a run's step names one that is stored."""
     for demo_id, source in sources:
-        named = run_step_of(source)
+        named = _run_step_of(source)
         if named is None:
             continue
         kind, run, step = named

@@ -96,8 +96,9 @@ class FootstepConfig(Params):
     joint_margin: float | None = param(None, unit="rad", range=above(0),
                                        doc="joint-limit margin: a foothold whose swing leg has "
                                            "a joint nearer its limit than this at touch-down or "
-                                           "at its next lift-off (the body a stride on) is "
-                                           "dropped from F (unless every one is); None: no check")
+                                           "with the body at the look-ahead's last step (a "
+                                           "stride on: its next lift-off) is dropped from F "
+                                           "(unless every one is); None: no check")
     footing_margin: float = param(0.005, unit="m", range=at_least(0),
                                   doc="the friction check's footholds hold within this of them "
                                       "(one lattice spacing: the tilt between lattice points)")
@@ -324,7 +325,7 @@ class FootstepPlanner:
         body, whose nearest path point gives the arc length ``s0``. Step k
         (k = 0 is this one; legs follow ``robot.gait_order``) touches down
         with the body on the path at ``s0 + (k + 1) * step_advance`` (clamped
-        to the path's end), heading as :meth:`heading` says. Its path-nominal
+        to the path's end), heading as :func:`path_heading` says. Its path-nominal
         foothold is the leg's default stance position around the body pose
         ``foot_lead`` further along the path; the body is posed for the stance
         after the step, with the swing foot at that foothold (see :meth:`_state`).

@@ -58,9 +58,8 @@ def contact_tilt(hmap: HeightMap, points: np.ndarray, radius: float) -> np.ndarr
     The terrain is its cells' centres: the tilt is exact for points at cell centres and, on
     flat ground, within ``arcsin(resolution / (sqrt(2) radius))`` elsewhere (the planner's
     lattice points are cell centres). Cells without data (NaN) and outside the map do not
-    support the ball; NaN where no cell
-    within ``radius`` of a point has data. Vectorised over the points; the loop runs over the
-    (few hundred) cell offsets of the ball's footprint.
+    support the ball; NaN where no cell within ``radius`` of a point has data. Vectorised over
+    the points; the loop runs over the (few hundred) cell offsets of the ball's footprint.
     """
     if not radius > 0:
         raise FootfallError(f"the foot radius must be > 0, got {radius}")

@@ -19,7 +19,8 @@ from footfall.cli.fuzz.harness import Garbage, Multiline, cli_work, guarded
 from footfall.cli.fuzz.targets import TARGETS, run_case
 from footfall.core.errors import FootfallError
 
-EXAMPLES = {"map-file": 120, "model-file": 60, "store": 40, "scan-import": 120, "cli": 40}
+EXAMPLES = {"map-file": 120, "model-file": 60, "store": 40, "scan-import": 120, "cli": 40,
+            "lying-file": 26, "concurrency": 2}
 
 
 @pytest.fixture(scope="module")
@@ -28,7 +29,9 @@ def bases(tmp_path_factory):
 
 
 def test_every_target_is_fuzzed():
-    assert set(EXAMPLES) == set(TARGETS)
+    from footfall.cli.bench import FUZZ_TARGETS
+
+    assert set(EXAMPLES) == set(TARGETS) == set(FUZZ_TARGETS)  # and each can be chosen
 
 
 @pytest.mark.parametrize("name", sorted(EXAMPLES))
@@ -129,6 +132,11 @@ FOUND = [
     # NumPy's three-line message on a huge .npy header, quoted in a FootfallError
     ("scan-import", (".npy", [("array", ("nan", 9)), ("bytes", "delete", 9),
                               ("bytes", "flip", 426)], 0.005, 0.005, None)),
+    # an input name with an unpaired surrogate: comparing it with the output raised
+    # UnicodeEncodeError
+    ("cli", (3, [(57, False, 79, "\x1bf\x8e\xb2\xb8\udc50")])),
+    # a model whose robot has its hips 0.61 m from the body origin: NaN rewards
+    ("model-file", [("zip", "sizes", 708), ("meta", 100760, "replace", 0.61)]),
 ]
 
 

@@ -179,3 +179,61 @@ def test_a_board_whose_records_disagree_with_its_map_is_refused_in_one_line(file
         code, _, err = run(capsys, "walk", "--terrain", board, "--seed", "0")
         assert_user_error(code, err, message)
     assert batch.load_board(files / "flat.npz").shape == flat.shape  # the true board walks
+
+
+def test_a_model_is_held_to_the_terrains_its_templates_claim(files, tmp_path, capsys):
+    import json
+
+    from footfall.core.files import load_npz, save_npz
+    from footfall.learning import model as model_file
+    from footfall.learning.train import learn_from_store
+
+    model = tmp_path / "m.npz"
+    learn_from_store(files / "store.sqlite", model, "templates", library_size=30, cv=3, Cs=4)
+    code, out, err = run(capsys, "rank-eval", model, files / "store.sqlite", "--no-expert",
+                         "--json")
+    assert code == 0, err
+    assert json.loads(out)["trained_here"] == 1  # measured on its own terrain: said so
+    _, out, _ = run(capsys, "rank-eval", model, files / "store.sqlite", "--no-expert")
+    assert "not a held-out measure" in out
+    other = tmp_path / "other.sqlite"  # another board's decisions: held out, no warning
+    save_board(["rocky:0.5"], 2, tmp_path / "other.npz")
+    collect_into_store([tmp_path / "other.npz"], other, n=4, seed=0)
+    code, out, err = run(capsys, "rank-eval", model, other, "--no-expert", "--json")
+    assert code == 0 and json.loads(out)["trained_here"] == 0, err
+
+    _, arrays, meta = load_npz(model, model_file.FORMAT, model_file.VERSION, allow_nonfinite=True)
+    name = next(k for k in sorted(arrays) if k.endswith("_templates") and arrays[k].size)
+    edited = dict(arrays, **{name: arrays[name] + 0.001})  # every template 1 mm higher
+    save_npz(tmp_path / "edited.npz", model_file.FORMAT, model_file.VERSION, edited, meta)
+    assert_user_error(*run(capsys, "rank-eval", tmp_path / "edited.npz", files / "store.sqlite",
+                           "--no-expert")[::2], "not the patches their sources name")
+    code, out, err = run(capsys, "rank-eval", tmp_path / "edited.npz", other, "--no-expert")
+    assert code == 0, err  # its terrains are not here: nothing to hold it to
+
+    text = json.dumps(meta)
+    hashes = {h for g in meta["groups"].values() for fam in g["families"]
+              for h in fam["params"].get("library", {}).get("terrain_hashes", [])}
+    assert hashes, "the model names the terrains of its templates"
+    for h in hashes:
+        text = text.replace(h, "no-such-terrain")
+    save_npz(tmp_path / "nowhere.npz", model_file.FORMAT, model_file.VERSION, arrays,
+             json.loads(text))
+    assert_user_error(*run(capsys, "rank-eval", tmp_path / "nowhere.npz", other,
+                           "--no-expert")[::2], "64 hexadecimal digits")
+
+
+def test_walk_many_refuses_a_stored_run_the_store_check_calls_corrupt(files, tmp_path, capsys):
+    import sqlite3
+
+    log = tmp_path / "s.sqlite"
+    args = ("walk-many", "--terrain", files / "flat.npz", "--runs", 1, "--seed", 7, "--log", log,
+            "--processes", 1)
+    code, _, err = run(capsys, *args)
+    assert code == 0, err
+    con = sqlite3.connect(log)
+    with con:
+        con.execute("UPDATE runs SET n_steps = n_steps + 1")  # the steps no longer add up
+    con.close()
+    assert_user_error(*run(capsys, "store", "check", log)[::2], "n_steps")
+    assert_user_error(*run(capsys, *args)[::2], "n_steps")  # not reused as if it were whole

@@ -41,6 +41,10 @@ def test_description_round_trips_through_plain_data():
         RobotDescription.from_dict({**d, "wings": 2})
     with pytest.raises(FootfallError, match="unknown leg"):
         LITTLEDOG.leg("XX")
+    for hips in ({"hip_x": 0.61}, {"hip_y": 0.05}, {"trunk_size": (0.24, 0.09, 0.0)}):
+        with pytest.raises(FootfallError, match="must lie within the trunk"):
+            RobotDescription.from_dict({**d, **hips})
+    assert RobotDescription.from_dict({**d, "hip_x": 0.2, "trunk_size": (0.5, 0.09, 0.055)})
 
 
 def _random_joints(leg, n, rng):

@@ -111,12 +111,17 @@ def bench_expert_cmd(states: int, as_json: bool) -> None:
     emit(as_json, result, format_expert(result))
 
 
+FUZZ_TARGETS = ("map-file", "model-file", "store", "scan-import", "cli", "lying-file",
+                "concurrency")
+"""The fuzz targets by name (footfall.cli.fuzz.targets.TARGETS, which needs Hypothesis)."""
+
+
 @bench.command("fuzz")
 @click.option("--minutes", type=click.FloatRange(min=0.05, max=24 * 60), default=10.0,
               show_default=True, help="Time budget [min] (the base files are made first).")
 @click.option("--seed", type=click.IntRange(0, 2 ** 31 - 1), default=0, show_default=True)
 @click.option("--target", "targets", multiple=True,
-              type=click.Choice(["map-file", "model-file", "store", "scan-import", "cli"]),
+              type=click.Choice(FUZZ_TARGETS),
               help="Fuzz only these targets (default: all).")
 @json_option
 def bench_fuzz_cmd(minutes: float, seed: int, targets: tuple[str, ...], as_json: bool) -> None:

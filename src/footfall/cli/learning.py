@@ -167,7 +167,16 @@ def _agreement_text(agreement) -> str:
             f"(95 % CI {_number(s.reward_loss_ci[0])} to {_number(s.reward_loss_ci[1])}), "
             f"above the margin {_number(s.above_margin)}, severe {_number(s.severe)}"
             + ("" if agreement.expert is None else f"; judged by {agreement.expert}")
-            + _outcome_text(agreement.outcomes) + _degenerate_text(s))
+            + _outcome_text(agreement.outcomes) + _degenerate_text(s)
+            + _trained_here_text(agreement.trained_here))
+
+
+def _trained_here_text(terrains: int) -> str:
+    """A warning for a model whose templates were drawn from the terrains it is measured on."""
+    if not terrains:
+        return ""
+    return (f"\n  warning: its template library was drawn from {terrains} of these decisions' "
+            f"terrains: this is not a held-out measure")
 
 
 DEGENERATE = 0.5  # [-] a scorer valuing every candidate alike on more decisions is flagged

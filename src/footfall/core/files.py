@@ -199,9 +199,12 @@ def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
     """Whether two paths name one file: the same inode (through symbolic and hard links) when
     both exist, else the same resolved path."""
     try:
-        return os.path.samefile(a, b)
-    except OSError:  # one is missing (or unreadable): compare where they would be
-        return os.path.realpath(a) == os.path.realpath(b)
+        try:
+            return os.path.samefile(a, b)
+        except OSError:  # one is missing (or unreadable): compare where they would be
+            return os.path.realpath(a) == os.path.realpath(b)
+    except ValueError:  # a name the file system cannot hold (NUL, an unpaired surrogate):
+        return os.fspath(a) == os.fspath(b)  # no such file exists; only the same text is one
 
 
 def writable_path(path: str | os.PathLike, suffixes: tuple[str, ...] = (), *, what: str = "",

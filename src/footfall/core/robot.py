@@ -103,6 +103,11 @@ class RobotDescription:
                      "nominal_height"):
             if not getattr(self, name) > 0:
                 raise FootfallError(f"robot description: {name} must be > 0")
+        if not (len(self.trunk_size) == 3 and all(v > 0 for v in self.trunk_size)
+                and self.hip_x <= self.trunk_size[0] / 2 and self.hip_y <= self.trunk_size[1] / 2):
+            raise FootfallError(f"robot description: the hips (hip_x {self.hip_x}, hip_y "
+                                f"{self.hip_y} m) must lie within the trunk (trunk_size "
+                                f"{self.trunk_size} m, each > 0)")
         if not 0 < self.foot_mass < self.lower_leg_mass:
             raise FootfallError("robot description: foot_mass must be > 0 and < lower_leg_mass")
         for name in ("hip_roll_limits", "hip_pitch_limits_front", "knee_limits_front"):

@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -23,6 +23,7 @@ import numpy as np
 
 from footfall.control.footstep import FootstepConfig
 from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LITTLEDOG
 from footfall.data.outcomes import FALL_HORIZON, OUTCOME_LABELS, stored_outcomes
 from footfall.data.store import Demonstration, DemoStore
@@ -33,6 +34,7 @@ from footfall.expert.scorer import ExpertScorer, judge_name
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
 from footfall.features.scorer import SCORERS
 from footfall.features.scoring import score_footholds
+from footfall.features.templates import reproduced_on
 from footfall.learning.evaluation import EveryLeg, RankScores, expert_values, rank_scores
 from footfall.learning.model import FootholdModel
 from footfall.learning.train import store_demonstrations
@@ -52,13 +54,44 @@ class ModelAgreement:
     outcomes: dict | None = None  # run decisions: outcome label -> AUC of the scorer's value
     # of the footholds the robot stood on (outcome_power)
     expert: str | None = None  # the judging expert's name (judge_name); None without one
+    trained_here: int = 0  # the decisions' terrains its template libraries were drawn from:
+    # more than 0, and the measure is not a held-out one (library_provenance)
 
     def as_dict(self) -> dict[str, Any]:
         """Plain data for JSON: the scorer, the scores' keys, the outcome AUCs (run decisions;
         else null), the judging expert, then where the decisions came from."""
         return {"model": self.model, "feature_set": self.feature_set, "learner": self.learner,
                 **self.scores.as_dict(), "outcomes": self.outcomes, "expert": self.expert,
-                "decisions": self.decisions}
+                "decisions": self.decisions, "trained_here": self.trained_here}
+
+
+def library_provenance(model: FootholdModel, maps: Mapping[str, HeightMap], name: str) -> int:
+    """How many of the terrains ``maps`` (hash -> map) the model's template libraries name as
+    their sources (0: the decisions are held out from its templates).
+
+    Where every terrain a leg group's library names is among ``maps``, each of its templates
+    must be the patch its recorded source names on one of them
+    (:func:`~footfall.features.templates.reproduced_on`): a library that claims these terrains
+    but whose templates none of them gives is refused.
+    """
+    named: set[str] = set()
+    for group, f in model.functions.items():
+        library = f.library
+        if library is None or not library.terrain_hashes:
+            continue
+        named |= set(library.terrain_hashes)
+        if not set(library.terrain_hashes) <= set(maps):
+            continue  # templates from terrains not here: nothing to reproduce them on
+        found = [np.zeros(c, dtype=bool) for c in library.counts]
+        for h in library.terrain_hashes:
+            found = [a | b for a, b in zip(found, reproduced_on(library, maps[h]))]
+        missing = sum(int((~a).sum()) for a in found)
+        if missing:
+            raise FootfallError(f"{name}: {missing} of the {sum(library.counts)} templates of its "
+                                f"{group} library are not the patches their sources name on the "
+                                f"terrains it claims (held in this store): an edited model, or "
+                                f"one of other terrains")
+    return len(named & set(maps))
 
 
 def judging_expert(demos: Sequence[Demonstration] | None) -> ExpertConfig:
@@ -154,11 +187,13 @@ def rank_eval_many(model_paths: Sequence[str | os.PathLike], store_path: str | o
         demos, maps, values = run_decisions(store_path, expert, run_key)
     out = []
     for scorer, name, feature_set, learner in scorers:
+        here = (library_provenance(scorer, maps, name) if isinstance(scorer, FootholdModel)
+                else 0)
         scores = rank_scores(scorer, demos, maps.__getitem__, values=values,
                              margin=float(margin), severe_above=SEVERE_SHORTFALL)
         outcomes = (outcome_power(scorer, store_path, run_key) if decisions == "runs" else None)
         out.append(ModelAgreement(name, feature_set, learner, scores, decisions, outcomes,
-                                  judge_name(judge) if with_expert else None))
+                                  judge_name(judge) if with_expert else None, here))
     return out
 
 

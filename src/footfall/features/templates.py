@@ -19,6 +19,7 @@ neither zeroes nor NaNs the feature; a candidate whose coverage is below
 from __future__ import annotations
 
 import os
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, ClassVar
@@ -46,6 +47,9 @@ admits every RMS difference in :data:`RMS_RANGE` on every window up to
 scorer's float32 products far from overflow."""
 RMS_RANGE = (1e-5, 1.0)  # [m] RMS height differences a bandwidth may be set from
 MAX_TEMPLATE_HEIGHT = 1000.0  # [m] largest |height| of a template sample relative to its foothold
+_SHA256 = re.compile(r"[0-9a-f]{64}")  # a map's content hash (HeightMap.content_hash)
+PROVENANCE_TOLERANCE = 1e-9  # [m] a template is the patch its source names if no sample differs
+# by more (the same arithmetic on the same map gives the same patch)
 
 
 def bandwidth_for_rms(rms: float, grid: PatchGrid) -> float:
@@ -174,6 +178,9 @@ class TemplateLibrary:
         require_type(hashes, list, f"{what}.terrain_hashes")
         for k, h in enumerate(hashes):
             require_type(h, str, f"{what}.terrain_hashes[{k}]")
+            if not _SHA256.fullmatch(h):
+                raise FootfallError(f"{what}.terrain_hashes[{k}] must be a map's content hash "
+                                    f"(64 hexadecimal digits), got {h[:80]!r}")
         expected = [f"{prefix}{n}_{kind}" for n in config.scale_names
                     for kind in ("templates", "sources")]
         missing = [k for k in expected if k not in arrays]
@@ -228,6 +235,24 @@ def extract_templates(hmap: HeightMap, positions: Any, yaw: Any, mirror: Any,
         templates.append(rel[complete])
         sources.append(src[complete])
     return TemplateLibrary(config, tuple(templates), tuple(sources), (hmap.content_hash(),))
+
+
+def reproduced_on(library: TemplateLibrary, hmap: HeightMap) -> tuple[np.ndarray, ...]:
+    """Per scale (T_s,) bools: which templates are the patch their source (x, y [m], yaw [rad],
+    mirrored) names on ``hmap``, to :data:`PROVENANCE_TOLERANCE` [m]. A template whose source is
+    unknown (NaN) or off the map is not reproduced. One vectorised pass per scale."""
+    out = []
+    for s, (t, src) in enumerate(zip(library.templates, library.sources)):
+        known = np.isfinite(src).all(axis=1)
+        ok = np.zeros(t.shape[0], dtype=bool)
+        if known.any():
+            k = src[known]
+            rel = foothold_patches(hmap, k[:, :2], k[:, 2], k[:, 3] > 0.5,
+                                   library.config).relative[s]
+            with np.errstate(invalid="ignore"):
+                ok[known] = np.all(np.abs(rel - t[known]) <= PROVENANCE_TOLERANCE, axis=1)
+        out.append(ok)
+    return tuple(out)
 
 
 def merge_libraries(libraries: list[TemplateLibrary]) -> TemplateLibrary:

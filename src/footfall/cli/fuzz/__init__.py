@@ -13,11 +13,12 @@ limit, a memory blow-up, garbage accepted, an error of more than one line.
 * :mod:`.targets`: what a target is, and their registry; :mod:`.oracles`: the checks of an
   accepted input's result;
 * the targets: :mod:`.files` (map and model files, imported scans), :mod:`.stores`,
-  :mod:`.commands` (every command's arguments);
+  :mod:`.commands` (every command's arguments), :mod:`.lying` (valid files of wrong meaning,
+  an output that is an input), :mod:`.concurrency` (two processes on one store);
 * :mod:`.campaign`: ``footfall bench fuzz``: as many inputs as fit in a time budget.
 
 The test suite (``tests/test_fuzz.py``) runs the same targets through Hypothesis with a
 small budget.
 """
 
-from footfall.cli.fuzz import commands, files, stores  # noqa: F401,E402 - the targets register
+from footfall.cli.fuzz import commands, concurrency, files, lying, stores  # noqa: F401,E402 - the targets register

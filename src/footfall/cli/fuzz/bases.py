@@ -30,6 +30,7 @@ class Bases:
     small_map: Path  # the same at 4 mm: cheap to load many times
     store: Path  # demonstrations on ``map`` and the log of one run (.sqlite)
     model: Path  # learned from ``store`` (.npz)
+    flat: Path  # a short flat board (two modules, no flat ends): a quick walk
     scans: dict  # {".npy": path, ".png": ..., ".ply": ..., ".xyz": ...}
     empty: Path
     text: Path
@@ -51,19 +52,21 @@ def make_bases(root: str | Path) -> Bases:
     """Make (or reuse) the base files in ``root``."""
     root = Path(root)
     root.mkdir(parents=True, exist_ok=True)
-    paths = {name: root / name for name in ("map.npz", "small.npz", "store.sqlite", "model.npz")}
+    paths = {name: root / name for name in ("map.npz", "small.npz", "store.sqlite", "model.npz",
+                                            "flat.npz")}
     if not paths["map.npz"].exists():
         _cli("terrain", "make", "rocky", "--seed", "1", "-o", paths["map.npz"])
     full = HeightMap.load(paths["map.npz"])
     if not paths["small.npz"].exists():
         HeightMap(full.heights[::4, ::4], full.resolution * 4, full.origin, full.frame,
                   full.metadata).save(paths["small.npz"])
+    if not paths["flat.npz"].exists():
+        _cli("terrain", "board", "flat", "flat", "--no-flat-ends", "--seed", "0", "-o",
+             paths["flat.npz"])
     if not paths["store.sqlite"].exists():
         _cli("demos", "collect", "--terrain", paths["map.npz"], "-n", "8", "--seed", "0",
-             "-o", paths["store.sqlite"])
-        flat = root / "flat.npz"  # a short walk, so that the store holds a run log too
-        _cli("terrain", "board", "flat", "flat", "--no-flat-ends", "--seed", "0", "-o", flat)
-        _cli("walk", "--terrain", flat, "--seed", "0", "--log", paths["store.sqlite"])
+             "-o", paths["store.sqlite"])  # and a short walk, so that it holds a run log too
+        _cli("walk", "--terrain", paths["flat.npz"], "--seed", "0", "--log", paths["store.sqlite"])
     if not paths["model.npz"].exists():
         _cli("learn", paths["store.sqlite"], "--features", "both", "--cv", "2",
              "--library-size", "30", "-o", paths["model.npz"])
@@ -83,4 +86,4 @@ def make_bases(root: str | Path) -> Bases:
     empty.write_bytes(b"")
     text.write_text("these are not the heights you are looking for\n")
     return Bases(root, paths["map.npz"], paths["small.npz"], paths["store.sqlite"],
-                 paths["model.npz"], scans, empty, text)
+                 paths["model.npz"], paths["flat.npz"], scans, empty, text)

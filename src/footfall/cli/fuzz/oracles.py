@@ -13,6 +13,7 @@ from footfall.cli.fuzz.bases import Bases
 from footfall.cli.fuzz.harness import Garbage
 from footfall.core.files import checked_json
 from footfall.core.heightmap import HeightMap
+from footfall.core.robot import LITTLEDOG
 from footfall.core.state import nominal_state
 from footfall.data.store import DemoStore
 from footfall.expert.collect import rough_x_range
@@ -47,7 +48,10 @@ def check_map(hmap: Any) -> None:
 
 
 def check_model(model: Any, bases: Bases) -> None:
-    """An accepted model must rank footholds with finite rewards on a valid map."""
+    """An accepted model must rank footholds with finite rewards on a valid map -- once it is
+    accepted as every command that uses a model accepts it: for the robot footfall walks
+    (``check_compatible``; a model of another robot is refused there, in one line)."""
+    model.check_compatible(robot=LITTLEDOG)
     hmap = HeightMap.load(bases.map)
     for leg in ("LF", "RH"):
         state = nominal_state(hmap, (0.3, 0.0), 0.0, leg)

@@ -29,8 +29,8 @@ from footfall.cli.fuzz.harness import Garbage, cli_work
 from footfall.cli.fuzz.targets import Target, register_target
 from footfall.core.files import load_npz, save_npz
 from footfall.core.heightmap import MAX_BOARD_OFFSET, HeightMap
-from footfall.experiments.batch import load_board
 from footfall.data.store import DemoStore
+from footfall.experiments.batch import load_board
 from footfall.learning import model as model_file
 
 _SHIFTS = (0.0, 0.004, 0.5, 50.0, 1e6)  # [m] how far a lie moves records or a board

@@ -15,7 +15,7 @@ import numpy as np
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
-from footfall.features.dense import ScoreGrid
+from footfall.features.dense import ScoreGrid, lattice_index
 from footfall.features.scorer import FootholdScorer, RewardFor
 
 
@@ -73,10 +73,7 @@ def grid_spacing(grid: ScoreGrid) -> float:
 
 def grid_index(grid: ScoreGrid, xy: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray]:
     """Lattice index (i, j) of the grid point nearest each position [m] (..., 2); may be off the grid."""
-    xy = np.asarray(xy, dtype=np.float64)
-    i = np.floor((xy[..., 0] - grid.x[0]) / spacing + 0.5).astype(np.int64)
-    j = np.floor((xy[..., 1] - grid.y[0]) / spacing + 0.5).astype(np.int64)
-    return i, j
+    return lattice_index(grid.x[0], grid.y[0], xy, spacing)
 
 
 def grid_values(grid: ScoreGrid, xy: np.ndarray, spacing: float) -> np.ndarray:

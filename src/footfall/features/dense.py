@@ -65,6 +65,16 @@ def linear_values(c: Candidates, parts: Sequence[tuple[FeatureFamily, np.ndarray
     return sum(values[1:], values[0]) if values else np.zeros(c.n)
 
 
+def lattice_index(x0: float, y0: float, xy: np.ndarray, spacing: float
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Index (i, j) of the lattice point nearest each position (..., 2) [m] on the lattice of
+    ``spacing`` [m] whose point (0, 0) is at (``x0``, ``y0``) [m]; may be off the lattice."""
+    xy = np.asarray(xy, dtype=np.float64)
+    i = np.floor((xy[..., 0] - x0) / spacing + 0.5).astype(np.int64)
+    j = np.floor((xy[..., 1] - y0) / spacing + 0.5).astype(np.int64)
+    return i, j
+
+
 def lattice_points(hmap: HeightMap, spacing: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Lattice points (n, 2) [m] every ``spacing`` over the map, and their x (na,), y (nb,) [m]."""
     if not spacing > 0:

@@ -28,7 +28,7 @@ from scipy.ndimage import maximum_filter
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import RobotDescription
-from footfall.features.dense import whole_ratio
+from footfall.features.dense import lattice_index, whole_ratio
 
 _EQUATOR = 1.0 - 1e-9  # a cell counts only strictly inside the ball's footprint: one at its
 # equator (distance = radius) would hang the ball on a corner it only grazes
@@ -122,9 +122,7 @@ class FootingGrid:
     def at(self, xy: np.ndarray) -> np.ndarray:
         """Tilt [rad] (...) at the lattice point nearest each position (..., 2) [m]; pi/2 off
         the lattice."""
-        xy = np.asarray(xy, dtype=np.float64)
-        i = np.floor((xy[..., 0] - self.x[0]) / self.spacing + 0.5).astype(np.int64)
-        j = np.floor((xy[..., 1] - self.y[0]) / self.spacing + 0.5).astype(np.int64)
+        i, j = lattice_index(self.x[0], self.y[0], xy, self.spacing)
         on = (i >= 0) & (i < self.x.size) & (j >= 0) & (j < self.y.size)
         out = np.full(i.shape, math.pi / 2)
         out[on] = self.tilt[i[on], j[on]]

@@ -17,7 +17,7 @@ import numpy as np
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _surface_point(filled, known, ox, oy, res, complete, px, py):  # pragma: no cover - compiled
+def surface_point(filled, known, ox, oy, res, complete, px, py):  # pragma: no cover - compiled
     """A sphere surface's bilinear height at (px, py) [m]: NaN outside the window or where the
     nearest cell is unknown; else the known corners' weights renormalised (unless
     ``complete``: every cell known)."""
@@ -51,7 +51,7 @@ def surface_at(filled, known, ox, oy, res, complete, px, py):  # pragma: no cove
     at (ox, oy) [m], ``res`` [m/cell]) at the points (px, py) (m,) [m]."""
     out = np.empty(px.shape[0])
     for m in range(px.shape[0]):
-        out[m] = _surface_point(filled, known, ox, oy, res, complete, px[m], py[m])
+        out[m] = surface_point(filled, known, ox, oy, res, complete, px[m], py[m])
     return out
 
 
@@ -62,7 +62,7 @@ def surface_along_rays(filled, known, ox, oy, res, complete, xy, d, s):  # pragm
     for i in range(xy.shape[0]):
         for k in range(d.shape[0]):
             for j in range(s.shape[0]):
-                out[i, k, j] = _surface_point(filled, known, ox, oy, res, complete,
+                out[i, k, j] = surface_point(filled, known, ox, oy, res, complete,
                                        xy[i, 0] + s[j] * d[k, 0], xy[i, 1] + s[j] * d[k, 1])
     return out
 

@@ -56,20 +56,38 @@ class SphereSurface:
 
 
 _BOARD_SURFACES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-# map -> {radius [m]: (filled, known)}: each map's sphere surface, dilated once over the whole map
+# map -> {radius [m]: SphereSurface | None}: each map's sphere surface, dilated once over the map
 
 
-def board_surface(hmap: HeightMap, radius: float) -> tuple[np.ndarray, np.ndarray]:
-    """The sphere's centre-height surface over the whole map: (heights [m], 0 where unknown;
-    1.0 where known), computed once per map and radius (a map's heights are read-only)."""
+def board_sphere(hmap: HeightMap, radius: float) -> SphereSurface | None:
+    """The sphere's centre-height surface over the whole map, computed once per map and radius
+    (a map's heights are read-only); ``None`` if no height of it is known.
+
+    Every sample of it is a function of the point alone -- the same window, origin and
+    renormalisation rule whatever else is sampled -- so values sampled from it can be
+    remembered per point.
+    """
     per_map = _BOARD_SURFACES.setdefault(hmap, {})
     if radius not in per_map:
         surface = ball_centre_surface(hmap.heights, hmap.resolution, radius)
         known = np.isfinite(surface)
         filled = np.where(known, surface, 0.0)
-        filled.setflags(write=False)
-        per_map[radius] = (filled, known)
+        weights = known.astype(np.float64)
+        for a in (filled, weights):
+            a.setflags(write=False)
+        per_map[radius] = None if not known.any() else SphereSurface(
+            filled, weights, np.asarray(hmap.origin, dtype=np.float64), hmap.resolution,
+            bool(known.all()))
     return per_map[radius]
+
+
+def board_surface(hmap: HeightMap, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """The sphere's centre-height surface over the whole map: (heights [m], 0 where unknown;
+    1.0 where known), computed once per map and radius."""
+    whole = board_sphere(hmap, radius)
+    if whole is None:
+        return np.zeros(hmap.shape), np.zeros(hmap.shape)
+    return whole.filled, whole.known
 
 
 def sphere_surface(hmap: HeightMap, lo: np.ndarray, hi: np.ndarray, radius: float
@@ -99,7 +117,7 @@ def sphere_surface(hmap: HeightMap, lo: np.ndarray, hi: np.ndarray, radius: floa
     known = known[i0:i1, j0:j1]
     if not known.any():
         return None
-    return SphereSurface(filled[i0:i1, j0:j1], known.astype(np.float64),
+    return SphereSurface(filled[i0:i1, j0:j1], known,
                     np.array([hmap.origin[0] + i0 * res, hmap.origin[1] + j0 * res]), res,
                     bool(known.all()))
 

@@ -26,7 +26,8 @@ from footfall.core.kinematics import (
 )
 from footfall.core.robot import LEG_NAMES, RobotDescription
 from footfall.core.state import RobotState
-from footfall.expert.surface import no_data, sample_surface, sphere_surface
+from footfall.expert.rays import RaySamples, no_data_share, ray_terms
+from footfall.expert.surface import board_sphere, sample_surface
 from footfall.features.pose_features import triangle_margins
 
 if TYPE_CHECKING:  # the settings live with the expert, which computes its terms here
@@ -84,48 +85,18 @@ def terrain_terms(hmap: HeightMap, f: np.ndarray, cfg: ExpertConfig, robot: Robo
     k = int(cfg.directions)
     angles = 2 * np.pi * np.arange(k) / k
     dirs = np.column_stack([np.cos(angles), np.sin(angles)])  # (K, 2); dirs[k + K/2] = -dirs[k]
-    longest = max(cfg.slip_distance, cfg.pinch_distance, cfg.trap_radius, cfg.edge_radius,
-                  cfg.unknown_radius, cfg.riser_distance)
-    near_reach = max(cfg.slip_distance, cfg.pinch_distance)
-    s_near = cfg.ray_step * np.arange(1, int(math.floor(near_reach / cfg.ray_step + 1e-9)) + 1)
-    s_far = np.arange(s_near[-1] + cfg.far_step, longest + cfg.far_step - 1e-12, cfg.far_step)
-    s = np.concatenate([s_near, s_far])  # (J,) [m] distances of the samples along each ray
-
     xy = f[:, :2]
-    ball = sphere_surface(hmap, xy.min(axis=0) - longest, xy.max(axis=0) + longest, r)
+    ball = board_sphere(hmap, r)
     seat = sample_surface(ball, xy)  # (n,) [m] seated ball-centre height
     # A ball with no data under it at all sits one radius above the candidate's given
     # height, or above 0 if that is unknown too (its `unknown` term is then 1).
     seat = np.where(np.isnan(seat), np.nan_to_num(f[:, 2], nan=0.0) + r, seat)
-    along = np.full((n, k, s.size), np.nan) if ball is None else ball.along_rays(xy, dirs, s)
-    rise = along - seat[:, None, None]  # (n, K, J) [m] at xy + s * direction, K rays of J samples
-    # Samples with no ball surface (no data) count as level ground: neither wall nor drop.
-    rise = np.nan_to_num(rise, nan=0.0)
-    secant = rise / s  # [-]
-
-    # Slip: the weakest direction's steepest secant within the slip distance.
-    near = (s >= 0.5 * cfg.slip_distance - 1e-12) & (s <= cfg.slip_distance + 1e-12)
-    if not near.any():
-        near = s == s[0]
-    hold = secant[:, :, near].max(axis=2).min(axis=1)  # (n,) [-]
-    phi = math.atan(robot.foot_friction)
-    slip_margin = phi + np.arctan(hold)
-
-    # Pinch: opposite contact normals, both tilted; the most pinching pair.
-    jp = int(np.argmin(np.abs(s - cfg.pinch_distance)))
-    tilt = secant[:, :, jp]  # (n, K) tan of the contact normal resisting a push along each ray
-    pair = np.minimum(tilt[:, : k // 2], tilt[:, k // 2:])
-    pinch = robot.foot_friction * np.clip(pair.max(axis=1), 0.0, None)
-
-    # Trap: the least, over directions, of the highest rise within the trap radius.
-    in_trap = s <= cfg.trap_radius + 1e-12
-    trap_depth = np.clip(rise[:, :, in_trap].max(axis=2).min(axis=1), 0.0, None)
-
-    # Drop-off: the ball-centre surface falling below a cone of the walkable slope, weighted
-    # by how likely a slip that far is (linearly less likely, to nothing at the edge radius).
-    in_edge = s < cfg.edge_radius
-    fall = -rise[:, :, in_edge] - cfg.walkable_slope * s[in_edge]
-    drop_off = np.clip((fall * (1.0 - s[in_edge] / cfg.edge_radius)).max(axis=(1, 2)), 0.0, None)
+    rays = RaySamples.of(cfg)
+    hold, pair, trap, drop = ray_terms(ball, xy, seat, dirs, rays)
+    slip_margin = math.atan(robot.foot_friction) + np.arctan(hold)
+    pinch = robot.foot_friction * np.clip(pair, 0.0, None)
+    trap_depth = np.clip(trap, 0.0, None)
+    drop_off = np.clip(drop, 0.0, None)
 
     # Riser ahead: the ball-centre surface rising along the heading, nearer counting more.
     ahead = np.arange(1, int(math.floor(cfg.riser_distance / cfg.far_step + 1e-9)) + 1) * cfg.far_step
@@ -138,10 +109,8 @@ def terrain_terms(hmap: HeightMap, f: np.ndarray, cfg: ExpertConfig, robot: Robo
         riser_ahead = np.zeros(n)
 
     # Missing data around the foothold (its own cell included).
-    in_unknown = s <= cfg.unknown_radius + 1e-12
-    rays = xy[:, None, None, :] + s[None, None, in_unknown, None] * dirs[None, :, None, :]
-    probe = np.concatenate([xy[:, None, :], rays.reshape(n, -1, 2)], axis=1)
-    unknown = no_data(hmap, probe).mean(axis=1)
+    unknown = no_data_share(hmap.heights, hmap.origin[0], hmap.origin[1], hmap.resolution,
+                            np.ascontiguousarray(xy), dirs, rays.unknown)
 
     terms = {"slip_margin": slip_margin, "pinch": pinch, "trap_depth": trap_depth,
              "drop_off": drop_off, "riser_ahead": riser_ahead, "unknown": unknown}
@@ -174,12 +143,7 @@ def leg_terms(hmap: HeightMap, state: RobotState, f: np.ndarray, seat: np.ndarra
     t = np.linspace(0.0, end, int(cfg.leg_samples))
     spheres = knee[:, None, :] + t[None, :, None] * (foot - knee)[:, None, :]  # (n, S, 3)
     ok = np.isfinite(spheres).all(axis=(1, 2))
-    if ok.any():
-        pts = spheres[ok].reshape(-1, 3)
-        shin = sphere_surface(hmap, pts[:, :2].min(axis=0), pts[:, :2].max(axis=0), rho)
-    else:
-        shin = None
-    ground = sample_surface(shin, np.nan_to_num(spheres[..., :2]))
+    ground = sample_surface(board_sphere(hmap, rho), np.nan_to_num(spheres[..., :2]))
     # No data under a sphere: no obstacle (as in the pose features).
     gap = np.where(np.isnan(ground), np.inf, spheres[..., 2] - ground).min(axis=1)
     # No posture at all (neither seated nor nominal solvable): counted as touching.

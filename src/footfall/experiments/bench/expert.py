@@ -16,6 +16,9 @@ import numpy as np
 from footfall.control.footstep import FootstepConfig
 from footfall.core.robot import LEG_NAMES, LITTLEDOG
 from footfall.core.state import nominal_state
+from footfall.core.heightmap import HeightMap
+from footfall.expert.rays import RaySamples
+from footfall.expert.surface import SphereSurface, no_data
 from footfall.expert.synthetic import SyntheticExpert, walking_expert
 from footfall.features.candidates import reachable_footholds
 from footfall.terrain import make_board
@@ -73,3 +76,27 @@ def format_expert(r: dict) -> str:
         f"{labels[k]}: {r[k]['candidates_median']:.0f} candidates, walking expert "
         f"{r[k]['placement_ms']:.1f} ms with its placement error, {r[k]['baseline_ms']:.1f} ms "
         f"without (x{r[k]['ratio']:.2f}; medians over {r['states']} states)" for k in ("F", "all"))
+
+
+def ray_terms_reference(hmap: HeightMap, ball: SphereSurface | None, xy: np.ndarray,
+                        seat: np.ndarray, dirs: np.ndarray, rays: RaySamples
+                        ) -> tuple[np.ndarray, ...]:
+    """The expert's ray terms as whole-array NumPy, the rules the compiled
+    :func:`~footfall.expert.rays.ray_terms` and :func:`~footfall.expert.rays.no_data_share`
+    replaced: hold, pinch, trap, drop, unknown share (n,) each."""
+    n, s = xy.shape[0], rays.s
+    k = dirs.shape[0]
+    along = np.full((n, k, s.size), np.nan) if ball is None else ball.along_rays(xy, dirs, s)
+    rise = np.nan_to_num(along - seat[:, None, None], nan=0.0)  # (n, K, J) [m]
+    secant = rise / s
+    hold = secant[:, :, rays.near].max(axis=2).min(axis=1)
+    tilt = secant[:, :, rays.jp]
+    pinch = np.minimum(tilt[:, : k // 2], tilt[:, k // 2:]).max(axis=1)
+    trap = rise[:, :, rays.in_trap].max(axis=2).min(axis=1)
+    fall = -rise[:, :, rays.in_edge] - rays.edge_offset
+    drop = (fall * rays.edge_weight).max(axis=(1, 2))
+    probe = xy[:, None, None, :] + rays.unknown[None, None, :, None] * dirs[None, :, None, :]
+    unknown = no_data(hmap, np.concatenate([xy[:, None, :], probe.reshape(n, -1, 2)],
+                                           axis=1)).mean(axis=1)
+    return hold, pinch, trap, drop, unknown
+

@@ -103,11 +103,15 @@ def bench_executors_cmd(runs: int, processes: int, as_json: bool) -> None:
 
 
 @bench.command("expert")
-@click.option("--states", type=click.IntRange(1, 1000), default=16, show_default=True)
+@click.option("--runs", type=click.IntRange(1, 50), default=2, show_default=True,
+              help="Seeds walked by each chooser.")
+@click.option("--sets", type=click.IntRange(1, 10000), default=60, show_default=True,
+              help="Candidate sets whose terrain terms are timed, compiled against NumPy.")
 @json_option
-def bench_expert_cmd(states: int, as_json: bool) -> None:
-    """The walking expert's judgement with its placement error against without."""
-    result = bench_expert(states=states)
+def bench_expert_cmd(runs: int, sets: int, as_json: bool) -> None:
+    """A run with the walking expert choosing every foothold against a hand-tuned run (CPU
+    time), and its terrain terms compiled against the NumPy rules."""
+    result = bench_expert(runs=runs, sets=sets)
     emit(as_json, result, format_expert(result))
 
 

@@ -11,18 +11,19 @@ the same bits as computing them all.
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 
 import numpy as np
 
-MEMO_ROWS = 500_000  # [-] rows a memo keeps before it starts again (~40 MB of terms)
+MEMO_ROWS = 200_000  # [-] rows a memo keeps before it starts again (~30 MB with its index)
 
 
 class RowMemo:
     """Values of rows of a float array, remembered by the rows' bits.
 
     ``compute(rows)`` maps an (m, d) float64 array to a dict of (m,) arrays, and must give each
-    row the same values whatever the other rows are.
+    row the same values whatever the other rows are. Calls from several threads take turns.
     """
 
     def __init__(self, compute: Callable[[np.ndarray], dict[str, np.ndarray]],
@@ -32,6 +33,7 @@ class RowMemo:
         self._index: dict[bytes, int] = {}
         self._values: dict[str, np.ndarray] = {}
         self._size = 0
+        self._lock = threading.Lock()
 
     def __len__(self) -> int:
         return self._size
@@ -39,6 +41,10 @@ class RowMemo:
     def __call__(self, rows: np.ndarray) -> dict[str, np.ndarray]:
         """The values of ``rows`` (n, d), computed where not remembered; fresh arrays."""
         rows = np.ascontiguousarray(rows, dtype=np.float64)
+        with self._lock:
+            return self._lookup(rows)
+
+    def _lookup(self, rows: np.ndarray) -> dict[str, np.ndarray]:
         keys = [r.tobytes() for r in rows]
         where = np.fromiter((self._index.get(k, -1) for k in keys), dtype=np.int64,
                             count=len(keys))

@@ -205,7 +205,7 @@ def walking_expert(lead: float, placement_error: float = WALKER_PLACEMENT_ERROR)
 
 
 _SEAT = "seat"  # the memo's name for the seated ball-centre height [m]
-MEMO_HEADINGS = 8  # [-] headings per map whose footholds' terrain terms an expert remembers
+MEMO_HEADINGS = 4  # [-] headings per map whose footholds' terrain terms an expert remembers
 
 
 class SyntheticExpert:

@@ -1,81 +1,140 @@
-"""Benchmark of the walking expert: its judgement with its placement error against without.
+"""Benchmark of the walking expert: what a run with it choosing every foothold costs.
 
-``bench_expert``: the walking expert judges the reproduction's candidate sets
-and every reachable foothold at states on a rocky module, with no placement
-error (the baseline) and with the default one; the medians [ms] and their ratio.
+``bench_expert`` walks the controller test board with the hand-tuned reward
+(the baseline) and with the walking expert choosing every foothold, alternately
+in one process, and compares their CPU time a run (target: the expert at most
+1.5 x); then it times the expert's terrain terms of the candidate sets it
+judged, computed by the compiled ray terms against the whole-array NumPy rules
+they replaced (:func:`ray_terms_reference`), and checks they give the same bits.
 """
 
 from __future__ import annotations
 
+import math
 import os
 import platform
 import time
 
 import numpy as np
 
-from footfall.control.footstep import FootstepConfig
-from footfall.core.robot import LEG_NAMES, LITTLEDOG
-from footfall.core.state import nominal_state
 from footfall.core.heightmap import HeightMap
-from footfall.expert.rays import RaySamples
-from footfall.expert.surface import SphereSurface, no_data
-from footfall.expert.synthetic import SyntheticExpert, walking_expert
-from footfall.features.candidates import reachable_footholds
+from footfall.core.robot import LITTLEDOG
+from footfall.experiments.batch import chooser_expert, expert_judge, walk_config
+from footfall.experiments.runs import reward_source
+from footfall.expert import terms as expert_terms
+from footfall.expert.rays import RaySamples, no_data_share, ray_terms
+from footfall.expert.surface import SphereSurface, board_sphere, no_data, sample_surface
+from footfall.sim.episode import Walk
 from footfall.terrain import make_board
 
+TEST_BOARD = ([("rocky", 0.7), ("steps", 0.7)], 500)  # the controller test board and its seed
+EXPERT_RUN_TARGET = 1.5  # [-] an expert run's CPU time at most this many hand-tuned runs'
 
-def bench_expert(states: int = 16, repeats: int = 3, seed: int = 0) -> dict:
-    """Cost of the walking expert's judgement with its placement error, against without.
 
-    ``states`` robot states standing at evenly spaced places on a rocky 0.5
-    module (swing legs in turn); for each, the candidate set F of the
-    reproduction (reachable footholds within 3 cm of the gait-nominal one)
-    and every reachable foothold (5 mm lattice). Each set is judged by the
-    walking expert with no placement error (the baseline) and with the
-    default one, alternately, ``repeats`` times; the best time of each
-    counts. Medians over the states [ms] and their ratio.
+def bench_expert(runs: int = 2, seed: int = 5000, sets: int = 60) -> dict:
+    """CPU time of a run with the walking expert choosing every foothold, against the
+    hand-tuned reward, and of the expert's terrain terms compiled against NumPy.
+
+    ``runs`` seeds from ``seed`` on the controller test board (rocky 0.7 | steps 0.7,
+    board seed 500), F within 3 cm as the reproduction walks; each seed walked by the
+    hand-tuned reward and by a fresh walking expert (nothing remembered from an earlier
+    run), alternately. Then the terrain terms of ``sets`` candidate sets the first expert
+    run judged, evenly spaced through it, by :func:`ray_terms` and :func:`no_data_share`
+    against :func:`ray_terms_reference` (best of 3 each).
     """
-    lead = FootstepConfig().lead
-    judges = {"baseline": SyntheticExpert(walking_expert(lead, placement_error=0.0)).values,
-              "placement": SyntheticExpert(walking_expert(lead)).values}
-    board = make_board([("rocky", 0.5)], seed)
-    xs = np.linspace(0.75, 1.10, states)
-    times: dict[str, dict[str, list[float]]] = {s: {j: [] for j in judges} for s in ("F", "all")}
-    sizes: dict[str, list[int]] = {"F": [], "all": []}
-    for i, x in enumerate(xs):
-        leg = LEG_NAMES[i % 4]
-        st = nominal_state(board, (float(x), 0.0), 0.0, leg)
-        every = reachable_footholds(board, st)
-        nominal = st.body_position[:2] + np.asarray(LITTLEDOG.nominal_foot(leg)[:2]) + (lead, 0.0)
-        sets = {"all": every,
-                "F": every[np.linalg.norm(every[:, :2] - nominal, axis=1) <= 0.03]}
-        for name, cand in sets.items():
-            sizes[name].append(int(cand.shape[0]))
-            best = {j: np.inf for j in judges}
-            for _ in range(repeats):
-                for j, judge in judges.items():
-                    t = time.perf_counter()
-                    judge(board, st, cand)
-                    best[j] = min(best[j], time.perf_counter() - t)
-            for j in judges:
-                times[name][j].append(best[j] * 1000)
+    board = make_board(*TEST_BOARD)
+    config = walk_config(None, True, 0.03)
+    reward = reward_source(None, board)
+    cpu: dict[str, list[float]] = {"hand": [], "expert": []}
+    results: dict[str, list[dict]] = {"hand": [], "expert": []}
+    judged: list[tuple[np.ndarray, float]] = []
+    for i in range(runs):
+        for who in ("hand", "expert"):
+            judge = expert_judge(chooser_expert(config, True)) if who == "expert" else None
+            walk = Walk(board, reward, seed + i, config, judge=judge)
+            t = time.process_time()
+            if who == "expert" and i == 0:
+                record, judged = _recording(walk)
+            else:
+                record = walk.run()
+            cpu[who].append(time.process_time() - t)
+            results[who].append({"seed": seed + i, "success": record.result["success"],
+                                 "simulated_s": record.result["time"]})
+    med = {w: float(np.median(v)) for w, v in cpu.items()}
     out: dict = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version()},
-                 "states": states}
-    for name in ("F", "all"):
-        med = {j: float(np.median(times[name][j])) for j in judges}
-        out[name] = {"candidates_median": float(np.median(sizes[name])),
-                     "baseline_ms": med["baseline"], "placement_ms": med["placement"],
-                     "ratio": med["placement"] / med["baseline"]}
+                 "board": "rocky:0.7 steps:0.7 --seed 500", "runs": runs,
+                 "hand_cpu_s": cpu["hand"], "expert_cpu_s": cpu["expert"],
+                 "hand_median_s": med["hand"], "expert_median_s": med["expert"],
+                 "ratio": med["expert"] / med["hand"], "target": EXPERT_RUN_TARGET,
+                 "results": results}
+    out["terms"] = _bench_terms(board, judged, sets)
     return out
+
+
+def _recording(walk: Walk):
+    """The walk's run record, and the placements (m, 3) [m] and headings [rad] whose terrain
+    terms the expert computed in it (copying them costs the run a little)."""
+    seen: list[tuple[np.ndarray, float]] = []
+    original = expert_terms.terrain_terms
+
+    def record(hmap, f, cfg, robot, yaw=0.0):
+        seen.append((np.array(f), float(yaw)))
+        return original(hmap, f, cfg, robot, yaw)
+
+    expert_terms.terrain_terms = record
+    try:
+        return walk.run(), seen
+    finally:
+        expert_terms.terrain_terms = original
+
+
+def _bench_terms(board: HeightMap, judged: list[tuple[np.ndarray, float]], sets: int) -> dict:
+    """The compiled ray terms against the NumPy rules on ``sets`` of the ``judged`` sets."""
+    cfg = chooser_expert(walk_config(None, True, 0.03), True)
+    k = int(cfg.directions)
+    angles = 2 * np.pi * np.arange(k) / k
+    dirs = np.column_stack([np.cos(angles), np.sin(angles)])
+    rays = RaySamples.of(cfg)
+    ball = board_sphere(board, LITTLEDOG.foot_radius)
+    picks = [judged[int(i)] for i in np.linspace(0, len(judged) - 1, min(sets, len(judged)))]
+    times = {"numpy": [], "compiled": []}
+    same = True
+    points = 0
+    for f, _ in picks:
+        xy = np.ascontiguousarray(f[:, :2])
+        seat = sample_surface(ball, xy)
+        seat = np.where(np.isnan(seat), np.nan_to_num(f[:, 2]) + LITTLEDOG.foot_radius, seat)
+        points += xy.shape[0]
+        best = {w: math.inf for w in times}
+        for _ in range(3):
+            t = time.perf_counter()
+            want = ray_terms_reference(board, ball, xy, seat, dirs, rays)
+            best["numpy"] = min(best["numpy"], time.perf_counter() - t)
+            t = time.perf_counter()
+            got = (*ray_terms(ball, xy, seat, dirs, rays),
+                   no_data_share(board.heights, board.origin[0], board.origin[1],
+                                 board.resolution, xy, dirs, rays.unknown))
+            best["compiled"] = min(best["compiled"], time.perf_counter() - t)
+        same = same and all(np.array_equal(a, b) for a, b in zip(want, got))
+        for w in times:
+            times[w].append(best[w] * 1e3)
+    numpy_ms, compiled_ms = sum(times["numpy"]), sum(times["compiled"])
+    return {"sets": len(picks), "sets_judged": len(judged), "points": points,
+            "numpy_ms": numpy_ms, "compiled_ms": compiled_ms,
+            "speedup": numpy_ms / max(compiled_ms, 1e-12), "same_bits": bool(same)}
 
 
 def format_expert(r: dict) -> str:
     """Human-readable lines of :func:`bench_expert`."""
-    labels = {"F": "the reproduction's F (3 cm)", "all": "every reachable foothold"}
-    return "\n".join(
-        f"{labels[k]}: {r[k]['candidates_median']:.0f} candidates, walking expert "
-        f"{r[k]['placement_ms']:.1f} ms with its placement error, {r[k]['baseline_ms']:.1f} ms "
-        f"without (x{r[k]['ratio']:.2f}; medians over {r['states']} states)" for k in ("F", "all"))
+    t = r["terms"]
+    return "\n".join([
+        f"controller test board ({r['board']}), {r['runs']} run(s) each, CPU time a run "
+        f"(median): hand-tuned reward {r['hand_median_s']:.1f} s, walking expert choosing every "
+        f"foothold {r['expert_median_s']:.1f} s: x{r['ratio']:.2f} (target x{r['target']:.1f})",
+        f"the expert's terrain terms of {t['sets']} of the {t['sets_judged']} candidate sets it "
+        f"computed ({t['points']} placements): NumPy rules {t['numpy_ms']:.0f} ms, compiled "
+        f"{t['compiled_ms']:.0f} ms (x{t['speedup']:.1f}), same bits: "
+        f"{'yes' if t['same_bits'] else 'NO'}"])
 
 
 def ray_terms_reference(hmap: HeightMap, ball: SphereSurface | None, xy: np.ndarray,

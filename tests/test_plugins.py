@@ -10,8 +10,8 @@ from cli_helpers import assert_user_error, run
 from footfall.core import plugins
 from footfall.core.errors import FootfallError
 from footfall.core.registry import Registry
-from footfall.experiments.ablation import VARIANTS
 from footfall.experiments.executors import EXECUTORS, LocalPool, make_executor
+from footfall.experiments.variants import VARIANTS
 from footfall.features.family import FAMILIES, FEATURE_SETS, feature_set_families
 from footfall.learning.learner import LEARNERS, get_learner
 from footfall.terrain import KINDS, make_module, unregister_kind
@@ -20,7 +20,7 @@ PLUGIN = '''
 import numpy as np
 from sklearn.linear_model import RidgeClassifier
 
-from footfall.experiments.ablation import register_variant
+from footfall.experiments.variants import register_variant
 from footfall.experiments.executors import LocalPool, register_executor
 from footfall.features.family import register_feature_set
 from footfall.learning.learner import register_learner

@@ -14,6 +14,7 @@ from footfall.experiments.terrain_suite import (
     SUITES,
     SuiteConfig,
     run_suite,
+    suite_jobs,
     suite_markdown,
 )
 from footfall.terrain.kinds import HELD_OUT_KINDS, PAPER_KINDS
@@ -84,3 +85,18 @@ def test_a_rerun_walks_nothing_and_other_boards_are_refused(walked):
 def test_the_command_refuses_bad_kinds_in_one_line(tmp_path, capsys):
     assert_user_error(*run(capsys, "benchmark-terrain", "--kind", "rocky", "--out",
                            tmp_path)[::2], "has no kind rocky")
+
+
+def test_a_variant_walks_its_change_and_is_not_mixed_with_the_defaults(walked, tmp_path):
+    out, summary = walked
+    variant = replace(TINY, variant="with-friction-check")
+    jobs = suite_jobs(variant, {"stones-b0": tmp_path / "b.npz"})
+    assert {j.walk.footstep.friction_safety for j in jobs} == {1.5}
+    assert {j.walk.footstep.friction_safety for j in suite_jobs(
+        TINY, {"stones-b0": tmp_path / "b.npz"})} == {None}
+    assert suite_markdown({**summary, "config": variant.to_dict()}).startswith(
+        "# The held-out terrain suite, with-friction-check: with footholds dropped")
+    with pytest.raises(FootfallError, match="other settings"):
+        run_suite(out, variant, processes=1, log=lambda s: None)
+    with pytest.raises(FootfallError, match="controller variant"):
+        replace(TINY, variant="no-such-variant")

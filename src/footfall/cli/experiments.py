@@ -329,22 +329,26 @@ def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], hard: bo
               help="Boards per kind [default: 2].")
 @click.option("--runs", type=click.IntRange(min=1), default=None,
               help="Runs on each board [default: 8].")
+@click.option("--variant", type=RegistryChoice(_variant_names), default="defaults",
+              show_default=True, help="The controller variant walked (as the ablation's); "
+              "walk each into its own --out.")
 @click.option("--quick", is_flag=True, help="One board and two hand-tuned runs a kind.")
 @executor_options
 @json_option
 def benchmark_terrain(suite: str, out: str | None, kinds: tuple[str, ...], who: tuple[str, ...],
-                      boards: int | None, runs: int | None, quick: bool, processes: int | None,
-                      executor_name: str, ray_address: str | None, as_json: bool) -> None:
+                      boards: int | None, runs: int | None, variant: str, quick: bool,
+                      processes: int | None, executor_name: str, ray_address: str | None,
+                      as_json: bool) -> None:
     """A terrain suite: the expert and the hand-tuned reward on every kind, success with
     Wilson intervals, slip and the failure taxonomy per kind."""
     config = SuiteConfig.quick(suite) if quick else SuiteConfig(suite=suite)
     changes: dict = {}
     for key, value in (("kinds", kinds or None), ("who", tuple(dict.fromkeys(who)) or None),
-                       ("boards", boards), ("runs", runs)):
+                       ("boards", boards), ("runs", runs), ("variant", variant)):
         if value is not None:
             changes[key] = value
     config = replace(config, **changes)  # checked: one line for a bad value
-    folder = Path(out or f"out/suite-{suite}")
+    folder = Path(out or f"out/suite-{suite}" + ("" if variant == "defaults" else f"-{variant}"))
     with opened_executor(executor_name, processes, ray_address) as executor:
         summary = run_suite(folder, config, log=progress_log(as_json), executor=executor)
     emit(as_json, summary, suite_markdown(summary) + f"wrote {folder / 'suite.md'}")

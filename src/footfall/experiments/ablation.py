@@ -5,8 +5,8 @@
 the stance load control of :mod:`footfall.control.load`, the COG plan within
 the legs' reach of :mod:`footfall.control.cog`) is worth. Every *variant* is
 the default :class:`~footfall.sim.episode.WalkConfig` with one change
-(:data:`VARIANTS`, a registry: a new part of the controller adds its variant
-with :func:`register_variant`). Each variant walks, with the walking expert
+(:data:`footfall.experiments.variants.VARIANTS`, a registry: a new part of the
+controller adds its variant with :func:`~footfall.experiments.variants.register_variant`). Each variant walks, with the walking expert
 choosing every foothold and with the hand-tuned reward, over
 
 * the controller's test board -- ``rocky:0.7 steps:0.7``, board seed 500,
@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
@@ -55,89 +55,18 @@ from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor, LocalPool
 from footfall.experiments.reproduce import reproduction_walk
 from footfall.experiments.runs import RunJob, Runner, board_files, claim_folder
+from footfall.experiments.variants import (  # noqa: F401 (re-exported: the ablation's variants)
+    BUILTIN_VARIANTS,
+    VARIANTS,
+    Variant,
+    register_variant,
+)
 from footfall.expert.synthetic import walking_expert
 from footfall.sim.episode import WalkConfig
 
 STORE_NAME = "ablation.sqlite"
 WHO = ("expert", "hand")  # who chooses the footholds: the walking expert, the hand-tuned reward
 Spec = tuple[tuple[str, float], ...]  # a board: (kind, difficulty) of each module
-
-
-# ------------------------------------------------------------------ variants
-@dataclass(frozen=True)
-class Variant:
-    """A controller variant: the default walk with one change."""
-
-    name: str  # the key in VARIANTS and in run keys (no "/")
-    description: str  # one line, for the table
-    change: Callable[[WalkConfig], WalkConfig]  # the default walk -> this variant's walk
-
-
-VARIANTS: Registry[Variant] = Registry("controller variant")
-"""The controller variants by name: the defaults, each part switched off, the parts off by default
-switched on."""
-
-
-def register_variant(name: str, description: str,
-                     change: Callable[[WalkConfig], WalkConfig]) -> Variant:
-    """Add a controller variant to :data:`VARIANTS` (a new part of the controller adds its own)."""
-    if not name or "/" in name:
-        raise FootfallError(f"a variant needs a new name without '/', got {name!r}")
-    try:
-        return VARIANTS.register(name, Variant(name, description, change))
-    except ValueError:  # the name is taken
-        raise FootfallError(f"a variant needs a new name without '/', got {name!r}") from None
-
-
-def _reflexes(walk: WalkConfig, **switches) -> WalkConfig:
-    return replace(walk, reflexes=replace(walk.reflexes, **switches))
-
-
-def _lowlevel(walk: WalkConfig, **settings) -> WalkConfig:
-    return replace(walk, lowlevel=replace(walk.lowlevel, **settings))
-
-
-def _no_reach(walk: WalkConfig) -> WalkConfig:
-    return replace(walk, cog=replace(walk.cog, reach=None))
-
-
-BUILTIN_VARIANTS = tuple(variant.name for variant in (
-    register_variant("defaults", "the default controller", lambda w: w),
-    register_variant("no-lift-off-gate", "without the lift-off gate",
-                     lambda w: _reflexes(w, lift_off_gate=False)),
-    register_variant("no-touchdown-check", "without the touch-down check",
-                     lambda w: _reflexes(w, touchdown_check=False)),
-    register_variant("no-tilt-reflex", "without the tilt reflex",
-                     lambda w: _reflexes(w, tilt_reflex=False)),
-    register_variant("no-load-control", "without the stance load control",
-                     lambda w: _lowlevel(w, load_gain=0.0)),
-    register_variant("no-cog-reach", "without the COG plan within the legs' reach", _no_reach),
-    register_variant("no-hand-over", "without the body correction handed to the stance anchors "
-                     "at each touch-down", lambda w: _lowlevel(w, hand_over=False)),
-    register_variant("no-support-feedforward", "without the support torques fed forward",
-                     lambda w: _lowlevel(w, support_feedforward=0.0)),
-    register_variant("none", "no reflexes, no load control, no reach, no hand-over, no support "
-                     "torques (the controller before the reflexes)",
-                     lambda w: _no_reach(_lowlevel(_reflexes(
-                         w, lift_off_gate=False, touchdown_check=False, tilt_reflex=False,
-                         slip_reflex=False, rebase_distance=None),
-                         load_gain=0.0, hand_over=False, support_feedforward=0.0))),
-    register_variant("with-slip-reflex", "with the stance slip reflex (off by default)",
-                     lambda w: _reflexes(w, slip_reflex=True)),
-    register_variant("with-re-anchoring", "with slipped stance feet re-anchored where they "
-                     "stand (0.3 s; off by default)",
-                     lambda w: _lowlevel(w, anchor_follow_time=0.3)),
-    register_variant("with-rebase", "with the stance re-based after a recovery that leaves the "
-                     "body more than 30 mm off (off by default)",
-                     lambda w: _reflexes(w, rebase_distance=0.03)),
-    register_variant("with-friction-check", "with footholds dropped where a ball foot's "
-                     "contact tilts past atan(friction / 1.5) within 5 mm (off by default)",
-                     lambda w: replace(w, footstep=replace(w.footstep, friction_safety=1.5))),
-    register_variant("with-joint-margin", "with footholds dropped where the swing leg comes "
-                     "within 0.1 rad of a joint limit at touch-down or a stride on (off by "
-                     "default)",
-                     lambda w: replace(w, footstep=replace(w.footstep, joint_margin=0.1))),
-))  # the controller's own variants, in table order: an ablation walks them all by default
 
 
 # ------------------------------------------------------------------ settings

@@ -22,6 +22,10 @@ stream "boards" at (kind's place in :data:`SUITES`, board), so a kind's boards
 do not depend on which other kinds are walked. Run seeds: the stream
 "evaluation runs", the same on every board and for both choosers.
 
+A suite walks the default controller or one of its variants
+(:mod:`footfall.experiments.variants`: ``--variant with-friction-check``), so
+that a change is measured on the held-out kinds after the ablation judged it.
+
 Runs are stored under ``WHO/KIND/bB/sSEED`` in ``suite.sqlite`` as they arrive;
 a rerun walks only what is missing; other kinds or choosers in the same folder
 add their runs; other boards, runs, difficulty or walking settings are refused.
@@ -45,6 +49,7 @@ from footfall.experiments.batch import summarise
 from footfall.experiments.executors import Executor, LocalPool
 from footfall.experiments.reproduce import reproduction_walk
 from footfall.experiments.runs import RunJob, Runner, board_files, claim_folder
+from footfall.experiments.variants import VARIANTS
 from footfall.expert.synthetic import walking_expert
 from footfall.sim.episode import WalkConfig
 from footfall.terrain.kinds import HELD_OUT_KINDS, PAPER_KINDS
@@ -77,6 +82,10 @@ class SuiteConfig(Params):
     seed: int = param(0, range=at_least(0), doc="the suite's seed: boards and runs")
     walk: WalkConfig = param(factory=reproduction_walk,
                              doc="the walk: the reproduction's (F within its search radius)")
+    variant: str = param("defaults", check=lambda v: v in VARIANTS,
+                         must="a controller variant (footfall ablation --help lists them)",
+                         doc="the controller variant walked: the walk with its one change "
+                             "(footfall.experiments.variants)")
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -104,6 +113,10 @@ class SuiteConfig(Params):
                                  True)
                 for kind in self.walked_kinds() for b in range(self.boards)}
 
+    def walked(self) -> WalkConfig:
+        """The walk of every run: ``walk`` with the variant's change."""
+        return VARIANTS.get(self.variant).change(self.walk)
+
     def run_seeds(self) -> list[int]:
         """The run seeds of every board."""
         return SeedStreams("terrain suite", self.seed).seeds("evaluation runs", self.runs)
@@ -116,7 +129,7 @@ def suite_jobs(config: SuiteConfig, paths: dict[str, Path]) -> list[RunJob]:
     for who in sorted(config.who, key=lambda w: w == "expert"):
         for name, path in paths.items():
             kind, board = name.rsplit("-", 1)
-            jobs += [RunJob(f"{who}/{kind}/{board}/s{s}", str(path), None, s, config.walk,
+            jobs += [RunJob(f"{who}/{kind}/{board}/s{s}", str(path), None, s, config.walked(),
                             expert=expert, judge=who == "expert") for s in config.run_seeds()]
     return jobs
 
@@ -192,7 +205,10 @@ def suite_markdown(summary: dict) -> str:
     names = {"expert": "expert", "hand": "hand-tuned"}
     head = ["kind"] + [f"{names[w]}: {what}" for w in c["who"]
                        for what in ("crossed (95 %)", "slip of crossings [mm]", "failures")]
-    lines = [f"# The {c['suite']} terrain suite", "",
+    variant = c.get("variant", "defaults")
+    title = f"# The {c['suite']} terrain suite" + (
+        "" if variant == "defaults" else f", {variant}: {VARIANTS.get(variant).description}")
+    lines = [title, "",
              f"Boards KIND:{c['difficulty']:g} KIND:{c['difficulty']:g}, {c['boards']} per kind, "
              f"{c['runs']} runs each (the same seeds for every board and chooser); F within "
              f"{c['walk']['footstep']['search_radius'] * 100:g} cm.", "",

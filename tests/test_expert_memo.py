@@ -54,3 +54,22 @@ def test_the_experts_values_do_not_depend_on_the_other_candidates_or_on_what_it_
         # Remembered: the same set again, and a set overlapping the one it judged.
         assert np.array_equal(alone.values(board, state, f), together)
         assert np.array_equal(alone.values(board, state, f[::-1]), together[::-1])
+
+
+def test_an_expert_keeps_a_bounded_number_of_footholds_over_all_maps(monkeypatch) -> None:
+    from footfall.expert import synthetic
+
+    monkeypatch.setattr(synthetic, "MEMO_ROWS", 50)
+    expert = SyntheticExpert(walking_expert(0.02))
+    boards = [make_board([("rocky", 0.5)], seed=s) for s in (1, 2)]
+    first = None
+    for board in boards:
+        state = nominal_state(board, (0.8, 0.0), 0.0, "LF")
+        f = reachable_footholds(board, state)[:40]  # two maps of them: past the bound
+        values = expert.values(board, state, f)
+        first = values if first is None else first
+        remembered = sum(len(m) for per in expert._memos.values() for m in per.values())
+        assert remembered == 40 and len(expert._memos) == 1  # only the memo in use
+    state = nominal_state(boards[0], (0.8, 0.0), 0.0, "LF")
+    again = expert.values(boards[0], state, reachable_footholds(boards[0], state)[:40])
+    assert np.array_equal(again, first)  # computed afresh: the same bits

@@ -41,7 +41,7 @@ from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, above, at_least, param, within
 from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState
-from footfall.expert.memo import RowMemo
+from footfall.expert.memo import MEMO_ROWS, RowMemo
 from footfall.expert.terms import (
     EXPERT_TERM_NAMES,
     contributions,
@@ -206,6 +206,7 @@ def walking_expert(lead: float, placement_error: float = WALKER_PLACEMENT_ERROR)
 
 _SEAT = "seat"  # the memo's name for the seated ball-centre height [m]
 MEMO_HEADINGS = 4  # [-] headings per map whose footholds' terrain terms an expert remembers
+# (and at most MEMO_ROWS footholds in all: beyond, only the memo in use is kept)
 
 
 class SyntheticExpert:
@@ -244,6 +245,8 @@ class SyntheticExpert:
         else:
             per_map.move_to_end(float(yaw))
         terms = memo(f)
+        if sum(len(m) for per in list(self._memos.values()) for m in per.values()) > MEMO_ROWS:
+            self._memos = weakref.WeakKeyDictionary({hmap: OrderedDict({float(yaw): memo})})
         seat = terms.pop(_SEAT)
         return terms, seat
 

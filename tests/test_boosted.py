@@ -57,6 +57,21 @@ def test_the_trees_do_not_depend_on_the_number_of_threads():
         BoostedRanker(n_jobs=0).fit(X, y, groups)
 
 
+def test_the_folds_trained_in_threads_give_the_same_path_and_trees():
+    """Folds trained at once (one thread each) are independent: the same errors, the same
+    selection, the same trees as one after another."""
+    X, y, groups = _toy(4)
+    kw = dict(trees=(5, 15, 30), cv=4)
+    alone = BoostedRanker(**kw, fold_jobs=1).fit(X, y, groups)
+    together = BoostedRanker(**kw, fold_jobs=4).fit(X, y, groups)
+    assert [p.error for p in alone.path_] == [p.error for p in together.path_]
+    assert alone.n_trees_ == together.n_trees_
+    for name, array in alone.forest_.arrays().items():
+        np.testing.assert_array_equal(array, together.forest_.arrays()[name])
+    with pytest.raises(FootfallError, match="fold_jobs must be at least 1"):
+        BoostedRanker(fold_jobs=0).fit(X, y, groups)
+
+
 def _stump() -> dict:
     """One tree: a split on column 1 at 0.5, leaves -1 and +2."""
     return {"feature": np.array([1.0, -1, -1]), "threshold": np.array([0.5, 0, 0]),

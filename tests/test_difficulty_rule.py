@@ -3,7 +3,7 @@
 import pytest
 
 from footfall.core.errors import FootfallError
-from footfall.experiments.difficulty import choose_difficulty
+from footfall.experiments.difficulty import calibration_held, choose_difficulty
 
 
 def test_the_hardest_level_at_which_the_expert_still_crosses_90_percent():
@@ -74,3 +74,22 @@ def test_bad_outcomes_are_refused():
         choose_difficulty({0.5: (3, 2)})
     with pytest.raises(FootfallError, match=r"\[0, 1\]"):
         choose_difficulty({1.5: (1, 1)})
+
+
+def test_whether_the_calibration_held_on_the_test_boards():
+    choice = choose_difficulty({0.5: (10, 10), 0.6: (9, 10), 0.7: (6, 10)}).as_dict()
+    assert choice["difficulty"] == 0.6
+    # the fresh reproduction's case: 9 / 10 in calibration, then 45 / 63 on the test boards
+    held = calibration_held(choice, 45, 63)
+    lo, hi = choice["levels"]["0.6"]["success_ci"]
+    assert held["calibration"] == [9, 10] and held["test"] == [45, 63]
+    assert held["inside"] == (lo <= 45 / 63 <= hi)
+    assert 0 < held["fisher_p"] <= 1
+    same = calibration_held(choice, 56, 63)  # 89 %: the calibration's own rate
+    assert same["inside"] and same["fisher_p"] == 1.0
+    far = calibration_held(choice, 10, 63)
+    assert not far["inside"] and far["fisher_p"] < 0.001
+    # a difficulty that was given, not calibrated, or no test runs: nothing to say
+    given = {**choice, "difficulty": 0.55}
+    assert calibration_held(given, 45, 63) is None
+    assert calibration_held(choice, 0, 0) is None

@@ -40,6 +40,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.stats import fisher_exact
 from sklearn.isotonic import IsotonicRegression
 
 from footfall.core.errors import FootfallError
@@ -103,3 +104,20 @@ def choose_difficulty(outcomes: dict[float, tuple[int, int]], threshold: float =
     chosen = float(grid[int(np.flatnonzero(passes)[-1])]) if met else float(grid[0])
     return DifficultyChoice(chosen, met, float(threshold), levels,
                             RULE.format(threshold=threshold))
+
+
+def calibration_held(choice: dict, successes: int, runs: int) -> dict | None:
+    """Whether the expert's success on the test boards (``successes`` of ``runs``) stayed what
+    the calibration measured at the chosen test difficulty: inside that level's 95 % Wilson
+    interval, and Fisher's exact test (two-sided) of the two counts. ``choice`` is
+    :meth:`DifficultyChoice.as_dict`; None when it holds no level at that difficulty (a
+    difficulty given, not calibrated) or no test runs were walked."""
+    level = choice["levels"].get(f"{choice['difficulty']:g}")
+    if level is None or runs < 1:
+        return None
+    k, n = level["successes"], level["runs"]
+    lo, hi = level["success_ci"]
+    rate = successes / runs
+    p = float(fisher_exact([[k, n - k], [successes, runs - successes]]).pvalue)
+    return {"calibration": [k, n], "calibration_ci": [lo, hi], "test": [successes, runs],
+            "test_rate": rate, "inside": bool(lo <= rate <= hi), "fisher_p": p}

@@ -192,6 +192,15 @@ def _calibration(results: dict) -> list[str]:
         lines.append(f"| {d} | {v['successes']} / {v['runs']} | {_pct(v['success_ci'][0])} - "
                      f"{_pct(v['success_ci'][1])} | {_pct(v['fitted'])} | "
                      f"{'yes' if v['passes'] else 'no'} |")
+    held = c.get("held_on_test")
+    if held:
+        (k, n), (t, m), (lo, hi) = held["calibration"], held["test"], held["calibration_ci"]
+        lines += ["", f"Did the calibration hold? The expert crossed {t} / {m} "
+                      f"({_pct(held['test_rate'])}) of its test-board runs against {k} / {n} on "
+                      f"the calibration boards of that difficulty: "
+                      + ("inside" if held["inside"] else "**outside**")
+                      + f" their 95 % interval ({_pct(lo)} - {_pct(hi)}); Fisher's exact test "
+                      f"p = {held['fisher_p']:.3g}."]
     return lines + [""]
 
 

@@ -62,6 +62,7 @@ from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, above, at_least, param, within
 from footfall.core.robot import LITTLEDOG
 from footfall.data.store import DemoStore
+from footfall.experiments.difficulty import calibration_held
 from footfall.experiments.executors import Executor, LocalPool
 from footfall.experiments.report import write_report
 from footfall.experiments.runs import RunJob, Runner
@@ -410,6 +411,9 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig | None = No
         results["table2"] = {**evaluation.per_board[evaluation.boards[0]],
                              FLAT: evaluation.pooled[FLAT]}  # the paper's one-board table
         results["table2_pooled"] = evaluation.pooled
+        expert = evaluation.pooled.get("expert")
+        results["calibration"]["held_on_test"] = None if expert is None else calibration_held(
+            results["calibration"], expert["successes"], expert["runs"])
         results["table2_boards"] = evaluation.per_board
         results["pairs"] = evaluation.pairs
         results["slips_mm"] = evaluation.slips_mm

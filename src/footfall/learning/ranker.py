@@ -261,14 +261,17 @@ def _fit_coef(learner: LinearLearner, C: float, X: np.ndarray, y: np.ndarray, to
     return clf.coef_.ravel().copy()
 
 
-def _fit_rows(learner: LinearLearner, C: float, X: np.ndarray, y: np.ndarray, rows: np.ndarray,
+def _fit_rows(learner: LinearLearner, C: float, X: np.ndarray, y: np.ndarray,
+              rows: np.ndarray | None,
               tol: float, max_iter: int, screen: bool, start: np.ndarray | None = None
               ) -> np.ndarray:
-    """The weights at ``C`` on ``rows`` of (X, y): with ``screen`` on a working set of columns
-    grown from ``start`` (weights at a neighbouring C; :mod:`footfall.learning.screening`),
-    else on all columns at once."""
+    """The weights at ``C`` on ``rows`` of (X, y) (None: all, not copied): with ``screen`` on a
+    working set of columns grown from ``start`` (weights at a neighbouring C;
+    :mod:`footfall.learning.screening`), else on all columns at once."""
     if not screen:
-        return _fit_coef(learner, C, X[rows], y[rows], tol, max_iter)
+        return _fit_coef(learner, C, X if rows is None else X[rows],
+                         y if rows is None else y[rows], tol, max_iter)
+    rows = np.arange(X.shape[0]) if rows is None else rows
     return screened_l1_fit(lambda c, x, t: _fit_coef(learner, c, x, t, tol, max_iter), C, X, y,
                            rows, w_prev=start)[0]
 
@@ -315,15 +318,15 @@ def _cross_validate(learner: LinearLearner, Cs: np.ndarray, X: np.ndarray, y: np
         path.append(PathPoint(float(C), float(errors.mean()), float(errors.std()),
                               float(np.mean([r[1] for r in res])) if learner.logistic
                               else float("nan"), float(np.mean([r[2] for r in res]))))
-        if path_turned([p.error for p in path]):
+        if _path_turned([p.error for p in path]):
             break
     return path, weights
 
 
-def path_turned(errors: Sequence[float]) -> bool:
+def _path_turned(errors: Sequence[float]) -> bool:
     """Whether a path of held-out errors, simplest model first, has risen for two values in a
-    row past its minimum: where every learner's path stops (the selection never reaches the
-    later, costlier values)."""
+    row past its minimum: where the linear path stops (the selection never reaches the later,
+    costlier values)."""
     k = int(np.argmin(errors))
     return len(errors) - k > 2 and errors[-1] > errors[-2] > errors[k]
 
@@ -449,8 +452,8 @@ class FootholdRanker(BaseEstimator):
         self.lambda_ = 1.0 / self.C_
         self.cv_error_ = self.path_[best].error
         # the folds' mean weights at the chosen C: where a screened fit of all pairs starts
-        w = _fit_rows(learner, 2.0 * self.C_, Xs, labels, np.arange(Xs.shape[0]), self.tol,
-                      self.max_iter, screen, np.mean(fold_weights[best], axis=0))
+        w = _fit_rows(learner, 2.0 * self.C_, Xs, labels, None, self.tol, self.max_iter, screen,
+                      np.mean(fold_weights[best], axis=0))
         self.scale_ = scale
         self.coef_ = w / scale
         self.n_features_in_ = X.shape[1]

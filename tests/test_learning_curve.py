@@ -9,14 +9,9 @@ import pytest
 
 from cli_helpers import assert_user_error, run
 from footfall.core.errors import FootfallError
-from footfall.experiments.learning_curve import FORMAT as CURVE_FORMAT
-from footfall.experiments.learning_curve import (
-    CurveConfig,
-    balanced_order,
-    compare_points,
-    curve_table,
-    run_learning_curve,
-)
+from footfall.experiments.curve_report import FORMAT as CURVE_FORMAT
+from footfall.experiments.curve_report import compare_points, curve_table
+from footfall.experiments.learning_curve import CurveConfig, balanced_order, run_learning_curve
 from footfall.terrain import make_board
 
 
@@ -85,6 +80,23 @@ def test_a_small_curve_is_measured_written_and_resumed(tmp_path):
                               log=logs.append)
     assert [p["n"] for p in more["points"]] == [10, 12] and more["points"][0] == point
     assert sum("learned" in line for line in logs) == 1
+
+
+def test_worker_processes_collect_and_learn_what_one_process_does(tmp_path):
+    config = CurveConfig(**{**vars(TINY), "draws": 2})
+    logs = []
+    one = run_learning_curve(tmp_path / "one", config, log=lambda _: None)
+    two = run_learning_curve(tmp_path / "two", config, log=logs.append, processes=2)
+    assert any("in 2 processes" in line for line in logs)
+    assert sum("learned" in line for line in logs) == 2
+    assert two["lines"] == one["lines"]
+    strip = [{k: v for k, v in p.items() if k != "seconds"} for p in one["points"]]
+    assert [{k: v for k, v in p.items() if k != "seconds"} for p in two["points"]] == strip
+    for name in ("terrain-l1-10-draw0.npz", "terrain-l1-10-draw1.npz"):
+        with np.load(tmp_path / "one" / "models" / name) as a, \
+                np.load(tmp_path / "two" / "models" / name) as b:
+            assert set(a.files) == set(b.files)
+            assert all(np.array_equal(a[k], b[k]) for k in a.files if k != "meta")
 
 
 @pytest.mark.parametrize("args, match", [

@@ -11,15 +11,12 @@ import click
 from footfall.cli.choices import BUDGET, FEATURE_SET, LEARNER, NO_BUDGET, SEED, RegistryChoice
 from footfall.cli.executors import executor_options, opened_executor
 from footfall.cli.output import emit, json_option, progress_log
+from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
 from footfall.experiments.ablation import VARIANTS, AblationConfig, ablation_markdown, run_ablation
+from footfall.experiments.curve_report import compare_points, read_curve
 from footfall.experiments.curve_walk import CurveWalkConfig, run_curve_walk, walk_markdown
-from footfall.experiments.learning_curve import (
-    CurveConfig,
-    compare_points,
-    read_curve,
-    run_learning_curve,
-)
+from footfall.experiments.learning_curve import CurveConfig, run_learning_curve
 from footfall.experiments.offline import OfflineConfig, run_offline
 from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
 from footfall.experiments.study import run_study
@@ -59,7 +56,7 @@ def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
               help="What a cross-validation fold never splits [default: demonstration].")
 @click.option("--selection", type=click.Choice(SELECTIONS), default=None,
               help="Where a learner stops on its path: one standard error or the smallest CV "
-                   "error [default: 1se].")
+                   "error [default: min].")
 @click.option("--template-budget", type=BUDGET, default=None,
               help="A leg group's function reads at most this share of its demonstrations' "
                    "number of templates, or 'none' [default: none].")
@@ -68,12 +65,15 @@ def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
 @click.option("--seed", type=SEED, default=0, show_default=True)
 @click.option("--quick", is_flag=True, help="A small curve (two sizes, two draws) for a smoke "
                                             "test.")
+@click.option("--processes", type=click.IntRange(1, 1024), default=None,
+              help="Worker processes that collect the draws and learn each size's models "
+                   "(the same models as one) [default: the available cores].")
 @json_option
 def learning_curve(out: str, sizes: str | None, draws: int | None,
                    feature_sets: tuple[str, ...], learners: tuple[str, ...],
                    test_decisions: int | None, folds: str | None, selection: str | None,
                    template_budget: float | str | None, library_size: int | None, seed: int,
-                   quick: bool, as_json: bool) -> None:
+                   quick: bool, processes: int | None, as_json: bool) -> None:
     """Learning curves: each feature set and learner from 25 to 1 600 demonstrations, on
     held-out decisions, with the hand-tuned and expert lines."""
     config = CurveConfig.quick(seed) if quick else CurveConfig(seed=seed)
@@ -88,7 +88,8 @@ def learning_curve(out: str, sizes: str | None, draws: int | None,
     if template_budget is not None:
         changes["template_budget"] = None if template_budget == NO_BUDGET else template_budget
     config = replace(config, **changes)  # checked: one line for a bad value
-    summary = run_learning_curve(Path(out), config, log=progress_log(as_json))
+    summary = run_learning_curve(Path(out), config, log=progress_log(as_json),
+                                 processes=processes or usable_cores())
     emit(as_json, summary, f"wrote {Path(out) / 'report.md'}")
 
 

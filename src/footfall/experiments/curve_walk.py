@@ -49,8 +49,9 @@ from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, at_least, param
 from footfall.core.seeds import SeedStreams
 from footfall.data.store import DemoStore
+from footfall.experiments.curve_report import read_curve
 from footfall.experiments.executors import Executor, LocalPool
-from footfall.experiments.learning_curve import point_model_path, read_curve
+from footfall.experiments.learning_curve import point_model_path
 from footfall.experiments.paired import RunOutcome, compare
 from footfall.experiments.reproduce import is_board_spec, reproduction_walk
 from footfall.experiments.runs import RunJob, Runner, board_files, claim_folder

@@ -26,11 +26,14 @@ point multiplies the learning time several times over.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
+from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
@@ -42,7 +45,6 @@ from footfall.core.files import load_npz, save_npz
 from footfall.core.params import Params, above, at_least, param
 from footfall.core.robot import LITTLEDOG
 from footfall.core.seeds import SeedStreams
-from footfall.core.stats import mcnemar_exact
 from footfall.data.demonstration import Demonstration
 from footfall.data.store import DemoStore
 from footfall.expert.collect import collect_demonstrations
@@ -59,9 +61,9 @@ from footfall.learning.train import FOLDS, TrainingDemo, learn_model
 from footfall.plots.curves import save_curve_figure
 from footfall.terrain import make_board
 
+from .curve_report import FORMAT, curve_report, curve_table
 from .offline import _difficulties, _feature_sets, _kinds
 
-FORMAT = "footfall.learning-curve"
 VALUES_FORMAT = "footfall.learning-curve.values"  # the expert's values of the held-out decisions
 VERSION = 1
 COLLECT_MORE = 1.25  # a draw collects this many times its largest size: the legs do not take
@@ -69,7 +71,6 @@ COLLECT_MORE = 1.25  # a draw collects this many times its largest size: the leg
 EXTENSIBLE = ("sizes", "draws", "feature_sets", "learners")  # settings a resumed curve may
 # change: they say which points to measure, not what a point means (its draw's demonstrations
 # are those its store holds)
-LINES = ("hand-tuned", "expert")  # the scorers measured once, as horizontal lines
 
 
 def _sizes(value: object) -> bool:
@@ -277,22 +278,48 @@ def _draw_training(out: Path, config: CurveConfig, draw: int, expert: SyntheticE
     return [TrainingDemo.of(demos[k], maps[demos[k].terrain_hash]) for k in order]
 
 
-def _point_model(out: Path, config: CurveConfig, key: tuple, training: list[TrainingDemo],
-                 log: Callable[[str], None]) -> FootholdModel:
-    """The model of point ``key`` (draw, n, feature set, learner): learned from the first n of
-    its draw's demonstrations and saved, or read back when saved already."""
+def _learn_point(out: Path, config: CurveConfig, key: tuple, training: list[TrainingDemo]
+                 ) -> float:
+    """Learn and save the model of point ``key`` (draw, n, feature set, learner) from the first
+    n of its draw's demonstrations; its learning time [s]."""
     draw, n, fs, ln = key
-    path = point_model_path(out, draw, n, fs, ln)
-    if not path.exists():
-        t0 = time.perf_counter()
-        rms = None if config.bandwidth_rms is None else (config.bandwidth_rms,) * 3
-        learn_model(training[:n], fs, ln, library_size=config.library_size, bandwidth_rms=rms,
-                    folds=config.folds, selection=config.selection,
-                    template_budget=config.template_budget,
-                    seed=config.streams.seed_for("learning", draw, n)).save(path)
-        log(f"  draw {draw}, {n} demonstrations, {fs}/{ln}: learned in "
-            f"{time.perf_counter() - t0:.0f} s")
-    return FootholdModel.load(path)
+    t0 = time.perf_counter()
+    rms = None if config.bandwidth_rms is None else (config.bandwidth_rms,) * 3
+    learn_model(training[:n], fs, ln, library_size=config.library_size, bandwidth_rms=rms,
+                folds=config.folds, selection=config.selection,
+                template_budget=config.template_budget,
+                seed=config.streams.seed_for("learning", draw, n)
+                ).save(point_model_path(out, draw, n, fs, ln))
+    return time.perf_counter() - t0
+
+
+_WORKER_TRAINING: dict[tuple, list[TrainingDemo]] = {}  # a worker process's draws, read once
+
+
+def _prepare_in_worker(out: Path, config: CurveConfig, draw: int | None) -> None:
+    """A worker's part of the start: draw ``draw``'s demonstrations collected into its store,
+    or (``draw`` None) the held-out decisions and the expert's values of them."""
+    quiet = lambda _: None  # noqa: E731 -- the driver logs
+    if draw is None:
+        _held_out(out, config, _expert(), quiet)
+    else:
+        _draw_training(out, config, draw, _expert(), quiet)
+
+
+def _learn_in_worker(out: Path, config: CurveConfig, key: tuple) -> tuple[tuple, float]:
+    """A worker's part of a size: one point's model learned and saved; (key, seconds)."""
+    cache = (str(out), key[0])
+    if cache not in _WORKER_TRAINING:
+        _WORKER_TRAINING[cache] = _draw_training(out, config, key[0], _expert(), lambda _: None)
+    return key, _learn_point(out, config, key, _WORKER_TRAINING[cache])
+
+
+def _work_order(keys: list[tuple]) -> list[tuple]:
+    """The points of a size in the order a pool takes them: the slowest learners first, so
+    that the last to finish is a short one."""
+    slow = {"lambdarank": 0, "l1": 1, "kernel": 2}
+    weight = {"both": 0, "templates": 1, "terrain": 2}
+    return sorted(keys, key=lambda k: (slow.get(k[3], 3), weight.get(k[2], 3), k))
 
 
 def _model_point(key: tuple, model: FootholdModel, scores: RankScores) -> dict:
@@ -312,13 +339,47 @@ def _save(path: Path, config: CurveConfig, lines: dict, points: list[dict], deci
     return summary
 
 
+def _learn_size(out: Path, config: CurveConfig, keys: list[tuple],
+                training: dict[int, list[TrainingDemo]], pool: ProcessPoolExecutor | None,
+                log: Callable[[str], None]) -> None:
+    """Learn and save the models of ``keys``: in this process, or each in a worker of
+    ``pool`` (the same models: each point's learning draws from its own seed)."""
+    def done(key: tuple, seconds: float) -> None:
+        log(f"  draw {key[0]}, {key[1]} demonstrations, {key[2]}/{key[3]}: learned in "
+            f"{seconds:.0f} s")
+
+    if pool is None or len(keys) < 2:
+        for key in keys:
+            done(key, _learn_point(out, config, key, training[key[0]]))
+        return
+    for f in as_completed([pool.submit(_learn_in_worker, out, config, k)
+                           for k in _work_order(keys)]):
+        done(*f.result())
+
+
+@contextlib.contextmanager
+def _pool(processes: int) -> Iterator[ProcessPoolExecutor | None]:
+    """Worker processes for the curve's stores and models (None for one process)."""
+    if processes <= 1:
+        yield None
+        return
+    # spawn: a fresh interpreter per worker (no forked BLAS state)
+    pool = ProcessPoolExecutor(max_workers=processes, mp_context=get_context("spawn"))
+    try:
+        yield pool
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
 def run_learning_curve(out: Path, config: CurveConfig | None = None,
-                       log: Callable[[str], None] = print) -> dict:
+                       log: Callable[[str], None] = print, processes: int = 1) -> dict:
     """Measure the curve into ``out``: ``results.json``, ``report.md``, ``learning-curve.png``,
     the demonstrations (``test.sqlite``, ``draw<k>.sqlite``) and every model (``models/``).
 
     A rerun with the same settings resumes: stored demonstrations, saved models and measured
-    points are not made again.
+    points are not made again. ``processes`` > 1 collects the draws' demonstrations and learns
+    each size's models in that many worker processes (the same stores and models as one
+    process: every part draws from its own seed); the measuring stays in this process.
     """
     config = CurveConfig() if config is None else config
     if out.exists() and not out.is_dir():
@@ -329,156 +390,54 @@ def run_learning_curve(out: Path, config: CurveConfig | None = None,
     if points:
         log(f"resuming: {len(points)} points measured")
     done = {(p["draw"], p["n"], p["feature_set"], p["learner"]) for p in points}
-    started = time.perf_counter()
-    expert = _expert()
-    held_out = _held_out(out, config, expert, log)
-    if lines is None:  # measured once: a resumed curve keeps them
-        lines = {name: _point(scores) for name, scores in held_out.measure(
-            {"hand-tuned": EveryLeg(default_reward()), "expert": EveryLeg(ExpertScorer(expert))}
-        ).items()}
-        _save(results_path, config, lines, points, len(held_out.decisions))
-    log(f"{len(held_out.decisions)} held-out decisions; hand-tuned above the margin "
-        f"{lines['hand-tuned']['above_margin']:.3f}")
-
-    def save(seconds: float | None = None) -> dict:
-        """Results, report and figure of the points measured so far (an interrupted curve
-        shows them)."""
-        summary = _save(results_path, config, lines, points, len(held_out.decisions))
-        if seconds is not None:
-            summary["seconds"] = seconds
-        write_text_atomic(out / "report.md", curve_report(summary))
-        if points:
-            save_curve_figure(curve_table(summary), summary["lines"], out / "learning-curve.png")
-        return summary
-
     left = {(draw, n, fs, ln) for draw in range(config.draws) for n in config.sizes
             for fs in config.feature_sets for ln in config.learners} - done
-    training = {draw: _draw_training(out, config, draw, expert, log)
-                for draw in sorted({k[0] for k in left})}
-    for n in config.sizes:  # a size's models of every draw, measured in one pass
-        todo = sorted(k for k in left if k[1] == n)
-        for key in [k for k in todo if n > len(training[k[0]])]:
-            log(f"  draw {key[0]}: {len(training[key[0]])} demonstrations, not {n}: "
-                f"{key[2]}/{key[3]} skipped")
-        models = {k: _point_model(out, config, k, training[k[0]], log) for k in todo
-                  if n <= len(training[k[0]])}
-        if not models:
-            continue
-        log(f"  {n} demonstrations: measuring {len(models)} models on "
-            f"{len(held_out.decisions)} decisions")
-        scores = held_out.measure({str(k): m for k, m in models.items()})
-        points.extend(_model_point(k, m, scores[str(k)]) for k, m in models.items())
-        save()
+    started = time.perf_counter()
+    with _pool(processes) as pool:
+        if pool is not None:  # the stores filled at once, one task each
+            log(f"collecting the held-out decisions and {len({k[0] for k in left})} draws' "
+                f"demonstrations in {processes} processes")
+            for f in [pool.submit(_prepare_in_worker, out, config, d)
+                      for d in [None, *sorted({k[0] for k in left})]]:
+                f.result()
+        expert = _expert()
+        held_out = _held_out(out, config, expert, log)
+        if lines is None:  # measured once: a resumed curve keeps them
+            lines = {name: _point(scores) for name, scores in held_out.measure(
+                {"hand-tuned": EveryLeg(default_reward()),
+                 "expert": EveryLeg(ExpertScorer(expert))}).items()}
+            _save(results_path, config, lines, points, len(held_out.decisions))
+        log(f"{len(held_out.decisions)} held-out decisions; hand-tuned above the margin "
+            f"{lines['hand-tuned']['above_margin']:.3f}")
+
+        def save(seconds: float | None = None) -> dict:
+            """Results, report and figure of the points measured so far (an interrupted
+            curve shows them)."""
+            summary = _save(results_path, config, lines, points, len(held_out.decisions))
+            if seconds is not None:
+                summary["seconds"] = seconds
+            write_text_atomic(out / "report.md", curve_report(summary))
+            if points:
+                save_curve_figure(curve_table(summary), summary["lines"],
+                                  out / "learning-curve.png")
+            return summary
+
+        training = {draw: _draw_training(out, config, draw, expert, log)
+                    for draw in sorted({k[0] for k in left})}
+        for n in config.sizes:  # a size's models of every draw, measured in one pass
+            todo = sorted(k for k in left if k[1] == n)
+            for key in [k for k in todo if n > len(training[k[0]])]:
+                log(f"  draw {key[0]}: {len(training[key[0]])} demonstrations, not {n}: "
+                    f"{key[2]}/{key[3]} skipped")
+            todo = [k for k in todo if n <= len(training[k[0]])]
+            if not todo:
+                continue
+            _learn_size(out, config, [k for k in todo if not point_model_path(out, *k).exists()],
+                        training, pool, log)
+            models = {k: FootholdModel.load(point_model_path(out, *k)) for k in todo}
+            log(f"  {n} demonstrations: measuring {len(models)} models on "
+                f"{len(held_out.decisions)} decisions")
+            scores = held_out.measure({str(k): m for k, m in models.items()})
+            points.extend(_model_point(k, m, scores[str(k)]) for k, m in models.items())
+            save()
     return save(time.perf_counter() - started)
-
-
-PAIRED_KEYS = ("train_kinds", "train_difficulties", "test_difficulties", "test_decisions",
-               "seed")  # settings two curves share when their points are paired
-
-
-def read_curve(out: Path) -> dict:
-    """The results of the curve in folder ``out`` (its ``results.json``)."""
-    path = out / "results.json"
-    try:
-        summary = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
-        raise FootfallError(f"{path}: not a learning curve's results ({exc})") from None
-    if not isinstance(summary, dict) or summary.get("format") != FORMAT:
-        raise FootfallError(f"{path}: not a learning curve's results")
-    return summary
-
-
-def compare_points(a: dict, b: dict, n: int, a_point: tuple[str, str],
-                   b_point: tuple[str, str]) -> dict:
-    """Paired comparison of two curve points at ``n`` demonstrations: ``a_point`` (feature
-    set, learner) of curve ``a`` against ``b_point`` of curve ``b`` (the same curve or another
-    with the same boards, decisions and seed, whose draws learned from the same
-    demonstrations).
-
-    Per draw both hold and pooled over them: the share of decisions above the margin, the
-    decisions only one of the two got above it, and the exact McNemar p-value of the pooled
-    draw-decision pairs.
-    """
-    for key in PAIRED_KEYS:
-        if a["config"][key] != b["config"][key]:
-            raise FootfallError(f"the curves differ in {key}: their points are not paired")
-
-    def find(summary: dict, point: tuple[str, str]) -> dict[int, np.ndarray]:
-        found = {p["draw"]: np.asarray(p["losses"], dtype=float) for p in summary["points"]
-                 if p["n"] == n and (p["feature_set"], p["learner"]) == point}
-        if not found:
-            raise FootfallError(f"no point {point[0]}/{point[1]} at {n} demonstrations")
-        return found
-
-    la, lb = find(a, a_point), find(b, b_point)
-    draws = sorted(set(la) & set(lb))
-    if not draws:
-        raise FootfallError("the two points share no draw")
-    margin = float(a["points"][0]["margin"])
-    above_a = np.concatenate([la[d] > margin for d in draws])
-    above_b = np.concatenate([lb[d] > margin for d in draws])
-    a_only, b_only = int(np.sum(above_a & ~above_b)), int(np.sum(above_b & ~above_a))
-    return {"n": n, "draws": draws, "margin": margin,
-            "a": {"point": list(a_point), "above_margin": float(above_a.mean()),
-                  "per_draw": [float(np.mean(la[d] > margin)) for d in draws]},
-            "b": {"point": list(b_point), "above_margin": float(above_b.mean()),
-                  "per_draw": [float(np.mean(lb[d] > margin)) for d in draws]},
-            "a_only_above": a_only, "b_only_above": b_only,
-            "p": mcnemar_exact(a_only, b_only)}
-
-
-def curve_table(summary: dict) -> list[dict]:
-    """One row per (feature set, learner, size): the mean and range over draws of the share
-    above the margin, the severe share, the mean shortfall and top-1; templates kept per
-    scale (front + hind, mean over draws)."""
-    rows = []
-    keys = sorted({(p["feature_set"], p["learner"], p["n"]) for p in summary["points"]},
-                  key=lambda k: (k[0], k[1], k[2]))
-    for fs, ln, n in keys:
-        ps = [p for p in summary["points"]
-              if (p["feature_set"], p["learner"], p["n"]) == (fs, ln, n)]
-        share = np.array([p["above_margin"] for p in ps])
-        kept = np.mean([np.add(p["templates_kept"]["front"], p["templates_kept"]["hind"])
-                        for p in ps], axis=0)
-        rows.append({"feature_set": fs, "learner": ln, "n": n, "draws": len(ps),
-                     "above_margin": float(share.mean()), "above_margin_min": float(share.min()),
-                     "above_margin_max": float(share.max()),
-                     "severe": float(np.mean([p["severe"] for p in ps])),
-                     "reward_loss": float(np.mean([p["reward_loss"] for p in ps])),
-                     "top1": float(np.mean([p["top1"] for p in ps])),
-                     "templates_kept": [round(float(k), 1) for k in kept]})
-    return rows
-
-
-def curve_report(summary: dict) -> str:
-    """The curve as a markdown table, with the lines and the settings."""
-    cfg = summary["config"]
-    lines = summary["lines"]
-    out = ["# footfall learning curve", "",
-           f"{summary['test_decisions']} held-out decisions on test boards never trained on "
-           f"(kinds {', '.join(cfg['train_kinds'])}, difficulties "
-           f"{', '.join(map(str, cfg['test_difficulties']))}); {cfg['draws']} draws of training "
-           f"boards and demonstrations per point; folds by {cfg['folds']}; template library "
-           f"{cfg['library_size']}. Settings in `results.json`.", "",
-           f"Above margin: the share of decisions whose expert shortfall is above "
-           f"{DEFAULT_MARGIN:g} value unit (1 cm of progress); severe: above "
-           f"{SEVERE_SHORTFALL:g}.", "",
-           "| scorer | above margin | severe | mean shortfall | top-1 |",
-           "| --- | --- | --- | --- | --- |"]
-    for name in LINES:
-        p = lines[name]
-        out.append(f"| {name} | {p['above_margin']:.3f} | {p['severe']:.3f} | "
-                   f"{p['reward_loss']:.2f} | {p['top1']:.3f} |")
-    out += ["", "| feature set | learner | demonstrations | draws | above margin (min - max) | "
-            "severe | mean shortfall | top-1 | templates kept (S, M, L; front + hind) |",
-            "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
-    for r in curve_table(summary):
-        out.append(f"| {r['feature_set']} | {r['learner']} | {r['n']} | {r['draws']} | "
-                   f"{r['above_margin']:.3f} ({r['above_margin_min']:.3f} - "
-                   f"{r['above_margin_max']:.3f}) | {r['severe']:.3f} | "
-                   f"{r['reward_loss']:.2f} | {r['top1']:.3f} | "
-                   f"{', '.join(f'{k:g}' for k in r['templates_kept'])} |")
-    if "seconds" in summary:
-        out += ["", f"This invocation took {summary['seconds'] / 60:.0f} min (measured points "
-                    f"are not measured again)."]
-    return "\n".join(out) + "\n"

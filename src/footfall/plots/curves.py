@@ -16,7 +16,7 @@ def save_curve_figure(rows: list[dict], lines: dict, path: str | os.PathLike) ->
     """A panel per feature set, a line per learner (mean over draws, the range shaded), the
     share above the margin against demonstrations (log scale); the hand-tuned reward and the
     expert (``lines``) as horizontal lines. ``rows``: :func:`~footfall.experiments.
-    learning_curve.curve_table`'s."""
+    curve_report.curve_table`'s."""
     sets = list(dict.fromkeys(r["feature_set"] for r in rows)) or ["-"]
     fig = Figure(figsize=(4.2 * len(sets), 3.6), layout="constrained")
     axes = fig.subplots(1, len(sets), sharey=True, squeeze=False)[0]

@@ -53,7 +53,13 @@ from footfall.expert.scorer import ExpertScorer, settings_hash
 from footfall.expert.synthetic import SyntheticExpert, walking_expert
 from footfall.features.family import PAPER_FEATURE_SETS
 from footfall.features.reward import default_reward
-from footfall.learning.evaluation import EveryLeg, RankScores, rank_scores_many
+from footfall.learning.evaluation import (
+    EveryLeg,
+    RankScores,
+    decision_rows,
+    rank_scores_many,
+    scores_of_rows,
+)
 from footfall.learning.learner import LEARNERS
 from footfall.learning.model import FootholdModel
 from footfall.learning.ranker import SELECTIONS
@@ -314,6 +320,38 @@ def _learn_in_worker(out: Path, config: CurveConfig, key: tuple) -> tuple[tuple,
     return key, _learn_point(out, config, key, _WORKER_TRAINING[cache])
 
 
+_WORKER_HELD_OUT: dict[str, _HeldOut] = {}  # a worker process's held-out decisions, read once
+
+
+def _measure_in_worker(out: Path, config: CurveConfig, keys: list[tuple], start: int,
+                       stop: int) -> dict[tuple, list[tuple]]:
+    """A worker's part of measuring a size: the rows of held-out decisions ``start:stop`` for
+    the saved models of ``keys``."""
+    if str(out) not in _WORKER_HELD_OUT:
+        _WORKER_HELD_OUT[str(out)] = _held_out(out, config, _expert(), lambda _: None)
+    held = _WORKER_HELD_OUT[str(out)]
+    models = {k: FootholdModel.load(point_model_path(out, *k)) for k in keys}
+    return decision_rows(models, held.decisions[start:stop], held.terrain,
+                         held.values[start:stop])
+
+
+def _measure(held_out: _HeldOut, out: Path, config: CurveConfig, keys: list[tuple],
+             pool: ProcessPoolExecutor | None, processes: int) -> dict[tuple, RankScores]:
+    """rank-eval's measures of the saved models of ``keys`` on the held-out decisions: in this
+    process, or the decisions in ``processes`` slices, one a worker (the same figures)."""
+    if pool is None:
+        models = {k: FootholdModel.load(point_model_path(out, *k)) for k in keys}
+        return held_out.measure(models)
+    cuts = np.linspace(0, len(held_out.decisions), processes + 1).round().astype(int)
+    parts = [pool.submit(_measure_in_worker, out, config, keys, int(a), int(b))
+             for a, b in zip(cuts[:-1], cuts[1:]) if b > a]
+    rows: dict[tuple, list[tuple]] = {k: [] for k in keys}
+    for f in parts:  # in the decisions' order
+        for k, r in f.result().items():
+            rows[k].extend(r)
+    return {k: scores_of_rows(r, DEFAULT_MARGIN, SEVERE_SHORTFALL) for k, r in rows.items()}
+
+
 def _work_order(keys: list[tuple]) -> list[tuple]:
     """The points of a size in the order a pool takes them: the slowest learners first, so
     that the last to finish is a short one."""
@@ -434,10 +472,10 @@ def run_learning_curve(out: Path, config: CurveConfig | None = None,
                 continue
             _learn_size(out, config, [k for k in todo if not point_model_path(out, *k).exists()],
                         training, pool, log)
-            models = {k: FootholdModel.load(point_model_path(out, *k)) for k in todo}
-            log(f"  {n} demonstrations: measuring {len(models)} models on "
+            log(f"  {n} demonstrations: measuring {len(todo)} models on "
                 f"{len(held_out.decisions)} decisions")
-            scores = held_out.measure({str(k): m for k, m in models.items()})
-            points.extend(_model_point(k, m, scores[str(k)]) for k, m in models.items())
+            scores = _measure(held_out, out, config, todo, pool, processes)
+            points.extend(_model_point(k, FootholdModel.load(point_model_path(out, *k)),
+                                       scores[k]) for k in todo)
             save()
     return save(time.perf_counter() - started)

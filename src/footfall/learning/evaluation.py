@@ -129,6 +129,15 @@ def rank_scores_many(models: dict, demos: Sequence, terrain: Callable[[str], obj
         values = expert_values(demos, terrain, expert)
     if not demos:
         raise FootfallError("no demonstrations to evaluate on")
+    return {name: scores_of_rows(rows, margin, severe_above)
+            for name, rows in decision_rows(models, demos, terrain, values).items()}
+
+
+def decision_rows(models: dict, demos: Sequence, terrain: Callable[[str], object],
+                  values: Sequence[np.ndarray] | None = None) -> dict[str, list[tuple]]:
+    """Each model's (by name) figures of each demonstration, in order: the rows
+    :func:`scores_of_rows` summarises. Rows of consecutive slices of the demonstrations,
+    concatenated, are the rows of all (so the slices may be scored in separate processes)."""
     found: dict[str, list] = {name: [] for name in models}
     for k, d in enumerate(demos):  # one demonstration at a time, vectorised over its candidates
         hmap = terrain(d.terrain_hash)
@@ -144,7 +153,7 @@ def rank_scores_many(models: dict, demos: Sequence, terrain: Callable[[str], obj
             if not np.isfinite(r).all():
                 raise FootfallError(f"demonstration {d.id}: a candidate has no valid features")
             found[name].append(_decision(r, d, None if values is None else values[k]))
-    return {name: _scores(rows, margin, severe_above) for name, rows in found.items()}
+    return found
 
 
 def _decision(r: np.ndarray, d, values: np.ndarray | None) -> tuple[float, ...]:
@@ -162,7 +171,10 @@ def _decision(r: np.ndarray, d, values: np.ndarray | None) -> tuple[float, ...]:
     return top1, near, pct, loss, float(picks.size > 1), float(picks.size == r.size > 1)
 
 
-def _scores(rows: list[tuple[float, ...]], margin: float, severe_above: float) -> RankScores:
+def scores_of_rows(rows: list[tuple[float, ...]], margin: float = float("nan"),
+                   severe_above: float = float("nan")) -> RankScores:
+    """The measures of a model's rows (:func:`decision_rows`): shares above ``margin`` and
+    ``severe_above`` [value units] of its losses."""
     top1, near, pct, loss, tied, constant = (np.array(c, dtype=float) for c in zip(*rows))
     has_loss = not np.isnan(loss).any()
     losses = loss if has_loss else np.zeros(0)

@@ -103,3 +103,23 @@ def test_incomplete_or_misshapen_templates_are_rejected():
     other = FeatureConfig(template_resolution=0.002)
     with pytest.raises(FootfallError, match="different feature configurations"):
         merge_libraries([analytic, analytic_templates(other)[0]])
+
+
+def test_families_with_the_same_library_share_their_columns_once_per_candidate_set():
+    from footfall.features.family import Candidates
+    from footfall.features.templates import TemplateFeatures
+
+    library, _ = analytic_templates(CONFIG)
+    a = TemplateFeatures(CONFIG, library).with_rms((0.004,) * 3)
+    b = TemplateFeatures(CONFIG, TemplateLibrary(CONFIG, tuple(t.copy() for t in library.templates),
+                                                 library.sources)).with_rms((0.004,) * 3)
+    other_rms = TemplateFeatures(CONFIG, library).with_rms((0.006,) * 3)
+    fewer = TemplateFeatures(CONFIG, library.subset(tuple(np.arange(2) for _ in library.templates))
+                             ).with_rms((0.004,) * 3)
+    assert TemplateFeatures(CONFIG).memo_key() is None  # not fitted: nothing to share
+    assert a.memo_key() == b.memo_key()  # equal contents, other arrays
+    assert len({a.memo_key(), other_rms.memo_key(), fewer.memo_key()}) == 3
+    c = Candidates(_bumpy_map(), np.array([[0.1, 0.0, 0.1], [0.2, 0.02, 0.1]]), 0.0, False, CONFIG)
+    assert c.columns(a) is c.columns(b)  # computed once, shared
+    np.testing.assert_array_equal(c.columns(other_rms), other_rms.compute(c))
+    assert c.columns(other_rms) is not c.columns(a)

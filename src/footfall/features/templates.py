@@ -18,6 +18,7 @@ neither zeroes nor NaNs the feature; a candidate whose coverage is below
 
 from __future__ import annotations
 
+import hashlib
 import os
 import re
 from collections.abc import Callable, Mapping, Sequence
@@ -366,6 +367,21 @@ class TemplateFeatures(FeatureFamily):
 
     def compute(self, c: Candidates) -> np.ndarray:
         return self._fitted().features(c.patches.relative, self.bandwidths)
+
+    def memo_key(self) -> tuple | None:
+        """The templates' contents and the bandwidths: two fitted families with the same
+        library (two models learned from the same draw) compute the same columns once per
+        candidate set. None until fitted."""
+        if self.library is None or not self.bandwidths:
+            return None
+        key = self.__dict__.get("_memo_key")
+        if key is None:  # hashed once per family: the templates do not change
+            digest = hashlib.sha1()
+            for t in self.library.templates:
+                digest.update(np.ascontiguousarray(t, dtype=np.float64).tobytes())
+            key = (self.name, digest.hexdigest(), self.bandwidths, repr(self.config.to_dict()))
+            object.__setattr__(self, "_memo_key", key)
+        return key
 
     def dense(self, scale: int, weights: np.ndarray, dtype: np.dtype) -> DenseTerms:
         library = self._fitted()

@@ -8,10 +8,14 @@ import numpy as np
 import pytest
 
 from cli_helpers import assert_user_error, run
+from footfall.control.footstep import FootstepConfig
 from footfall.core.errors import FootfallError
+from footfall.core.robot import LITTLEDOG
+from footfall.data.store import DemoStore
 from footfall.experiments.curve_report import FORMAT as CURVE_FORMAT
 from footfall.experiments.curve_report import compare_points, curve_table
 from footfall.experiments.learning_curve import CurveConfig, balanced_order, run_learning_curve
+from footfall.expert.terms import stance_target
 from footfall.terrain import make_board
 
 
@@ -97,6 +101,29 @@ def test_worker_processes_collect_and_learn_what_one_process_does(tmp_path):
                 np.load(tmp_path / "two" / "models" / name) as b:
             assert set(a.files) == set(b.files)
             assert all(np.array_equal(a[k], b[k]) for k in a.files if k != "meta")
+
+
+def test_a_curve_on_the_walking_planners_f_holds_only_footholds_near_the_gait_nominal_one(
+        tmp_path):
+    config = CurveConfig(**{**vars(TINY), "search_radius": 0.03})
+    summary = run_learning_curve(tmp_path, config, log=lambda _: None)
+    assert summary["config"]["search_radius"] == 0.03
+    assert "within 3 cm of the gait-nominal foothold" in (tmp_path / "report.md").read_text()
+    lead = FootstepConfig().lead  # the walking expert's stance lead
+    for name in ("test.sqlite", "draw0.sqlite"):
+        with DemoStore(tmp_path / name) as store:
+            demos = store.demonstrations()
+        assert demos
+        for d in demos:
+            target = stance_target(d.state, LITTLEDOG, lead)
+            assert np.hypot(*(d.candidates[:, :2] - target).T).max() <= 0.03 + 1e-9
+
+    stored = json.loads((tmp_path / "results.json").read_text())
+    del stored["config"]["search_radius"]  # a curve written before the setting existed: read
+    (tmp_path / "old").mkdir()  # as its default (every reachable foothold), not this curve's
+    (tmp_path / "old" / "results.json").write_text(json.dumps(stored))
+    with pytest.raises(FootfallError, match="other settings .search_radius"):
+        run_learning_curve(tmp_path / "old", config, log=lambda _: None)
 
 
 @pytest.mark.parametrize("args, match", [

@@ -99,6 +99,30 @@ def test_candidates_are_the_reachable_footholds_with_valid_features(board, walk)
         assert d.candidates.tobytes() == expected.tobytes()
 
 
+def test_a_search_radius_keeps_the_footholds_near_the_gait_nominal_one_as_the_planner_does(
+        board, walk):
+    from dataclasses import replace
+
+    from footfall.expert.terms import stance_target
+
+    near = walk_demonstrations(board, ProgressExpert(), np.random.default_rng(3), 8,
+                               options=replace(FAST, search_radius=0.03, lead=0.01))
+    assert [d.swing_leg for d in near] == [d.swing_leg for d in walk]
+    for d in near:
+        full = reachable_footholds(board, d.state, LITTLEDOG, SPACING, FeatureConfig())
+        target = stance_target(d.state, LITTLEDOG, 0.01)
+        inside = np.hypot(*(full[:, :2] - target).T) <= 0.03
+        assert 2 <= d.n_candidates == inside.sum() < full.shape[0]  # F: exactly those near
+        assert d.candidates.tobytes() == full[inside].tobytes()
+    leg = LITTLEDOG.leg(near[0].swing_leg)  # the target: the default stance, lead ahead
+    expected = near[0].state.body_position[:2] + np.array(
+        [leg.hip[0] + 0.01, leg.side * LITTLEDOG.nominal_foot_y])
+    np.testing.assert_allclose(stance_target(near[0].state, LITTLEDOG, 0.01), expected,
+                               atol=1e-12)
+    with pytest.raises(FootfallError, match="search_radius"):
+        collect_demonstrations([board], ProgressExpert(), 4, seed=0, search_radius=-0.01)
+
+
 def test_walk_is_deterministic_for_a_seed(board):
     def signature(seed):
         demos = walk_demonstrations(board, ProgressExpert(noise=0.05), np.random.default_rng(seed),

@@ -65,6 +65,10 @@ def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
 @click.option("--seed", type=SEED, default=0, show_default=True)
 @click.option("--quick", is_flag=True, help="A small curve (two sizes, two draws) for a smoke "
                                             "test.")
+@click.option("--search-radius", type=click.FloatRange(min=0, min_open=True), default=None,
+              metavar="METRES", help="The decisions' F, trained on and held out: the reachable "
+              "footholds within this of the gait-nominal foothold, as the walking planner's "
+              "(the reproduction walks with 0.03) [default: every reachable foothold].")
 @click.option("--processes", type=click.IntRange(1, 1024), default=None,
               help="Worker processes that collect the draws and learn each size's models "
                    "(the same models as one) [default: the available cores].")
@@ -73,7 +77,8 @@ def learning_curve(out: str, sizes: str | None, draws: int | None,
                    feature_sets: tuple[str, ...], learners: tuple[str, ...],
                    test_decisions: int | None, folds: str | None, selection: str | None,
                    template_budget: float | str | None, library_size: int | None, seed: int,
-                   quick: bool, processes: int | None, as_json: bool) -> None:
+                   quick: bool, search_radius: float | None, processes: int | None,
+                   as_json: bool) -> None:
     """Learning curves: each feature set and learner from 25 to 1 600 demonstrations, on
     held-out decisions, with the hand-tuned and expert lines."""
     config = CurveConfig.quick(seed) if quick else CurveConfig(seed=seed)
@@ -82,7 +87,8 @@ def learning_curve(out: str, sizes: str | None, draws: int | None,
         changes["sizes"] = _sizes_option(sizes)
     for key, value in (("draws", draws), ("test_decisions", test_decisions), ("folds", folds),
                        ("selection", selection), ("library_size", library_size),
-                       ("feature_sets", feature_sets or None), ("learners", learners or None)):
+                       ("feature_sets", feature_sets or None), ("learners", learners or None),
+                       ("search_radius", search_radius)):
         if value is not None:
             changes[key] = value
     if template_budget is not None:

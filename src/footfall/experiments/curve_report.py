@@ -104,7 +104,10 @@ def curve_report(summary: dict) -> str:
            f"(kinds {', '.join(cfg['train_kinds'])}, difficulties "
            f"{', '.join(map(str, cfg['test_difficulties']))}); {cfg['draws']} draws of training "
            f"boards and demonstrations per point; folds by {cfg['folds']}; template library "
-           f"{cfg['library_size']}. Settings in `results.json`.", "",
+           f"{cfg['library_size']}; F: " + (
+               "every reachable foothold" if cfg.get("search_radius") is None else
+               f"the reachable footholds within {cfg['search_radius'] * 100:g} cm of the "
+               f"gait-nominal foothold") + ". Settings in `results.json`.", "",
            f"Above margin: the share of decisions whose expert shortfall is above "
            f"{DEFAULT_MARGIN:g} value unit (1 cm of progress); severe: above "
            f"{SEVERE_SHORTFALL:g}.", "",

@@ -129,6 +129,11 @@ class CurveConfig(Params):
         None, unit="-", range=above(0),
         doc="a leg group's function reads at most this share of its demonstrations' number "
             "of templates; None: no budget")
+    search_radius: float | None = param(
+        None, unit="m", range=above(0),
+        doc="the decisions' F, trained on and held out: the reachable footholds within this of "
+            "the gait-nominal foothold, as the walking planner's F (the reproduction's walk: "
+            "0.03); None: every reachable foothold")
     seed: int = param(0, range=at_least(0), doc="the curve's seed: boards, demonstrations and "
                                                 "learning draw from its named streams")
 
@@ -173,9 +178,10 @@ def _expert() -> SyntheticExpert:
 
 
 def _stored_demos(path: Path, specs: list[tuple[str, float, int]], n: int, seed: int,
-                  source: str, expert: SyntheticExpert, log: Callable[[str], None]
-                  ) -> tuple[list[Demonstration], dict]:
-    """The expert's ``n`` demonstrations on the boards ``specs``, from the store at ``path``
+                  source: str, expert: SyntheticExpert, log: Callable[[str], None],
+                  search_radius: float | None) -> tuple[list[Demonstration], dict]:
+    """The expert's ``n`` demonstrations on the boards ``specs``, F within ``search_radius``
+    [m] of the gait-nominal foothold (None: all reachable), from the store at ``path``
     (collected into it the first time: a rerun reads them back)."""
     boards = [make_board([(kind, d)], s) for kind, d, s in specs]
     maps = {b.content_hash(): b for b in boards}
@@ -183,8 +189,9 @@ def _stored_demos(path: Path, specs: list[tuple[str, float, int]], n: int, seed:
         demos = store.demonstrations(source_prefix=source)
         if not demos:
             log(f"collecting {n} demonstrations on {len(boards)} boards ({path.name})")
-            store.add_demonstrations(collect_demonstrations(boards, expert, n, seed=seed,
-                                                            source=source), terrains=boards)
+            store.add_demonstrations(collect_demonstrations(
+                boards, expert, n, seed=seed, source=source, search_radius=search_radius,
+                lead=expert.config.stance_lead), terrains=boards)
             demos = store.demonstrations(source_prefix=source)
     if {d.terrain_hash for d in demos} - set(maps):
         raise FootfallError(f"{path} holds demonstrations of other boards; use another --out")
@@ -218,6 +225,9 @@ def _resumed(results_path: Path, config: CurveConfig) -> tuple[list[dict], dict 
                             f"again") from None
     new = json.loads(json.dumps(config.to_dict()))
     was = old.get("config") if isinstance(old.get("config"), dict) else {}
+    # a setting added since the file was written has its default there: every new setting's
+    # default measures what the curve measured before it existed
+    was = {**json.loads(json.dumps(CurveConfig().to_dict())), **was}
     differ = sorted(k for k in set(new) | set(was) if k not in new or k not in was
                     or (k not in EXTENSIBLE and was[k] != new[k]))
     if old.get("format") != FORMAT or differ:
@@ -244,7 +254,7 @@ def _held_out(out: Path, config: CurveConfig, expert: SyntheticExpert,
               log: Callable[[str], None]) -> _HeldOut:
     test, maps = _stored_demos(out / "test.sqlite", config.test_boards(),
                                config.test_decisions, config.streams.seed_for("demonstrations", 1),
-                               "walker:test", expert, log)
+                               "walker:test", expert, log, config.search_radius)
     if len(test) < config.test_decisions:
         raise FootfallError(f"the test boards gave {len(test)} decisions, fewer than "
                             f"{config.test_decisions}")
@@ -278,7 +288,7 @@ def _draw_training(out: Path, config: CurveConfig, draw: int, expert: SyntheticE
     demos, maps = _stored_demos(out / f"draw{draw}.sqlite", config.training_boards(draw),
                                 math.ceil(COLLECT_MORE * max(config.sizes)),
                                 config.streams.seed_for("demonstrations", 0, draw),
-                                f"walker:draw{draw}", expert, log)
+                                f"walker:draw{draw}", expert, log, config.search_radius)
     front = np.array([LITTLEDOG.leg(d.state.swing_leg).front for d in demos])
     order = balanced_order(front, config.streams.generator("demonstrations", 2, draw))
     return [TrainingDemo.of(demos[k], maps[demos[k].terrain_hash]) for k in order]

@@ -116,7 +116,8 @@ def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, s
                            robot: RobotDescription = LITTLEDOG, spacing: float = DEFAULT_SPACING,
                            config: FeatureConfig | None = None, source: str = "walker",
                            progress: Callable[[Demonstration], None] | None = None,
-                           max_rounds: int = MAX_PATH_ROUNDS) -> list[Demonstration]:
+                           max_rounds: int = MAX_PATH_ROUNDS, search_radius: float | None = None,
+                           lead: float = 0.0) -> list[Demonstration]:
     """About ``n`` demonstrations spread evenly over terrains and lateral paths.
 
     In round r every terrain is walked along each path of
@@ -153,6 +154,10 @@ def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, s
         As for :func:`walk_demonstrations`.
     max_rounds : int
         Most rounds of lateral paths (>= 1).
+    search_radius, lead : float
+        F within ``search_radius`` [m] of the gait-nominal foothold ``lead`` [m] ahead of the
+        default stance, as the walking planner's F (:class:`WalkOptions`); None: every
+        reachable foothold.
 
     Returns
     -------
@@ -160,6 +165,10 @@ def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, s
         At most ``n``, in walking order.
     """
     n = check_count(n, "the number of demonstrations", minimum=1)
+    if search_radius is not None and not (isinstance(search_radius, numbers.Real)
+                                          and math.isfinite(search_radius) and search_radius > 0):
+        raise FootfallError(f"search_radius must be a positive number of metres or None, "
+                            f"got {search_radius!r}")
     if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
         raise FootfallError(f"seed must be a non-negative integer, got {seed!r}")
     unique: dict[str, HeightMap] = {}
@@ -168,7 +177,7 @@ def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, s
     terrains = list(unique.values())
     if not terrains:
         raise FootfallError("collecting demonstrations needs at least one terrain")
-    options = WalkOptions(stride, robot, spacing, config, source)
+    options = WalkOptions(stride, robot, spacing, config, source, search_radius, lead)
     info = expert_settings(expert)
     out: list[Demonstration] = []
     for round_ in range(max_rounds):

@@ -152,6 +152,15 @@ def leg_terms(hmap: HeightMap, state: RobotState, f: np.ndarray, seat: np.ndarra
             "joint_margin": joint_margin}
 
 
+def stance_target(state: RobotState, robot: RobotDescription, lead: float) -> np.ndarray:
+    """The swing leg's gait-nominal foothold (2,) [m]: its default stance around the body,
+    moved ``lead`` [m] ahead along the body's heading."""
+    c, sn = math.cos(state.yaw), math.sin(state.yaw)
+    nominal = np.asarray(robot.nominal_foot(state.swing_leg)[:2]) + (lead, 0.0)
+    return np.asarray(state.body_position[:2]) + np.array(
+        [c * nominal[0] - sn * nominal[1], sn * nominal[0] + c * nominal[1]])
+
+
 def pose_terms(state: RobotState, f: np.ndarray, cfg: ExpertConfig, robot: RobotDescription
                 ) -> dict[str, np.ndarray]:
     """Progress toward the goal, offset from the gait-nominal stance, and the stability margin."""
@@ -163,10 +172,7 @@ def pose_terms(state: RobotState, f: np.ndarray, cfg: ExpertConfig, robot: Robot
     dist = np.linalg.norm(to_goal)
     goal_dir = to_goal / dist if dist > 1e-9 else np.array([np.cos(state.yaw), np.sin(state.yaw)])
     progress = (xy - state.feet[s, :2]) @ goal_dir
-    c, sn = math.cos(state.yaw), math.sin(state.yaw)
-    nominal = np.asarray(robot.nominal_foot(state.swing_leg)[:2]) + (cfg.stance_lead, 0.0)
-    target = body_xy + np.array([c * nominal[0] - sn * nominal[1], sn * nominal[0] + c * nominal[1]])
-    stance_offset = np.linalg.norm(xy - target, axis=1)
+    stance_offset = np.linalg.norm(xy - stance_target(state, robot, cfg.stance_lead), axis=1)
     after = np.broadcast_to(state.feet[:, :2], (n, 4, 2)).copy()
     after[:, s] = xy
     order = list(robot.gait_order)

@@ -23,6 +23,7 @@ from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG, RobotDescr
 from footfall.core.state import RobotState, nominal_state
 from footfall.data.store import Demonstration
 from footfall.expert.protocol import Expert, expert_settings
+from footfall.expert.terms import stance_target
 from footfall.features.candidates import DEFAULT_SPACING, reachable_footholds
 from footfall.features.config import FeatureConfig
 
@@ -52,6 +53,10 @@ class WalkOptions:
     config: FeatureConfig | None = None  # candidates need enough data for these feature
     # patches; None: FeatureConfig(), so every candidate has valid features
     source: str = "walker"  # the source recorded with each demonstration
+    search_radius: float | None = None  # [m] F: the reachable footholds within this of the
+    # swing leg's gait-nominal foothold (stance_target), as the walking planner's F, or every
+    # reachable one where fewer than two are that near; None: every reachable foothold
+    lead: float = 0.0  # [m] how far ahead of the default stance the gait-nominal foothold lies
 
 
 @dataclass(frozen=True)
@@ -225,6 +230,11 @@ def _decide(hmap: HeightMap, expert: Expert, rng: np.random.Generator, state: Ro
     """The swing leg's candidates F (n, 3) [m] and the expert's choice among them; None where
     F has fewer than two (the walk stops)."""
     candidates = reachable_footholds(hmap, state, options.robot, options.spacing, config)
+    if options.search_radius is not None:
+        target = stance_target(state, options.robot, options.lead)
+        near = np.sum((candidates[:, :2] - target) ** 2, axis=1) <= options.search_radius ** 2
+        if np.count_nonzero(near) >= 2:
+            candidates = candidates[near]
     if candidates.shape[0] < 2:
         return None
     choice = expert.choose(hmap, state, candidates, rng)

@@ -148,16 +148,12 @@ def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, s
     rough_only : bool
         Record only footholds on a board's non-flat modules
         (:func:`rough_x_range`; boards without module metadata count whole).
-    stride, robot, spacing, config, source
-        As for :class:`WalkOptions`.
+    stride, robot, spacing, config, source, search_radius, lead
+        As for :class:`WalkOptions` (``search_radius`` [m]: F as the walking planner's).
     progress : callable, optional
         As for :func:`walk_demonstrations`.
     max_rounds : int
         Most rounds of lateral paths (>= 1).
-    search_radius, lead : float
-        F within ``search_radius`` [m] of the gait-nominal foothold ``lead`` [m] ahead of the
-        default stance, as the walking planner's F (:class:`WalkOptions`); None: every
-        reachable foothold.
 
     Returns
     -------
@@ -165,10 +161,6 @@ def collect_demonstrations(hmaps: Sequence[HeightMap], expert: Expert, n: int, s
         At most ``n``, in walking order.
     """
     n = check_count(n, "the number of demonstrations", minimum=1)
-    if search_radius is not None and not (isinstance(search_radius, numbers.Real)
-                                          and math.isfinite(search_radius) and search_radius > 0):
-        raise FootfallError(f"search_radius must be a positive number of metres or None, "
-                            f"got {search_radius!r}")
     if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
         raise FootfallError(f"seed must be a non-negative integer, got {seed!r}")
     unique: dict[str, HeightMap] = {}

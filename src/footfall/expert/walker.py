@@ -58,6 +58,14 @@ class WalkOptions:
     # reachable one where fewer than two are that near; None: every reachable foothold
     lead: float = 0.0  # [m] how far ahead of the default stance the gait-nominal foothold lies
 
+    def __post_init__(self) -> None:
+        r = self.search_radius
+        if r is not None and not (isinstance(r, numbers.Real) and math.isfinite(r) and r > 0):
+            raise FootfallError(f"search_radius must be a positive number of metres or None, "
+                                f"got {r!r}")
+        if not (isinstance(self.lead, numbers.Real) and math.isfinite(self.lead)):
+            raise FootfallError(f"lead must be a finite number of metres, got {self.lead!r}")
+
 
 @dataclass(frozen=True)
 class WalkPath:

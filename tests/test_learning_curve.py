@@ -85,6 +85,14 @@ def test_a_small_curve_is_measured_written_and_resumed(tmp_path):
     assert [p["n"] for p in more["points"]] == [10, 12] and more["points"][0] == point
     assert sum("learned" in line for line in logs) == 1
 
+    stored = json.loads((tmp_path / "results.json").read_text())  # written before a setting
+    del stored["config"]["search_radius"]  # existed: read as that setting's default
+    (tmp_path / "results.json").write_text(json.dumps(stored))
+    logs.clear()
+    run_learning_curve(tmp_path, CurveConfig(**{**vars(TINY), "sizes": (10, 12)}),
+                       log=logs.append)
+    assert "resuming: 2 points measured" in logs and not any("learned" in s for s in logs)
+
 
 def test_worker_processes_collect_and_learn_what_one_process_does(tmp_path):
     config = CurveConfig(**{**vars(TINY), "draws": 2})

@@ -15,7 +15,12 @@ from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
 from footfall.experiments.ablation import VARIANTS, AblationConfig, ablation_markdown, run_ablation
 from footfall.experiments.curve_report import compare_points, read_curve
-from footfall.experiments.curve_walk import CurveWalkConfig, run_curve_walk, walk_markdown
+from footfall.experiments.curve_walk import (
+    CurveWalkConfig,
+    report_name,
+    run_curve_walk,
+    walk_markdown,
+)
 from footfall.experiments.learning_curve import CurveConfig, run_learning_curve
 from footfall.experiments.offline import OfflineConfig, run_offline
 from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
@@ -168,7 +173,7 @@ def curve_walk(curve: str, sizes: str | None, feature_set: str, learner: str, wi
         summary = run_curve_walk(Path(curve), config, log=progress_log(as_json),
                                  executor=executor)
     emit(as_json, summary, walk_markdown(summary)
-         + f"wrote {Path(curve) / 'walk' / 'walk.md'} and walk.json")
+         + f"wrote {Path(curve) / 'walk' / report_name(config)}.md and .json")
 
 
 def _sizes_option(sizes: str) -> tuple[int, ...]:

@@ -134,7 +134,8 @@ def run_curve_walk(curve_out: str | Path, config: CurveWalkConfig | None = None,
                    processes: int | None = None, log: Callable[[str], None] = print,
                    executor: Executor | None = None) -> dict:
     """Walk (or resume) the points into ``CURVE/walk/``; return the summary (also
-    ``walk.json`` and ``walk.md`` there)."""
+    ``walk-FEATURES-LEARNER.json`` and ``.md`` there: one report per walked feature set and
+    learner, so walking another keeps the first's)."""
     config = CurveWalkConfig() if config is None else config
     curve_out = Path(curve_out)
     curve = read_curve(curve_out)
@@ -154,9 +155,15 @@ def run_curve_walk(curve_out: str | Path, config: CurveWalkConfig | None = None,
     log("the expert's verdict on every step of the runs")
     expert = SyntheticExpert(walking_expert(config.walk.footstep.lead))
     summary = summarise_walks(curve, config, methods, runs, maps, expert)
-    write_text_atomic(out / "walk.json", json.dumps(summary, indent=1, sort_keys=True))
-    write_text_atomic(out / "walk.md", walk_markdown(summary))
+    name = report_name(config)
+    write_text_atomic(out / f"{name}.json", json.dumps(summary, indent=1, sort_keys=True))
+    write_text_atomic(out / f"{name}.md", walk_markdown(summary))
     return summary
+
+
+def report_name(config: CurveWalkConfig) -> str:
+    """The stem of the walk's report files in ``CURVE/walk/``: its feature set and learner."""
+    return f"walk-{config.feature_set}-{config.learner}"
 
 
 # ------------------------------------------------------------------ results

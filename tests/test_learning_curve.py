@@ -166,6 +166,9 @@ def test_two_points_are_compared_decision_by_decision_over_their_shared_draws(tm
     assert r["p"] == pytest.approx(1.0)  # 2 against 1 separates nothing
     with pytest.raises(FootfallError, match="differ in seed"):
         compare_points(curve, _curve([], seed=1), 100, ("both", "l1"), ("both", "l1"))
+    with pytest.raises(FootfallError, match="differ in search_radius"):  # other decisions
+        compare_points(curve, _curve([], search_radius=0.03), 100, ("both", "l1"),
+                       ("both", "l1"))
     with pytest.raises(FootfallError, match="no point both/svm at 100"):
         compare_points(curve, curve, 100, ("both", "l1"), ("both", "svm"))
 

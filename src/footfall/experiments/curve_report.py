@@ -18,7 +18,8 @@ LINES = ("hand-tuned", "expert")  # the scorers measured once, as horizontal lin
 
 
 PAIRED_KEYS = ("train_kinds", "train_difficulties", "test_difficulties", "test_decisions",
-               "seed")  # settings two curves share when their points are paired
+               "search_radius", "seed")  # settings two curves share when their points are
+# paired (a setting a results file predates is its default, None)
 
 
 def read_curve(out: Path) -> dict:
@@ -45,7 +46,7 @@ def compare_points(a: dict, b: dict, n: int, a_point: tuple[str, str],
     draw-decision pairs.
     """
     for key in PAIRED_KEYS:
-        if a["config"][key] != b["config"][key]:
+        if a["config"].get(key) != b["config"].get(key):
             raise FootfallError(f"the curves differ in {key}: their points are not paired")
 
     def find(summary: dict, point: tuple[str, str]) -> dict[int, np.ndarray]:

@@ -345,13 +345,14 @@ def _measure_in_worker(out: Path, config: CurveConfig, keys: list[tuple], start:
                          held.values[start:stop])
 
 
-def _measure(held_out: _HeldOut, out: Path, config: CurveConfig, keys: list[tuple],
+def _measure(held_out: _HeldOut, out: Path, config: CurveConfig, models: dict[tuple, FootholdModel],
              pool: ProcessPoolExecutor | None, processes: int) -> dict[tuple, RankScores]:
-    """rank-eval's measures of the saved models of ``keys`` on the held-out decisions: in this
-    process, or the decisions in ``processes`` slices, one a worker (the same figures)."""
+    """rank-eval's measures of ``models`` (saved points, by key) on the held-out decisions: in
+    this process, or the decisions in ``processes`` slices, one a worker reading the saved
+    models (the same figures)."""
     if pool is None:
-        models = {k: FootholdModel.load(point_model_path(out, *k)) for k in keys}
         return held_out.measure(models)
+    keys = list(models)
     cuts = np.linspace(0, len(held_out.decisions), processes + 1).round().astype(int)
     parts = [pool.submit(_measure_in_worker, out, config, keys, int(a), int(b))
              for a, b in zip(cuts[:-1], cuts[1:]) if b > a]
@@ -484,8 +485,8 @@ def run_learning_curve(out: Path, config: CurveConfig | None = None,
                         training, pool, log)
             log(f"  {n} demonstrations: measuring {len(todo)} models on "
                 f"{len(held_out.decisions)} decisions")
-            scores = _measure(held_out, out, config, todo, pool, processes)
-            points.extend(_model_point(k, FootholdModel.load(point_model_path(out, *k)),
-                                       scores[k]) for k in todo)
+            models = {k: FootholdModel.load(point_model_path(out, *k)) for k in todo}
+            scores = _measure(held_out, out, config, models, pool, processes)
+            points.extend(_model_point(k, m, scores[k]) for k, m in models.items())
             save()
     return save(time.perf_counter() - started)

@@ -3,6 +3,7 @@ every prefix of a draw's demonstrations holds both leg groups, and a small curve
 written and resumed."""
 
 import json
+import shutil
 
 import numpy as np
 import pytest
@@ -11,11 +12,14 @@ from cli_helpers import assert_user_error, run
 from footfall.control.footstep import FootstepConfig
 from footfall.core.errors import FootfallError
 from footfall.core.robot import LITTLEDOG
+from footfall.core.state import stance_target
 from footfall.data.store import DemoStore
 from footfall.experiments.curve_report import FORMAT as CURVE_FORMAT
 from footfall.experiments.curve_report import compare_points, curve_table
 from footfall.experiments.learning_curve import CurveConfig, balanced_order, run_learning_curve
-from footfall.expert.terms import stance_target
+from footfall.expert.synthetic import SyntheticExpert, walking_expert
+from footfall.features.reward import default_reward
+from footfall.learning.evaluation import EveryLeg, PathBias, rank_scores
 from footfall.terrain import make_board
 
 
@@ -132,6 +136,33 @@ def test_a_curve_on_the_walking_planners_f_holds_only_footholds_near_the_gait_no
     (tmp_path / "old" / "results.json").write_text(json.dumps(stored))
     with pytest.raises(FootfallError, match="other settings .search_radius"):
         run_learning_curve(tmp_path / "old", config, log=lambda _: None)
+
+
+def test_a_curve_ranked_as_the_planner_picks_measures_the_same_models_with_the_path_bias(
+        tmp_path):
+    alone = run_learning_curve(tmp_path / "alone", TINY, log=lambda _: None)
+    (tmp_path / "biased" / "models").mkdir(parents=True)  # the same stores and models
+    for path in (tmp_path / "alone").glob("*.sqlite"):
+        shutil.copy(path, tmp_path / "biased" / path.name)
+    for path in (tmp_path / "alone" / "models").iterdir():
+        shutil.copy(path, tmp_path / "biased" / "models" / path.name)
+    logs = []
+    config = CurveConfig(**{**vars(TINY), "path_bias": 60.0})
+    biased = run_learning_curve(tmp_path / "biased", config, log=logs.append)
+    assert not any("learned" in line for line in logs)  # measured anew, not learned anew
+    assert biased["config"]["path_bias"] == 60.0
+    assert biased["lines"]["expert"]["reward_loss"] == 0.0  # the expert carries its own
+    assert biased["lines"]["hand-tuned"]["losses"] != alone["lines"]["hand-tuned"]["losses"]
+    with DemoStore(tmp_path / "alone" / "test.sqlite") as store:
+        demos = store.demonstrations()[:TINY.test_decisions]
+        maps = {d.terrain_hash: store.terrain(d.terrain_hash) for d in demos}
+    expert = SyntheticExpert(walking_expert(FootstepConfig().lead))
+    hand = rank_scores(EveryLeg(default_reward()), demos, maps.__getitem__, expert,
+                       margin=1.0, path_bias=PathBias(60.0, FootstepConfig().lead))
+    assert biased["lines"]["hand-tuned"]["losses"] == pytest.approx(list(hand.losses))
+    assert "as the footstep planner picks" in (tmp_path / "biased" / "report.md").read_text()
+    with pytest.raises(FootfallError, match="differ in path_bias"):
+        compare_points(alone, biased, 10, ("terrain", "l1"), ("terrain", "l1"))
 
 
 @pytest.mark.parametrize("args, match", [

@@ -5,19 +5,25 @@ import json
 import math
 from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from cli_helpers import assert_user_error, run
 from footfall.control.footstep import FootstepConfig
 from footfall.core.errors import FootfallError
+from footfall.core.robot import LITTLEDOG
+from footfall.core.state import stance_target
 from footfall.data.outcomes import OUTCOME_LABELS, step_outcomes
 from footfall.data.store import DemoStore
 from footfall.experiments.batch import walk_once
-from footfall.experiments.rank_eval import judging_expert, rank_eval
+from footfall.experiments.rank_eval import judging_expert, rank_eval, severe_by_term
 from footfall.expert.collect import collect_into_store
 from footfall.expert.scorer import judge_name
-from footfall.expert.synthetic import ExpertConfig, walking_expert
-from footfall.learning.train import learn_from_store
+from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
+from footfall.features.reward import default_reward
+from footfall.features.spread import path_bias_weight
+from footfall.learning.evaluation import EveryLeg
+from footfall.learning.train import learn_from_store, store_demonstrations
 from footfall.terrain.saving import save_board
 
 
@@ -101,6 +107,8 @@ def test_the_command_ranks_a_model_or_a_named_scorer_and_refuses_bad_use(store, 
     for args, message in [
             ([str(path)], "give MODEL.npz... STORE.sqlite"),
             (["--reward", "hand-tunde", str(path)], "unknown scorer 'hand-tunde'"),
+            (["--reward", "hand-tuned", "--path-bias", "-1", str(path)],
+             "Invalid value for '--path-bias'"),
             (["--reward", "expert", "--decisions", "runs", "--no-expert", str(path)],
              "run decisions are ranked against the expert's best")]:
         code, out, err = run(capsys, "rank-eval", *args)
@@ -120,3 +128,65 @@ def test_the_judge_is_the_expert_that_demonstrated_else_the_walking_expert(store
     assert judging_expert(None) == walking_expert(FootstepConfig().lead)
     other = replace(made_by, w_riser=50.0)
     assert rank_eval(None, path, reward="expert", expert_config=other).expert == judge_name(other)
+
+
+def test_a_path_bias_ranks_as_the_planner_picks(store):
+    """With the planner's path bias each scorer's values lose weight x spread ratio per metre
+    from the judge's gait-nominal foothold; the expert, which carries its own, loses none."""
+    path, _ = store
+    alone = rank_eval(None, path, reward="hand-tuned").scores
+    assert rank_eval(None, path, reward="hand-tuned", path_bias=0.0).scores.losses == alone.losses
+    # a bias far larger than any reward difference: every pick is the candidate nearest the
+    # gait-nominal foothold, and its loss is the expert's shortfall there
+    pulled = rank_eval(None, path, reward="hand-tuned", path_bias=1e9)
+    assert pulled.path_bias == 1e9 and pulled.as_dict()["path_bias"] == 1e9
+    demos, maps = store_demonstrations(path)
+    judge = judging_expert(demos)
+    expert = SyntheticExpert(judge, LITTLEDOG)
+    expected = []
+    for d in demos:
+        v = expert.values(maps[d.terrain_hash], d.state, d.candidates)
+        gap = np.hypot(*(d.candidates[:, :2] - stance_target(d.state, LITTLEDOG,
+                                                                judge.stance_lead)).T)
+        nearest = np.flatnonzero(gap == gap.min())
+        expected.append(v.max() - v[nearest].mean())
+    np.testing.assert_allclose(pulled.scores.losses, expected, atol=1e-9)
+    assert pulled.scores.losses != alone.losses
+    ceiling = rank_eval(None, path, reward="expert", path_bias=60.0).scores
+    assert ceiling.reward_loss == 0  # the expert walks and is ranked without the bias
+    with pytest.raises(FootfallError, match="path bias's weight must be a finite number >= 0"):
+        rank_eval(None, path, reward="hand-tuned", path_bias=-1.0)
+
+
+def test_the_path_bias_is_scaled_to_a_rewards_spread():
+    hand = default_reward()
+    assert path_bias_weight(hand, 60.0) == 60.0  # the hand-tuned reward: exactly, unscored
+    assert path_bias_weight(hand.scaled(2.0, name="twice"), 60.0) == pytest.approx(120.0)
+
+
+def test_severe_shortfalls_split_by_the_experts_terms_add_up_to_the_shortfall(store, capsys):
+    path, _ = store
+    demos, maps = store_demonstrations(path)
+    expert = SyntheticExpert(judging_expert(demos), LITTLEDOG)
+    values = [expert.values(maps[d.terrain_hash], d.state, d.candidates) for d in demos]
+    hand = rank_eval(None, path, reward="hand-tuned").scores
+    above = float(np.median(hand.losses))  # half the decisions, whatever this board gives
+    split = severe_by_term(EveryLeg(default_reward()), demos, maps, expert, values,
+                           hand.losses, above=above)
+    worse = [x for x in hand.losses if x > above]
+    assert split["decisions"] == len(worse) > 0 and split["above"] == above
+    # the terms add up to the value: their differences add up to the shortfall
+    assert split["shortfall"] == pytest.approx(sum(worse))
+    assert sum(split["terms"].values()) == pytest.approx(1.0)
+    assert set(split["terms"]) <= set(expert.contributions(maps[demos[0].terrain_hash],
+                                                           demos[0].state,
+                                                           demos[0].candidates[:1]))
+    asked = rank_eval(None, path, reward="hand-tuned", by_term=True)
+    assert asked.as_dict()["severe_terms"]["above"] == 10.0  # the severe threshold
+    assert rank_eval(None, path, reward="hand-tuned").severe_terms is None
+    with pytest.raises(FootfallError, match="needs the expert"):
+        rank_eval(None, path, reward="hand-tuned", by_term=True, with_expert=False)
+    code, out, _ = run(capsys, "rank-eval", "--reward", "hand-tuned", path, "--by-term",
+                       "--path-bias", "60")
+    assert code == 0 and "as the planner picks (path bias 60 /m)" in out
+    assert ("by the expert's term: " in out) == (asked.severe_terms["decisions"] > 0)

@@ -103,7 +103,7 @@ def test_a_search_radius_keeps_the_footholds_near_the_gait_nominal_one_as_the_pl
         board, walk):
     from dataclasses import replace
 
-    from footfall.expert.terms import stance_target
+    from footfall.core.state import stance_target
 
     near = walk_demonstrations(board, ProgressExpert(), np.random.default_rng(3), 8,
                                options=replace(FAST, search_radius=0.03, lead=0.01))

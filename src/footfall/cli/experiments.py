@@ -74,6 +74,10 @@ def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
               metavar="METRES", help="The decisions' F, trained on and held out: the reachable "
               "footholds within this of the gait-nominal foothold, as the walking planner's "
               "(the reproduction walks with 0.03) [default: every reachable foothold].")
+@click.option("--path-bias", type=click.FloatRange(min=0), default=None, metavar="REWARD/M",
+              help="Rank every scorer as the footstep planner picks: its values less this path "
+                   "bias per metre from the gait-nominal foothold, scaled to its spread (the "
+                   "reproduction walks 60) [default: each scorer alone].")
 @click.option("--processes", type=click.IntRange(1, 1024), default=None,
               help="Worker processes that collect the draws and learn each size's models "
                    "(the same models as one) [default: the available cores].")
@@ -82,8 +86,8 @@ def learning_curve(out: str, sizes: str | None, draws: int | None,
                    feature_sets: tuple[str, ...], learners: tuple[str, ...],
                    test_decisions: int | None, folds: str | None, selection: str | None,
                    template_budget: float | str | None, library_size: int | None, seed: int,
-                   quick: bool, search_radius: float | None, processes: int | None,
-                   as_json: bool) -> None:
+                   quick: bool, search_radius: float | None, path_bias: float | None,
+                   processes: int | None, as_json: bool) -> None:
     """Learning curves: each feature set and learner from 25 to 1 600 demonstrations, on
     held-out decisions, with the hand-tuned and expert lines."""
     config = CurveConfig.quick(seed) if quick else CurveConfig(seed=seed)
@@ -93,7 +97,7 @@ def learning_curve(out: str, sizes: str | None, draws: int | None,
     for key, value in (("draws", draws), ("test_decisions", test_decisions), ("folds", folds),
                        ("selection", selection), ("library_size", library_size),
                        ("feature_sets", feature_sets or None), ("learners", learners or None),
-                       ("search_radius", search_radius)):
+                       ("search_radius", search_radius), ("path_bias", path_bias)):
         if value is not None:
             changes[key] = value
     if template_budget is not None:

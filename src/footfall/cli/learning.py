@@ -137,10 +137,19 @@ def learn(store_path: str, feature_set: str, learner: str, library_size: int,
               help="Judge with these expert settings; default: the synthetic expert that made "
                    "the demonstrations, or the walking expert (run steps, mixed sources).")
 @click.option("--source", multiple=True, help=SOURCE_HELP)
+@click.option("--path-bias", type=Finite(min=0.0), default=None, metavar="REWARD/M",
+              help="Rank as the footstep planner picks: each scorer's values less this path "
+                   "bias per metre from the gait-nominal foothold, scaled to its spread (the "
+                   "reproduction walks 60; the expert carries its own) [default: the scorer "
+                   "alone].")
+@click.option("--by-term", is_flag=True,
+              help="Split each scorer's severe shortfalls by the expert's terms (slip margin, "
+                   "drop-off, leg clearance ...): what its worst picks lose.")
 @json_option
 def rank_eval_cmd(paths: tuple[str, ...], reward: str | None, decisions: str,
                   run_key: str | None, margin: float, no_expert: bool,
-                  expert_config: str | None, source: tuple[str, ...], as_json: bool) -> None:
+                  expert_config: str | None, source: tuple[str, ...], path_bias: float | None,
+                  by_term: bool, as_json: bool) -> None:
     """How a scorer ranks a store's decisions against the expert: top-1, within 1 cm,
     percentile, the expert's shortfall of its pick and the shares above the correction margin
     and the severe threshold. Several models (and --reward) are judged on the same decisions,
@@ -150,7 +159,8 @@ def rank_eval_cmd(paths: tuple[str, ...], reward: str | None, decisions: str,
     agreements = rank_eval_many(
         paths[:-1], paths[-1], reward=reward, with_expert=not no_expert, source=source or None,
         decisions=decisions, run_key=run_key, margin=margin,
-        expert_config=load_expert(expert_config) if expert_config else None)
+        expert_config=load_expert(expert_config) if expert_config else None,
+        path_bias=path_bias, by_term=by_term)
     data = ([a.as_dict() for a in agreements] if len(agreements) > 1
             else agreements[0].as_dict())
     emit(as_json, data, "\n".join(_agreement_text(a) for a in agreements))
@@ -167,8 +177,23 @@ def _agreement_text(agreement) -> str:
             f"(95 % CI {_number(s.reward_loss_ci[0])} to {_number(s.reward_loss_ci[1])}), "
             f"above the margin {_number(s.above_margin)}, severe {_number(s.severe)}"
             + ("" if agreement.expert is None else f"; judged by {agreement.expert}")
-            + _outcome_text(agreement.outcomes) + _degenerate_text(s)
+            + ("" if agreement.path_bias is None
+               else f"; as the planner picks (path bias {agreement.path_bias:g} /m)")
+            + _outcome_text(agreement.outcomes) + _terms_text(agreement.severe_terms)
+            + _degenerate_text(s)
             + _trained_here_text(agreement.trained_here))
+
+
+def _terms_text(split: dict | None) -> str:
+    """The severe shortfalls' split by the expert's terms (the terms of 1 % or more)."""
+    if split is None:
+        return ""
+    if not split["decisions"]:
+        return f"\n  no shortfall above {split['above']:g}"
+    parts = ", ".join(f"{t.replace('_', ' ')} {100 * v:.0f} %"
+                      for t, v in split["terms"].items() if abs(v) >= 0.01)
+    return (f"\n  its {split['decisions']} shortfalls above {split['above']:g} "
+            f"({split['shortfall']:.0f} value units) by the expert's term: {parts}")
 
 
 def _trained_here_text(terrains: int) -> str:

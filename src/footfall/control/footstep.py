@@ -32,9 +32,8 @@ from footfall.features.candidates import joint_margins, lattice, reachable_footh
 from footfall.features.dense import ScoreGrid
 from footfall.features.family import Candidates
 from footfall.features.footing import FrictionCheck
-from footfall.features.reward import default_reward
 from footfall.features.scorer import RewardFor
-from footfall.features.spread import reward_spread, spread_key
+from footfall.features.spread import path_bias_weight
 
 GRID_YAW = 0.0  # [rad] heading the planner's dense reward grids are computed for (+x)
 
@@ -223,17 +222,9 @@ class FootstepPlanner:
             hmap, config.spacing, robot, config.friction_safety, config.footing_margin)
 
     def _bias_weights(self) -> dict[str, float]:
-        """Path bias [reward/m] per leg: ``bias_weight`` scaled to each reward's spread.
-
-        A reward with the default's terrain and pose parts has the ratio 1 exactly, so its bias is ``bias_weight`` to the last
-        bit without scoring the reference module at all (a module made and
-        scored: ~0.5 s of CPU, once per process, that would only be divided
-        by itself); other rewards are scaled by their cached spreads.
-        """
-        default = default_reward(self.rewards_[LEG_NAMES[0]].config)
-        default_key = spread_key(default)
-        return {name: (self.config.bias_weight if spread_key(r) == default_key else
-                       self.config.bias_weight * (reward_spread(r) / reward_spread(default)))
+        """Path bias [reward/m] per leg: ``bias_weight`` scaled to each reward's spread
+        (:func:`~footfall.features.spread.path_bias_weight`)."""
+        return {name: path_bias_weight(r, self.config.bias_weight)
                 for name, r in self.rewards_.items()}
 
     # -------------------------------------------------------------- pieces

@@ -7,12 +7,13 @@ features need for progress.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from footfall.core.errors import FootfallError
-from footfall.core.robot import LEG_NAMES, LITTLEDOG
+from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,3 +105,12 @@ def feet_pitch(feet: np.ndarray, robot=None) -> float:
     f, h = feet[front].mean(axis=0), feet[~front].mean(axis=0)
     run = max(float(np.hypot(f[0] - h[0], f[1] - h[1])), 1e-6)
     return float(np.arctan2(h[2] - f[2], run))
+
+
+def stance_target(state: RobotState, robot: RobotDescription, lead: float) -> np.ndarray:
+    """The swing leg's gait-nominal foothold (2,) [m]: its default stance around the body,
+    moved ``lead`` [m] ahead along the body's heading."""
+    c, sn = math.cos(state.yaw), math.sin(state.yaw)
+    nominal = np.asarray(robot.nominal_foot(state.swing_leg)[:2]) + (lead, 0.0)
+    return np.asarray(state.body_position[:2]) + np.array(
+        [c * nominal[0] - sn * nominal[1], sn * nominal[0] + c * nominal[1]])

@@ -18,7 +18,7 @@ LINES = ("hand-tuned", "expert")  # the scorers measured once, as horizontal lin
 
 
 PAIRED_KEYS = ("train_kinds", "train_difficulties", "test_difficulties", "test_decisions",
-               "search_radius", "seed")  # settings two curves share when their points are
+               "search_radius", "path_bias", "seed")  # settings two curves share when their points are
 # paired (a setting a results file predates is its default, None)
 
 
@@ -108,7 +108,12 @@ def curve_report(summary: dict) -> str:
            f"{cfg['library_size']}; F: " + (
                "every reachable foothold" if cfg.get("search_radius") is None else
                f"the reachable footholds within {cfg['search_radius'] * 100:g} cm of the "
-               f"gait-nominal foothold") + ". Settings in `results.json`.", "",
+               f"gait-nominal foothold") + (
+               "" if cfg.get("path_bias") is None else
+               f"; every scorer ranked as the footstep planner picks: its values less a path "
+               f"bias of {cfg['path_bias']:g} hand-tuned reward units per metre from the "
+               f"gait-nominal foothold, scaled to its spread (the expert carries its own)")
+           + ". Settings in `results.json`.", "",
            f"Above margin: the share of decisions whose expert shortfall is above "
            f"{DEFAULT_MARGIN:g} value unit (1 cm of progress); severe: above "
            f"{SEVERE_SHORTFALL:g}.", "",

@@ -16,8 +16,11 @@ share of decisions whose expert shortfall is above the correction margin
 mean shortfall with a bootstrap interval, top-1 and within 1 cm, and the
 templates kept per scale. The hand-tuned reward and the expert's own value
 (the ceiling: no shortfall by construction) are measured on the same
-decisions as lines. Results are written after every point and a rerun with
-the same settings resumes where it stopped.
+decisions as lines. With ``path_bias`` set every scorer, the lines too, is
+ranked as the footstep planner picks (its values less the planner's path
+bias: :class:`~footfall.learning.evaluation.PathBias`) -- how the planner walks
+it. Results are written after every point and a rerun with the same settings
+resumes where it stopped.
 
 Every point's RBF bandwidths are fixed (``bandwidth_rms``, the reproduction's
 rounds' value) unless set to None: choosing them by cross-validation at every
@@ -42,127 +45,34 @@ from footfall.control.footstep import FootstepConfig
 from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
 from footfall.core.files import load_npz, save_npz
-from footfall.core.params import Params, above, at_least, param
 from footfall.core.robot import LITTLEDOG
-from footfall.core.seeds import SeedStreams
 from footfall.data.demonstration import Demonstration
 from footfall.data.store import DemoStore
 from footfall.expert.collect import collect_demonstrations
 from footfall.expert.corrections import DEFAULT_MARGIN, SEVERE_SHORTFALL
 from footfall.expert.scorer import ExpertScorer, settings_hash
 from footfall.expert.synthetic import SyntheticExpert, walking_expert
-from footfall.features.family import PAPER_FEATURE_SETS
 from footfall.features.reward import default_reward
 from footfall.learning.evaluation import (
     EveryLeg,
+    PathBias,
     RankScores,
     decision_rows,
     rank_scores_many,
     scores_of_rows,
 )
-from footfall.learning.learner import LEARNERS
 from footfall.learning.model import FootholdModel
-from footfall.learning.ranker import SELECTIONS
-from footfall.learning.train import FOLDS, TrainingDemo, learn_model
+from footfall.learning.train import TrainingDemo, learn_model
 from footfall.plots.curves import save_curve_figure
 from footfall.terrain import make_board
 
+from .curve_config import EXTENSIBLE, CurveConfig
 from .curve_report import FORMAT, curve_report, curve_table
-from .offline import _difficulties, _feature_sets, _kinds
 
 VALUES_FORMAT = "footfall.learning-curve.values"  # the expert's values of the held-out decisions
 VERSION = 1
 COLLECT_MORE = 1.25  # a draw collects this many times its largest size: the legs do not take
 # turns exactly, and each leg group's prefix must reach half of every size
-EXTENSIBLE = ("sizes", "draws", "feature_sets", "learners")  # settings a resumed curve may
-# change: they say which points to measure, not what a point means (its draw's demonstrations
-# are those its store holds)
-
-
-def _sizes(value: object) -> bool:
-    return isinstance(value, tuple) and len(value) > 0 and all(
-        isinstance(n, int) and not isinstance(n, bool) and n >= 5 for n in value) and \
-        list(value) == sorted(set(value))
-
-
-@dataclass(frozen=True)
-class CurveConfig(Params):
-    """What a learning curve measures; written next to its results (docs/configuration.md)."""
-
-    sizes: tuple[int, ...] = param((25, 50, 100, 200, 400, 800, 1600), check=_sizes,
-                                   must="increasing whole numbers >= 5",
-                                   doc="demonstrations learned from at each point")
-    draws: int = param(3, range=at_least(1), doc="independent draws of training boards and "
-                                                 "demonstrations per point")
-    feature_sets: tuple[str, ...] = param(
-        PAPER_FEATURE_SETS, check=_feature_sets, must="a tuple of feature sets",
-        doc="the feature sets learned")
-    learners: tuple[str, ...] = param(
-        ("l1", "kernel", "lambdarank"), check=lambda v: isinstance(v, tuple) and len(v) > 0
-        and all(learner in LEARNERS for learner in v), must="a tuple of registered learners",
-        doc="the learners compared")
-    train_kinds: tuple[str, ...] = param(("steps", "barrier", "slope", "rocky"), check=_kinds,
-                                         must="a non-empty tuple of terrain kinds",
-                                         doc="the kinds of every draw's training boards")
-    train_difficulties: tuple[float, ...] = param(
-        (0.3, 0.6, 0.9), unit="-", check=_difficulties, must="a tuple of numbers in [0, 1]",
-        doc="difficulties of the training boards (one board per kind and difficulty)")
-    test_difficulties: tuple[float, ...] = param(
-        (0.45, 0.75), unit="-", check=_difficulties, must="a tuple of numbers in [0, 1]",
-        doc="difficulties of the held-out test boards (the training kinds)")
-    test_decisions: int = param(1000, range=at_least(1),
-                                doc="held-out decisions every point is measured on")
-    library_size: int = param(1000, range=at_least(3),
-                              doc="templates in the library before selection")
-    bandwidth_rms: float | None = param(
-        0.004, unit="m", range=above(0), doc="RBF bandwidth of every scale, as an RMS height "
-        "difference, for every point (the reproduction's rounds' value); None: each learner "
-        "chooses them by cross-validation at each point (much slower)")
-    folds: str = param("demonstration", check=lambda v: v in FOLDS,
-                       must=f"one of {', '.join(FOLDS)}",
-                       doc="what a cross-validation fold never splits")
-    selection: str = param("min", choices=SELECTIONS,
-                           doc="where on its path a learner stops: at the smallest CV error "
-                               "(the reproduction's, paper §V) or the simplest within one "
-                               "standard error of it")
-    template_budget: float | None = param(
-        None, unit="-", range=above(0),
-        doc="a leg group's function reads at most this share of its demonstrations' number "
-            "of templates; None: no budget")
-    search_radius: float | None = param(
-        None, unit="m", range=above(0),
-        doc="the decisions' F, trained on and held out: the reachable footholds within this of "
-            "the gait-nominal foothold, as the walking planner's F (the reproduction's walk: "
-            "0.03); None: every reachable foothold")
-    seed: int = param(0, range=at_least(0), doc="the curve's seed: boards, demonstrations and "
-                                                "learning draw from its named streams")
-
-    @classmethod
-    def quick(cls, seed: int = 0) -> CurveConfig:
-        """A small curve for a smoke test: two sizes, two draws, small boards' worth."""
-        return cls(sizes=(16, 32), draws=2, feature_sets=("terrain", "templates"),
-                   learners=("l1", "lambdarank"), train_kinds=("rocky", "steps"),
-                   train_difficulties=(0.6,), test_difficulties=(0.6,), test_decisions=30,
-                   library_size=60, seed=seed)
-
-    @property
-    def streams(self) -> SeedStreams:
-        """The curve's named seed streams."""
-        return SeedStreams("learning curve", self.seed)
-
-    def training_boards(self, draw: int) -> list[tuple[str, float, int]]:
-        """(kind, difficulty, seed) of draw ``draw``'s training boards: a stream of their own."""
-        return [(k, d, self.streams.seed_for("boards", 0, draw, i, j))
-                for i, k in enumerate(self.train_kinds)
-                for j, d in enumerate(self.train_difficulties)]
-
-    def test_boards(self) -> list[tuple[str, float, int]]:
-        """(kind, difficulty, seed) of the held-out test boards, the same for every draw."""
-        return [(k, d, self.streams.seed_for("boards", 1, i, j))
-                for i, k in enumerate(self.train_kinds)
-                for j, d in enumerate(self.test_difficulties)]
-
-
 def _point(scores: RankScores, **extra) -> dict:
     """A point's figures: ``extra`` (the point's draw, n, feature set, learner ...), the
     rank-eval measures and the number of decisions as ``decisions``; the per-decision
@@ -243,11 +153,18 @@ class _HeldOut:
     decisions: list[Demonstration]
     terrain: Callable[[str], object]
     values: list[np.ndarray]
+    bias: PathBias | None = None  # ranked as the planner picks, or each scorer alone
 
     def measure(self, models: dict) -> dict[str, RankScores]:
         """rank-eval's measures of every model on the decisions (their patches made once)."""
         return rank_scores_many(models, self.decisions, self.terrain, values=self.values,
-                                margin=DEFAULT_MARGIN, severe_above=SEVERE_SHORTFALL)
+                                margin=DEFAULT_MARGIN, severe_above=SEVERE_SHORTFALL,
+                                path_bias=self.bias)
+
+    def rows(self, models: dict, start: int, stop: int) -> dict[str, list[tuple]]:
+        """The rows of decisions ``start:stop`` for ``models`` (a worker's slice)."""
+        return decision_rows(models, self.decisions[start:stop], self.terrain,
+                             self.values[start:stop], self.bias)
 
 
 def _held_out(out: Path, config: CurveConfig, expert: SyntheticExpert,
@@ -260,7 +177,9 @@ def _held_out(out: Path, config: CurveConfig, expert: SyntheticExpert,
                             f"{config.test_decisions}")
     test = test[:config.test_decisions]
     return _HeldOut(test, maps.__getitem__,
-                    _expert_values(out / "test-values.npz", test, maps, expert))
+                    _expert_values(out / "test-values.npz", test, maps, expert),
+                    None if config.path_bias is None else
+                    PathBias(config.path_bias, expert.config.stance_lead))
 
 
 def _expert_values(path: Path, decisions: list[Demonstration], maps: dict,
@@ -341,8 +260,7 @@ def _measure_in_worker(out: Path, config: CurveConfig, keys: list[tuple], start:
         _WORKER_HELD_OUT[str(out)] = _held_out(out, config, _expert(), lambda _: None)
     held = _WORKER_HELD_OUT[str(out)]
     models = {k: FootholdModel.load(point_model_path(out, *k)) for k in keys}
-    return decision_rows(models, held.decisions[start:stop], held.terrain,
-                         held.values[start:stop])
+    return held.rows(models, start, stop)
 
 
 def _measure(held_out: _HeldOut, out: Path, config: CurveConfig, models: dict[tuple, FootholdModel],

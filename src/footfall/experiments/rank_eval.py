@@ -35,7 +35,14 @@ from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_exp
 from footfall.features.scorer import SCORERS
 from footfall.features.scoring import score_footholds
 from footfall.features.templates import reproduced_on
-from footfall.learning.evaluation import EveryLeg, RankScores, expert_values, rank_scores
+from footfall.learning.evaluation import (
+    EveryLeg,
+    PathBias,
+    RankScores,
+    best_picks,
+    expert_values,
+    rank_scores,
+)
 from footfall.learning.model import FootholdModel
 from footfall.learning.train import store_demonstrations
 
@@ -56,13 +63,18 @@ class ModelAgreement:
     expert: str | None = None  # the judging expert's name (judge_name); None without one
     trained_here: int = 0  # the decisions' terrains its template libraries were drawn from:
     # more than 0, and the measure is not a held-out one (library_provenance)
+    path_bias: float | None = None  # [hand-tuned reward/m] ranked as the planner picks with this
+    # path bias; None: the scorer alone
+    severe_terms: dict | None = None  # its severe shortfalls split by the expert's terms
+    # (severe_by_term); None when not asked for
 
     def as_dict(self) -> dict[str, Any]:
         """Plain data for JSON: the scorer, the scores' keys, the outcome AUCs (run decisions;
         else null), the judging expert, then where the decisions came from."""
         return {"model": self.model, "feature_set": self.feature_set, "learner": self.learner,
                 **self.scores.as_dict(), "outcomes": self.outcomes, "expert": self.expert,
-                "decisions": self.decisions, "trained_here": self.trained_here}
+                "decisions": self.decisions, "trained_here": self.trained_here,
+                "path_bias": self.path_bias, "severe_terms": self.severe_terms}
 
 
 def library_provenance(model: FootholdModel, maps: Mapping[str, HeightMap], name: str) -> int:
@@ -115,7 +127,8 @@ def rank_eval(model_path: str | os.PathLike | None, store_path: str | os.PathLik
               reward: str | None = None, with_expert: bool = True,
               source: str | Sequence[str] | None = None, decisions: str = "demonstrations",
               run_key: str | None = None, margin: float = DEFAULT_MARGIN,
-              expert_config: ExpertConfig | None = None) -> ModelAgreement:
+              expert_config: ExpertConfig | None = None,
+              path_bias: float | None = None, by_term: bool = False) -> ModelAgreement:
     """Score the model at ``model_path`` -- or the named scorer ``reward`` -- on the store's
     decisions.
 
@@ -129,6 +142,8 @@ def rank_eval(model_path: str | os.PathLike | None, store_path: str | os.PathLik
     above its own, ``ReproduceConfig.margin``). The judging expert is
     ``expert_config``, or :func:`judging_expert` of the demonstrations (run
     decisions: the walking expert); the named scorer "expert" is its own value.
+    ``path_bias`` [hand-tuned reward/m] ranks as the footstep planner picks and ``by_term``
+    splits the severe shortfalls by the expert's terms (see :func:`rank_eval_many`).
 
     Raises
     ------
@@ -142,16 +157,23 @@ def rank_eval(model_path: str | os.PathLike | None, store_path: str | os.PathLik
     return rank_eval_many([] if model_path is None else [model_path], store_path,
                           reward=reward, with_expert=with_expert, source=source,
                           decisions=decisions, run_key=run_key, margin=margin,
-                          expert_config=expert_config)[0]
+                          expert_config=expert_config, path_bias=path_bias,
+                          by_term=by_term)[0]
 
 
 def rank_eval_many(model_paths: Sequence[str | os.PathLike], store_path: str | os.PathLike, *,
                    reward: str | None = None, with_expert: bool = True,
                    source: str | Sequence[str] | None = None, decisions: str = "demonstrations",
                    run_key: str | None = None, margin: float = DEFAULT_MARGIN,
-                   expert_config: ExpertConfig | None = None) -> list[ModelAgreement]:
+                   expert_config: ExpertConfig | None = None,
+                   path_bias: float | None = None, by_term: bool = False
+                   ) -> list[ModelAgreement]:
     """:func:`rank_eval` of several models (and the named scorer ``reward``, last, if given)
     on the same decisions: the store is read and the expert judges each decision once.
+    ``path_bias`` [hand-tuned reward/m]: rank as the footstep planner picks, each scorer's
+    values less this bias per metre from the judge's gait-nominal foothold
+    (:class:`~footfall.learning.evaluation.PathBias`); None: the scorer alone. ``by_term``:
+    each scorer's severe shortfalls split by the expert's terms (:func:`severe_by_term`).
 
     Raises
     ------
@@ -162,8 +184,12 @@ def rank_eval_many(model_paths: Sequence[str | os.PathLike], store_path: str | o
         raise FootfallError("give a model file or --reward NAME")
     if not (isinstance(margin, (int, float)) and math.isfinite(margin) and margin >= 0):
         raise FootfallError(f"the correction margin must be a number >= 0, got {margin!r}")
+    if path_bias is not None:  # checked before the store is read
+        PathBias(path_bias, 0.0)
     if decisions not in DECISIONS:
         raise FootfallError(f"decisions must be one of {', '.join(DECISIONS)}, got {decisions!r}")
+    if by_term and not with_expert:
+        raise FootfallError("the shortfall by the expert's terms needs the expert")
     if decisions == "runs" and not with_expert:
         raise FootfallError("run decisions are ranked against the expert's best: they need "
                             "the expert")
@@ -176,6 +202,7 @@ def rank_eval_many(model_paths: Sequence[str | os.PathLike], store_path: str | o
     if decisions == "demonstrations":
         demos, maps = store_demonstrations(store_path, source=source)
     judge = expert_config or judging_expert(demos if decisions == "demonstrations" else None)
+    bias = None if path_bias is None else PathBias(path_bias, judge.stance_lead)
     expert = SyntheticExpert(judge, LITTLEDOG) if with_expert else None
     if reward is not None:  # "expert" is the judging expert's own value: the ceiling
         scorers.append((EveryLeg(ExpertScorer(SyntheticExpert(judge, LITTLEDOG),
@@ -190,11 +217,44 @@ def rank_eval_many(model_paths: Sequence[str | os.PathLike], store_path: str | o
         here = (library_provenance(scorer, maps, name) if isinstance(scorer, FootholdModel)
                 else 0)
         scores = rank_scores(scorer, demos, maps.__getitem__, values=values,
-                             margin=float(margin), severe_above=SEVERE_SHORTFALL)
+                             margin=float(margin), severe_above=SEVERE_SHORTFALL,
+                             path_bias=bias)
         outcomes = (outcome_power(scorer, store_path, run_key) if decisions == "runs" else None)
+        terms = (severe_by_term(scorer, demos, maps, expert, values, scores.losses, bias)
+                 if by_term else None)
         out.append(ModelAgreement(name, feature_set, learner, scores, decisions, outcomes,
-                                  judge_name(judge) if with_expert else None, here))
+                                  judge_name(judge) if with_expert else None, here,
+                                  path_bias, terms))
     return out
+
+
+def severe_by_term(scorer, demos: Sequence, maps: Mapping[str, HeightMap],
+                   expert: SyntheticExpert, values: Sequence[np.ndarray],
+                   losses: Sequence[float], path_bias: PathBias | None = None,
+                   above: float = SEVERE_SHORTFALL) -> dict[str, Any]:
+    """What the scorer's severe picks lose, term by term of the expert's value.
+
+    For every decision whose shortfall ``losses[k]`` is above ``above`` [value units], the
+    expert's best candidate against the scorer's pick (the mean over its tied best) in each of
+    the expert's terms (:meth:`~footfall.expert.synthetic.SyntheticExpert.contributions`).
+    Returns the number of such decisions, their summed shortfall [value units] and each
+    term's share of it (the shares sum to 1; a term the pick is better in is negative),
+    largest first.
+    """
+    severe = [k for k, loss in enumerate(losses) if loss > above]
+    sub = [demos[k] for k in severe]
+    totals: dict[str, float] = {}
+    for k, d, picks in zip(severe, sub, best_picks(scorer, sub, maps.__getitem__, path_bias)):
+        best = int(np.argmax(values[k]))
+        parts = expert.contributions(maps[d.terrain_hash], d.state,
+                                     d.candidates[np.r_[best, picks]])
+        for term, v in parts.items():
+            totals[term] = totals.get(term, 0.0) + float(v[0] - np.mean(v[1:]))
+    whole = sum(totals.values())
+    shares = {t: v / whole for t, v in sorted(totals.items(), key=lambda kv: -kv[1])
+              if whole > 0}
+    return {"decisions": len(severe), "shortfall": whole, "above": float(above),
+            "terms": shares}
 
 
 def outcome_power(model, store_path: str | os.PathLike, run_key: str | None = None,

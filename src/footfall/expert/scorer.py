@@ -38,6 +38,7 @@ class ExpertScorer(FootholdScorer):
     expert: Expert  # values (hmap, state, candidates (n, 3) [m]) -> (n,), higher is better
     config: FeatureConfig = field(default_factory=FeatureConfig)  # patch coverage of validity
     name: str = "synthetic expert"
+    own_path_preference: bool = True  # its stance term: walked and ranked without a path bias
 
     @cached_property
     def _usable(self) -> LinearReward:

@@ -25,7 +25,7 @@ from footfall.core.kinematics import (
     world_to_body,
 )
 from footfall.core.robot import LEG_NAMES, RobotDescription
-from footfall.core.state import RobotState
+from footfall.core.state import RobotState, stance_target
 from footfall.expert.rays import RaySamples, no_data_share, ray_terms
 from footfall.expert.surface import board_sphere, sample_surface
 from footfall.features.pose_features import triangle_margins
@@ -150,15 +150,6 @@ def leg_terms(hmap: HeightMap, state: RobotState, f: np.ndarray, seat: np.ndarra
     leg_clearance = np.where(ok, np.minimum(gap, cfg.leg_clearance_cap), 0.0)
     return {"leg_clearance": leg_clearance, "reach_margin": reach_margin,
             "joint_margin": joint_margin}
-
-
-def stance_target(state: RobotState, robot: RobotDescription, lead: float) -> np.ndarray:
-    """The swing leg's gait-nominal foothold (2,) [m]: its default stance around the body,
-    moved ``lead`` [m] ahead along the body's heading."""
-    c, sn = math.cos(state.yaw), math.sin(state.yaw)
-    nominal = np.asarray(robot.nominal_foot(state.swing_leg)[:2]) + (lead, 0.0)
-    return np.asarray(state.body_position[:2]) + np.array(
-        [c * nominal[0] - sn * nominal[1], sn * nominal[0] + c * nominal[1]])
 
 
 def pose_terms(state: RobotState, f: np.ndarray, cfg: ExpertConfig, robot: RobotDescription

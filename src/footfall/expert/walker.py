@@ -20,10 +20,9 @@ import numpy as np
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG, RobotDescription
-from footfall.core.state import RobotState, nominal_state
+from footfall.core.state import RobotState, nominal_state, stance_target
 from footfall.data.store import Demonstration
 from footfall.expert.protocol import Expert, expert_settings
-from footfall.expert.terms import stance_target
 from footfall.features.candidates import DEFAULT_SPACING, reachable_footholds
 from footfall.features.config import FeatureConfig
 

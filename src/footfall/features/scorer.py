@@ -44,6 +44,8 @@ class FootholdScorer(ABC):
 
     name: str  # shown in run logs, reports and on the teaching page
     config: FeatureConfig  # the patch scales and resolution it reads (validity of a foothold)
+    own_path_preference: bool = False  # True: it values closeness to the path itself (the
+    # synthetic expert's stance term), so a planner walks it without its path bias
 
     # ------------------------------------------------------------ required
     @abstractmethod

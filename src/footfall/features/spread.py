@@ -18,6 +18,7 @@ from footfall.core.robot import LEG_NAMES
 from footfall.core.state import RobotState, nominal_state
 from footfall.features.candidates import reachable_footholds
 from footfall.features.family import Candidates
+from footfall.features.reward import default_reward
 from footfall.features.scorer import FootholdScorer
 from footfall.terrain import make_module
 
@@ -89,3 +90,18 @@ def reward_spread(reward: FootholdScorer) -> float:
             spread = math.hypot(spread, float(np.nanstd(state_part)))
         _SPREADS[key] = spread
     return _SPREADS[key]
+
+
+def path_bias_weight(reward: FootholdScorer, bias_weight: float) -> float:
+    """The footstep planner's path bias for ``reward`` [reward/m]: ``bias_weight`` [hand-tuned
+    reward/m] scaled by the reward's spread over the hand-tuned reward's.
+
+    A reward with the hand-tuned default's terrain and pose parts has the ratio 1 exactly, so
+    its bias is ``bias_weight`` to the last bit without scoring the reference module at all (a
+    module made and scored: ~0.5 s of CPU, once per process, that would only be divided by
+    itself); other rewards are scaled by their cached spreads.
+    """
+    default = default_reward(reward.config)
+    if spread_key(reward) == spread_key(default):
+        return float(bias_weight)
+    return float(bias_weight) * (reward_spread(reward) / reward_spread(default))

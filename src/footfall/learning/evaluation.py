@@ -25,23 +25,58 @@ Any scorer is measured the same way: a learned model (one scorer per leg
 group), the hand-tuned reward or the expert's own value (the ceiling; its
 loss is zero by construction) -- :class:`EveryLeg` gives a single scorer a
 model's shape.
+
+**As the planner picks.** The footstep planner never walks with a scorer alone: it adds a
+path bias, ``bias_weight`` per metre from the swing leg's gait-nominal foothold, scaled to
+the scorer's spread (:func:`~footfall.features.spread.path_bias_weight`; the hand-tuned
+reward, which has no pose features, leaves the pull toward the path to it). With a
+:class:`PathBias` every scorer is ranked as the planner's first step would rank it: its
+values less that bias (the look-ahead and the pose finder's short list aside).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 
 from footfall.core.errors import FootfallError
 from footfall.core.robot import LITTLEDOG, RobotDescription
+from footfall.core.state import stance_target
 from footfall.core.stats import bootstrap_ci
 from footfall.features.family import Candidates
 from footfall.features.scorer import FootholdScorer
+from footfall.features.spread import path_bias_weight
 
 NEAR = 0.01  # [m] a pick this close (horizontally) to the expert's choice counts as "near"
+
+
+@dataclass(frozen=True)
+class PathBias:
+    """The footstep planner's pull toward the path, added when a decision is ranked as the
+    planner would pick: a candidate loses ``weight`` (scaled to the scorer's spread) per metre
+    it lies from the swing leg's gait-nominal foothold, ``lead`` ahead of its default stance."""
+
+    weight: float  # [hand-tuned reward/m] the planner's bias_weight (the reproduction walks 60)
+    lead: float  # [m] how far ahead of the default stance the gait-nominal foothold lies
+
+    def __post_init__(self) -> None:
+        for name in ("weight", "lead"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+                raise FootfallError(f"the path bias's {name} must be a finite number >= 0, "
+                                    f"got {v!r}")
+
+    def values(self, scorer: FootholdScorer, state, candidates: np.ndarray,
+               robot: RobotDescription) -> np.ndarray:
+        """The bias (n,) [the scorer's reward units] each candidate (n, 3) [m] loses (none for a
+        scorer with its own path preference: the expert walks without the bias)."""
+        if scorer.own_path_preference:
+            return np.zeros(candidates.shape[0])
+        target = stance_target(state, robot, self.lead)
+        return path_bias_weight(scorer, self.weight) * np.hypot(*(candidates[:, :2] - target).T)
 
 
 @dataclass(frozen=True)
@@ -103,7 +138,8 @@ class EveryLeg:
 
 def rank_scores(model, demos: Sequence, terrain: Callable[[str], object],
                 expert=None, values: Sequence[np.ndarray] | None = None, *,
-                margin: float = float("nan"), severe_above: float = float("nan")) -> RankScores:
+                margin: float = float("nan"), severe_above: float = float("nan"),
+                path_bias: PathBias | None = None) -> RankScores:
     """Score ``model`` on demonstrations; ``terrain(hash)`` returns each map.
 
     ``model`` is anything with ``reward_for(leg)`` (a scorer per leg),
@@ -112,16 +148,17 @@ def rank_scores(model, demos: Sequence, terrain: Callable[[str], object],
     The reward loss uses the expert's ``values`` of each demonstration's
     candidates (computed with ``expert`` when not given; NaN without either);
     ``above_margin`` and ``severe`` count the losses above ``margin`` and
-    ``severe_above`` [value units] (NaN where those are not given).
+    ``severe_above`` [value units] (NaN where those are not given). With ``path_bias`` the
+    model is ranked as the footstep planner picks (its values less the path bias).
     """
     return rank_scores_many({"model": model}, demos, terrain, expert, values, margin=margin,
-                            severe_above=severe_above)["model"]
+                            severe_above=severe_above, path_bias=path_bias)["model"]
 
 
 def rank_scores_many(models: dict, demos: Sequence, terrain: Callable[[str], object],
                      expert=None, values: Sequence[np.ndarray] | None = None, *,
-                     margin: float = float("nan"), severe_above: float = float("nan")
-                     ) -> dict[str, RankScores]:
+                     margin: float = float("nan"), severe_above: float = float("nan"),
+                     path_bias: PathBias | None = None) -> dict[str, RankScores]:
     """:func:`rank_scores` of several models on the same demonstrations, by name: each
     demonstration's candidates (their terrain patches, the costly part) are prepared once for
     every model with the same feature settings."""
@@ -130,16 +167,35 @@ def rank_scores_many(models: dict, demos: Sequence, terrain: Callable[[str], obj
     if not demos:
         raise FootfallError("no demonstrations to evaluate on")
     return {name: scores_of_rows(rows, margin, severe_above)
-            for name, rows in decision_rows(models, demos, terrain, values).items()}
+            for name, rows in decision_rows(models, demos, terrain, values, path_bias).items()}
 
 
 def decision_rows(models: dict, demos: Sequence, terrain: Callable[[str], object],
-                  values: Sequence[np.ndarray] | None = None) -> dict[str, list[tuple]]:
+                  values: Sequence[np.ndarray] | None = None, path_bias: PathBias | None = None
+                  ) -> dict[str, list[tuple]]:
     """Each model's (by name) figures of each demonstration, in order: the rows
     :func:`scores_of_rows` summarises. Rows of consecutive slices of the demonstrations,
     concatenated, are the rows of all (so the slices may be scored in separate processes)."""
     found: dict[str, list] = {name: [] for name in models}
-    for k, d in enumerate(demos):  # one demonstration at a time, vectorised over its candidates
+    for k, d, name, r in _scored(models, demos, terrain, path_bias):
+        found[name].append(_decision(r, d, None if values is None else values[k]))
+    return found
+
+
+def best_picks(model, demos: Sequence, terrain: Callable[[str], object],
+               path_bias: PathBias | None = None) -> list[np.ndarray]:
+    """The candidates (indices) ``model`` values best in each demonstration, ties all given
+    (its pick is any of them), ranked as :func:`decision_rows` ranks them."""
+    return [np.flatnonzero(r == r.max())
+            for _, _, _, r in _scored({"model": model}, demos, terrain, path_bias)]
+
+
+def _scored(models: dict, demos: Sequence, terrain: Callable[[str], object],
+            path_bias: PathBias | None) -> Iterator[tuple[int, Any, str, np.ndarray]]:
+    """(index, demonstration, model name, its values (n,) of the candidates) for every
+    demonstration and model: one demonstration at a time, its candidates' patches made once
+    for every model with the same feature settings."""
+    for k, d in enumerate(demos):
         hmap = terrain(d.terrain_hash)
         prepared: dict = {}
         for name, model in models.items():
@@ -152,8 +208,9 @@ def decision_rows(models: dict, demos: Sequence, terrain: Callable[[str], object
             r = reward.values(prepared[key])
             if not np.isfinite(r).all():
                 raise FootfallError(f"demonstration {d.id}: a candidate has no valid features")
-            found[name].append(_decision(r, d, None if values is None else values[k]))
-    return found
+            if path_bias is not None:
+                r = r - path_bias.values(reward, d.state, d.candidates, model.robot)
+            yield k, d, name, r
 
 
 def _decision(r: np.ndarray, d, values: np.ndarray | None) -> tuple[float, ...]:

@@ -8,8 +8,12 @@ whole command line (the fuzz suite, :mod:`footfall.cli.fuzz`, drives it through
 
 from __future__ import annotations
 
+import contextlib
 import importlib
+import signal
 import sys
+import threading
+from collections.abc import Iterator
 
 import click
 
@@ -68,8 +72,27 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point: run the CLI, turning user errors into one line and exit status 2."""
     args = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in args
-    with limits_of_one_command():  # --limit holds for this command (and its workers) only
+    with limits_of_one_command(), _terminate_interrupts():  # --limit: this command only
         return _run(args, debug)
+
+
+@contextlib.contextmanager
+def _terminate_interrupts() -> Iterator[None]:
+    """SIGTERM (``kill``, a scheduler's stop) interrupts the command as Ctrl-C does: its stores
+    close, its worker processes are stopped, it exits with status 130 -- rather than dying
+    with its workers left running. Only in the main thread (where signals are delivered)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _run(args: list[str], debug: bool) -> int:

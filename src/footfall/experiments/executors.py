@@ -33,14 +33,13 @@ import os
 import socket
 import tempfile
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from dataclasses import dataclass, field, replace
-from multiprocessing import get_context
 from pathlib import Path
 from typing import Any, Protocol
 
 from footfall.core.atomic import atomic_path
-from footfall.core.compute import usable_cores
+from footfall.core.compute import usable_cores, worker_pool
 from footfall.core.errors import FootfallError
 from footfall.core.registry import Registry
 from footfall.experiments.runs import RunJob, RunOutput, execute
@@ -112,15 +111,10 @@ class LocalPool:
             for job in jobs:
                 yield job, execute(job)
             return
-        # spawn: a fresh interpreter per worker (no forked BLAS or renderer state)
-        pool = ProcessPoolExecutor(max_workers=min(self.processes, len(jobs)),
-                                   mp_context=get_context("spawn"))
-        try:
+        with worker_pool(min(self.processes, len(jobs))) as pool:
             futures = {pool.submit(execute, job): job for job in jobs}
             for f in as_completed(futures):
                 yield futures[f], f.result()
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
 
     def close(self) -> None:
         pass

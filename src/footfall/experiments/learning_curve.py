@@ -36,13 +36,13 @@ import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
-from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
 
 from footfall.control.footstep import FootstepConfig
 from footfall.core.atomic import write_text_atomic
+from footfall.core.compute import worker_pool
 from footfall.core.errors import FootfallError
 from footfall.core.files import load_npz, save_npz
 from footfall.core.robot import LITTLEDOG
@@ -330,12 +330,8 @@ def _pool(processes: int) -> Iterator[ProcessPoolExecutor | None]:
     if processes <= 1:
         yield None
         return
-    # spawn: a fresh interpreter per worker (no forked BLAS state)
-    pool = ProcessPoolExecutor(max_workers=processes, mp_context=get_context("spawn"))
-    try:
+    with worker_pool(processes) as pool:
         yield pool
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def run_learning_curve(out: Path, config: CurveConfig | None = None,

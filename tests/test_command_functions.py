@@ -3,6 +3,7 @@ FootfallError, and the result's JSON is what the command prints."""
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -210,6 +211,7 @@ def test_one_walk_logged_and_a_batch_of_one(flat_board, tmp_path):
 @pytest.mark.parametrize("kwargs, match", [
     ({"expert": True, "model_path": "m.npz"}, "--expert chooses the footholds itself"),
     ({"search_radius": 0.0}, "search_radius must be > 0"),
+    ({"path_bias": -1.0}, "bias_weight must be >= 0"),
     ({"snapshots": "{tmp}/missing/s.png"}, "output directory does not exist"),
     ({"log_path": "{tmp}/missing/log.sqlite"}, "output directory does not exist"),
 ])
@@ -224,9 +226,12 @@ def test_walks_refuse_bad_settings_before_running(flat_board, tmp_path, kwargs, 
         walk_once(tmp_path / "none.npz", 0)
 
 
-def test_walk_config_limits_the_candidate_set():
+def test_walk_config_limits_the_candidate_set_and_sets_the_path_bias():
     assert walk_config(search_radius=0.03).footstep.search_radius == 0.03
     assert walk_config() == walk_config(None, False, None)
+    assert walk_config().footstep.bias_weight == 60.0  # the walk's own
+    assert walk_config(path_bias=0.0).footstep.bias_weight == 0.0
+    assert walk_config(path_bias=0.0).footstep == replace(walk_config().footstep, bias_weight=0)
 
 
 # -------------------------------------------------- the commands print them

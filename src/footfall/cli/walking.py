@@ -19,8 +19,14 @@ MODEL_OPTION = click.option("--model", "model_path", default=None,
 
 
 def _chooser_options(f):
-    """--expert, --search-radius and --friction-safety: who chooses the footholds, and among
-    which."""
+    """--expert, --search-radius, --friction-safety and --path-bias: who chooses the
+    footholds, and among which."""
+    f = click.option("--path-bias", type=click.FloatRange(min=0), default=None,
+                     metavar="REWARD/M",
+                     help="The footstep planner's pull toward the path: a candidate loses this "
+                          "much hand-tuned reward per metre from its path-nominal position, "
+                          "scaled to the reward's spread; 0: none, as the expert walks "
+                          "[default: the walk's own, 60].")(f)
     f = click.option("--friction-safety", type=float, default=None,
                      help="Drop the footholds where the ball foot's contact tilts past "
                           "atan(friction / this) within 5 mm (the friction check, e.g. 1.5); "
@@ -75,13 +81,14 @@ def _run_text(result: dict) -> str:
 def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: str | None,
              frames: int, video: str | None, log_path: str | None, explain: bool,
              explain_plot: str | None, expert: bool, expert_config: str | None,
-             search_radius: float | None, friction_safety: float | None, as_json: bool) -> None:
+             search_radius: float | None, friction_safety: float | None,
+             path_bias: float | None, as_json: bool) -> None:
     """One run of the simulated robot across a board (success, slip, speed)."""
     check_picture_outputs(snapshots, video, explain_plot, as_options=True,
                           inputs=(terrain_path, model_path, log_path, expert_config))
     outcome = walk_once(terrain_path, seed, model_path=model_path, expert=expert,
                         search_radius=search_radius, friction_safety=friction_safety,
-                        snapshots=snapshots, frames=frames,
+                        path_bias=path_bias, snapshots=snapshots, frames=frames,
                         video=video, log_path=log_path, explain_plot=explain_plot,
                         expert_config=_expert_settings(expert_config))
     text = _run_text(outcome.record.result)
@@ -106,7 +113,7 @@ def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: st
 def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: int,
                   log_path: str | None, expert: bool, expert_config: str | None,
                   search_radius: float | None, friction_safety: float | None,
-                  processes: int | None, executor_name: str,
+                  path_bias: float | None, processes: int | None, executor_name: str,
                   ray_address: str | None, as_json: bool) -> None:
     """N runs in parallel: success rate (Wilson 95 % CI), slip, speed."""
     todo = {"runs": runs}
@@ -122,7 +129,7 @@ def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: in
                        log_lines=True) as step):
         batch = walk_batch(terrain_path, runs, seed, model_path=model_path, expert=expert,
                            search_radius=search_radius, friction_safety=friction_safety,
-                           log_path=log_path, progress=step,
+                           path_bias=path_bias, log_path=log_path, progress=step,
                            executor=executor, reused=reused,
                            expert_config=_expert_settings(expert_config))
     s = batch.summary

@@ -31,7 +31,9 @@ path bias, ``bias_weight`` per metre from the swing leg's gait-nominal foothold,
 the scorer's spread (:func:`~footfall.features.spread.path_bias_weight`; the hand-tuned
 reward, which has no pose features, leaves the pull toward the path to it). With a
 :class:`PathBias` every scorer is ranked as the planner's first step would rank it: its
-values less that bias (the look-ahead and the pose finder's short list aside).
+values less that bias (the look-ahead and the pose finder's short list aside; the planner
+measures from the path-nominal position at mid-stance, a decision without a body path from
+its swing leg's gait-nominal foothold, :func:`~footfall.core.state.stance_target`).
 """
 
 from __future__ import annotations

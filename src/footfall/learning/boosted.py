@@ -249,11 +249,18 @@ class BoostedRanker(BaseEstimator):
                 "num_threads": int(self.n_jobs),
                 "deterministic": True, "force_col_wise": True, "verbosity": -1}
 
-    def _train(self, X: np.ndarray, y: np.ndarray, sizes: np.ndarray, rounds: int) -> Any:
+    def _dataset(self, X: np.ndarray, y: np.ndarray, sizes: np.ndarray) -> Any:
+        """LightGBM's binned data of ``X``, built at once with the training parameters: it
+        keeps no reference to ``X``, so a fold's copy of the rows is freed before its trees
+        are grown (at 1 600 demonstrations each copy is over a gigabyte)."""
         import lightgbm  # imported when boosting: the linear learners do without it
 
-        data = lightgbm.Dataset(X, y, group=sizes, params={"verbosity": -1},
-                                free_raw_data=True)
+        return lightgbm.Dataset(X, y, group=sizes, params=self._params(),
+                                free_raw_data=True).construct()
+
+    def _train(self, data: Any, rounds: int) -> Any:
+        import lightgbm
+
         return lightgbm.train(self._params(), data, num_boost_round=int(rounds))
 
     def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray,
@@ -273,15 +280,16 @@ class BoostedRanker(BaseEstimator):
             raise FootfallError(f"n_jobs must be at least 1 thread, got {self.n_jobs}")
         if self.fold_jobs is not None and int(self.fold_jobs) < 1:
             raise FootfallError(f"fold_jobs must be at least 1, got {self.fold_jobs}")
-        order = np.argsort(groups, kind="stable")  # LightGBM reads queries as contiguous runs
-        X, y, groups = X[order], y[order], groups[order]
-        units = None if units is None else np.asarray(units)[order]
+        if np.any(np.diff(groups) < 0):  # LightGBM reads queries as contiguous runs (stack's
+            order = np.argsort(groups, kind="stable")  # are: no copy of X then)
+            X, y, groups = X[order], y[order], groups[order]
+            units = None if units is None else np.asarray(units)[order]
         uniq, sizes = np.unique(groups, return_counts=True)
         folds = grouped_folds(uniq, int(self.cv), units_of(groups, units, uniq))
 
         def fold_errors(fold: tuple[np.ndarray, np.ndarray]) -> list[float]:
             train = np.isin(groups, uniq[fold[0]])
-            booster = self._train(X[train], y[train], sizes[fold[0]], trees[-1])
+            booster = self._train(self._dataset(X[train], y[train], sizes[fold[0]]), trees[-1])
             test = ~train
             return [pairwise_error(booster.predict(X[test], num_iteration=int(t)), y[test],
                                    groups[test]) for t in trees]
@@ -298,7 +306,7 @@ class BoostedRanker(BaseEstimator):
                               self.selection)
         self.n_trees_ = int(trees[best])
         self.cv_error_ = float(errors[:, best].mean())
-        booster = self._train(X, y, sizes, self.n_trees_)
+        booster = self._train(self._dataset(X, y, sizes), self.n_trees_)
         self.forest_ = forest_of(booster)
         self.feature_importances_ = np.asarray(booster.feature_importance("gain"), dtype=float)
         self.n_features_in_ = X.shape[1]

@@ -7,6 +7,7 @@ import weakref
 import numpy as np
 import pytest
 
+from footfall.core.compute import available_memory, jobs_that_fit
 from footfall.core.errors import FootfallError
 from footfall.learning.boosted import BoostedRanker, Forest
 from footfall.learning.model import FootholdModel
@@ -150,3 +151,18 @@ def test_a_tampered_model_file_is_refused_in_one_line(saved, tmp_path, key, make
     with pytest.raises(FootfallError, match=match) as err:
         FootholdModel.load(path)
     assert "\n" not in str(err.value)
+
+
+def test_folds_at_once_are_as_many_as_the_memory_holds():
+    gb = 1 << 30
+    assert jobs_that_fit(2, 5 * gb, 14 * gb) == 2  # 10.5 GB usable: two copies of 5
+    assert jobs_that_fit(2, 6 * gb, 14 * gb) == 1  # one copy at a time
+    assert jobs_that_fit(4, 6 * gb, 2 * gb) == 1  # never none
+    assert jobs_that_fit(3, 6 * gb, None) == 3  # memory unknown: the cores decide
+    available = available_memory()
+    assert available is None or available > 0
+    X, y, groups = _toy(5)  # small rows: threads as the cores allow, the same trees as one
+    auto = BoostedRanker(trees=(10, 30), cv=3).fit(X, y, groups)
+    one = BoostedRanker(trees=(10, 30), cv=3, fold_jobs=1).fit(X, y, groups)
+    for name, array in auto.forest_.arrays().items():
+        np.testing.assert_array_equal(array, one.forest_.arrays()[name])

@@ -99,8 +99,11 @@ def path_bias_weight(reward: FootholdScorer, bias_weight: float) -> float:
     A reward with the hand-tuned default's terrain and pose parts has the ratio 1 exactly, so
     its bias is ``bias_weight`` to the last bit without scoring the reference module at all (a
     module made and scored: ~0.5 s of CPU, once per process, that would only be divided by
-    itself); other rewards are scaled by their cached spreads.
+    itself); other rewards are scaled by their cached spreads. A scorer with its own path
+    preference (the expert's stance term) gets none.
     """
+    if reward.own_path_preference:
+        return 0.0
     default = default_reward(reward.config)
     if spread_key(reward) == spread_key(default):
         return float(bias_weight)

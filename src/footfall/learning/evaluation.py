@@ -75,8 +75,6 @@ class PathBias:
                robot: RobotDescription) -> np.ndarray:
         """The bias (n,) [the scorer's reward units] each candidate (n, 3) [m] loses (none for a
         scorer with its own path preference: the expert walks without the bias)."""
-        if scorer.own_path_preference:
-            return np.zeros(candidates.shape[0])
         target = stance_target(state, robot, self.lead)
         return path_bias_weight(scorer, self.weight) * np.hypot(*(candidates[:, :2] - target).T)
 

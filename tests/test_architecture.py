@@ -389,6 +389,10 @@ LAZY_IMPORTS = {
     ("footfall.experiments.batch", "imageio.v2"):
         "imageio and its bundled ffmpeg: only for a video (footfall walk --video)",
     ("footfall.teach.server", "uvicorn"): "the server itself: only `footfall teach` serves",
+    ("footfall.teach.browser", "playwright"):
+        "Playwright, a test extra: only the browser tests and `footfall bench teach` drive it",
+    ("footfall.teach.bench", "playwright.sync_api"):
+        "Playwright, a test extra: only `footfall bench teach` drives the page",
     ("footfall.core.stats", "scipy.stats"):
         "about a second to import: only the exact McNemar test asks for it",
     ("footfall.learning.boosted", "lightgbm"):

@@ -1,6 +1,9 @@
 """People's labels of run steps in the store: a foothold label is a demonstration with its
 provenance, written in one transaction; one label per labeler and step; retries not doubled."""
 
+import dataclasses
+
+import numpy as np
 import pytest
 
 from footfall.core.errors import FootfallError, NotFound
@@ -144,3 +147,57 @@ def test_the_store_check_reads_every_label_and_its_references(store, tmp_path):
     problems = check_store(s.path).problems
     assert any("a 'foothold' label without its demonstration" in p for p in problems)
     assert any("labels row 2" in p and "labeler name" in p for p in problems)
+
+
+def test_undo_walks_back_through_the_labelers_history_of_a_step(store):
+    s, run_id = store
+    a, _ = s.add_label(run_id, 1, "ada", "foothold", 2)
+    b, _ = s.add_label(run_id, 1, "ada", "foothold", 4)
+    c, _ = s.add_label(run_id, 1, "ada", "fine")
+    theirs, _ = s.add_label(run_id, 1, "grace", "foothold", 3)
+    assert [(x.labeler, x.verdict, x.chosen) for x in s.labels(run_id, 1)] == \
+        [("ada", "fine", c.chosen), ("grace", "foothold", 3)]
+    assert len(s.demonstrations()) == 1  # only grace's: ada's current label is "fine"
+    removed, restored = s.undo_label(c.id, labeler="ada")
+    assert removed == c  # b back in place: its id and fields, with a new demonstration
+    assert dataclasses.replace(restored, demonstration_id=b.demonstration_id) == b
+    demos = s.demonstrations()
+    assert sorted(d.chosen for d in demos) == [3, 4]
+    assert next(x for x in s.labels(run_id, 1) if x.labeler == "ada").demonstration_id in \
+        {d.id for d in demos}
+    removed, restored = s.undo_label(b.id, labeler="ada")
+    assert (removed.chosen, restored.id, restored.chosen) == (4, a.id, 2)
+    removed, restored = s.undo_label(a.id, labeler="ada")
+    assert restored is None and [x.labeler for x in s.labels(run_id, 1)] == ["grace"]
+    assert [d.chosen for d in s.demonstrations()] == [3]
+
+
+def test_the_same_verdict_again_changes_nothing_and_keeps_no_history(store):
+    s, run_id = store
+    a, new_a = s.add_label(run_id, 1, "ada", "foothold", 2, request="r1")
+    b, new_b = s.add_label(run_id, 1, "ada", "foothold", 2, request="r2")
+    assert new_a and not new_b and a == b and len(s) == 1
+    assert s.undo_label(a.id, labeler="ada")[1] is None
+
+
+def test_a_retried_request_of_a_replaced_label_is_not_stored_again(store):
+    s, run_id = store
+    a, _ = s.add_label(run_id, 1, "ada", "foothold", 2, request="first")
+    s.add_label(run_id, 1, "ada", "foothold", 4, request="second")
+    again, new = s.add_label(run_id, 1, "ada", "foothold", 2, request="first")
+    assert not new and again.id == a.id
+    assert [x.chosen for x in s.labels(run_id, 1)] == [4]
+
+
+def test_a_judgement_is_kept_per_run_and_expert(store):
+    s, run_id = store
+    assert s.judgement(run_id, "expert-a") is None
+    s.keep_judgement(run_id, "expert-a", np.array([1, 0, 5]), np.array([0.5, np.nan, 2.0]))
+    best, shortfall = s.judgement(run_id, "expert-a")
+    assert best.tolist() == [1, 0, 5] and np.isnan(shortfall[1])
+    assert shortfall[[0, 2]].tolist() == [0.5, 2.0]
+    assert s.judgement(run_id, "expert-b") is None
+    s.keep_judgement(run_id, "expert-a", np.array([2, 2, 2]), np.zeros(3))
+    assert s.judgement(run_id, "expert-a")[0].tolist() == [2, 2, 2]
+    with pytest.raises(FootfallError, match="one best index"):
+        s.keep_judgement(run_id, "expert-a", np.array([1]), np.zeros(2))

@@ -414,6 +414,8 @@ def _objects(path):
 
 def _as_version_1(path):
     with raw(path) as con:
+        con.execute("DROP TABLE judgements")
+        con.execute("DROP TABLE replaced_labels")
         con.execute("DROP TABLE labels")
         con.execute("DROP TABLE run_steps")
         con.execute("DROP TABLE runs")
@@ -440,6 +442,8 @@ def test_a_version_2_store_gains_the_labels_table_and_loses_nothing(filled, tmp_
     with DemoStore(tmp_path / "new.sqlite", create=True):
         pass
     with raw(path) as con:
+        con.execute("DROP TABLE judgements")
+        con.execute("DROP TABLE replaced_labels")
         con.execute("DROP TABLE labels")
         con.execute("UPDATE meta SET value = '2' WHERE key = 'schema_version'")
     con.close()
@@ -447,7 +451,7 @@ def test_a_version_2_store_gains_the_labels_table_and_loses_nothing(filled, tmp_
         assert store.schema_version == 2 and store.labels() == []
         assert store.summary()["labels"] == {"by_labeler": {}, "disagreements": 0}
     with DemoStore(path) as store:
-        assert store.schema_version == SCHEMA_VERSION == 3
+        assert store.schema_version == SCHEMA_VERSION == 4
     assert _objects(path) == _objects(tmp_path / "new.sqlite")
     assert contents(path) == before
 
@@ -463,3 +467,21 @@ def test_migration_leaves_a_store_another_process_upgraded_alone(filled):
         assert con.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone() \
             == (str(SCHEMA_VERSION),)
     con.close()
+
+
+def test_a_version_3_store_gains_undo_history_and_judgements_and_loses_nothing(filled, tmp_path):
+    path, _, _ = filled
+    before = contents(path)
+    with DemoStore(tmp_path / "new.sqlite", create=True):
+        pass
+    with raw(path) as con:
+        con.execute("DROP TABLE judgements")
+        con.execute("DROP TABLE replaced_labels")
+        con.execute("UPDATE meta SET value = '3' WHERE key = 'schema_version'")
+    con.close()
+    with DemoStore(path, read_only=True) as store:  # read as it is
+        assert store.schema_version == 3 and store.judgement(1, "any") is None
+    with DemoStore(path) as store:
+        assert store.schema_version == SCHEMA_VERSION == 4
+    assert _objects(path) == _objects(tmp_path / "new.sqlite")
+    assert contents(path) == before

@@ -59,16 +59,17 @@ def test_runs_steps_and_their_order(server):
 def test_a_click_labels_the_nearest_candidate_within_the_snap_radius(server):
     http, *_, path = server
     step = http.get("/api/runs/2/steps/1").json()
-    target = np.array(step["candidates"][4][:2])
+    i = next(i for i in (4, 3, 5) if i != step["chosen"])
+    target = np.array(step["candidates"][i][:2])
     near = http.post("/api/labels", json={"run": 2, "step": 1, "verdict": "foothold",
                                           "point": (target + 0.002).tolist(), "labeler": "ada"})
-    assert near.status_code == 201 and near.json()["chosen"] == 4
+    assert near.status_code == 201 and near.json()["chosen"] == i
     far = http.post("/api/labels", json={"run": 2, "step": 1, "verdict": "foothold",
                                          "point": [9.0, 9.0], "labeler": "ada"})
     assert far.status_code == 422 and "no candidate" in far.json()["detail"]
     with DemoStore(path, read_only=True) as store:
         (label,) = store.labels(run_id=2, k=1)
-        assert label.chosen == 4 and store.demonstrations([label.demonstration_id])[0].chosen == 4
+        assert label.chosen == i and store.demonstrations([label.demonstration_id])[0].chosen == i
 
 
 def test_fine_undo_and_a_repeated_request(server):
@@ -79,8 +80,36 @@ def test_fine_undo_and_a_repeated_request(server):
     other = http.delete(f"/api/labels/{first.json()['id']}", params={"labeler": "ada"})
     assert other.status_code == 404  # not ada's to undo
     mine = http.delete(f"/api/labels/{first.json()['id']}", params={"labeler": "bob"})
-    assert mine.status_code == 200
+    assert mine.status_code == 200 and mine.json() == {"removed": first.json(), "restored": None}
     assert http.get("/api/runs/3/steps/0").json()["labels"] == []
+
+
+def test_clicking_the_robots_own_choice_is_the_verdict_fine(server):
+    http, *_, path = server
+    step = http.get("/api/runs/1/steps/3").json()
+    answer = http.post("/api/labels", json={"run": 1, "step": 3, "verdict": "foothold",
+                                            "point": step["candidates"][step["chosen"]][:2],
+                                            "labeler": "cy"})
+    assert answer.status_code == 201 and answer.json()["verdict"] == "fine"
+    assert answer.json()["demonstration_id"] is None
+    with DemoStore(path, read_only=True) as store:
+        assert store.demonstrations(source_prefix="human:run:1:step:3") == []
+
+
+def test_undo_restores_the_label_it_replaced(server):
+    http, *_ = server
+    step = http.get("/api/runs/1/steps/4").json()
+    other = next(i for i in range(6) if i != step["chosen"])
+    first = http.post("/api/labels", json={"run": 1, "step": 4, "verdict": "foothold",
+                                           "candidate": other, "labeler": "dee"}).json()
+    fine = http.post("/api/labels", json={"run": 1, "step": 4, "verdict": "fine",
+                                          "labeler": "dee"}).json()
+    assert [lab["verdict"] for lab in http.get("/api/runs/1/steps/4/labels").json()] == ["fine"]
+    undone = http.delete(f"/api/labels/{fine['id']}", params={"labeler": "dee"}).json()
+    assert undone["removed"]["id"] == fine["id"] and undone["restored"]["id"] == first["id"]
+    (back,) = http.get("/api/runs/1/steps/4/labels").json()
+    assert (back["verdict"], back["chosen"]) == ("foothold", other)
+    assert http.get("/api/runs/1/steps/99/labels").status_code == 404
 
 
 @pytest.mark.parametrize("method, path, kwargs, status, words", [

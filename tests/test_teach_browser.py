@@ -9,19 +9,15 @@ then a missing browser fails the run.
 """
 
 import os
-import shutil
 
 import pytest
 
 from footfall.data.store import DemoStore
+from footfall.teach.browser import FLAGS, chromium_path
 from footfall.teach.service import TeachService
 from teach_helpers import serving, store_of_runs
 
-CHROMIUM = os.environ.get("FOOTFALL_CHROMIUM") or shutil.which("chromium") \
-    or shutil.which("chromium-browser")
-FLAGS = ["--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
-         "--enable-unsafe-swiftshader", "--disable-background-networking",
-         "--disable-component-update", "--disable-sync", "--no-first-run"]
+CHROMIUM = chromium_path()
 
 
 @pytest.fixture(scope="module")

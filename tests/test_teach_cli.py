@@ -61,8 +61,8 @@ def test_the_server_prints_its_address_serves_and_stops_on_ctrl_c(tmp_path, as_j
         proc.send_signal(signal.SIGINT)
         out, err = proc.communicate(timeout=30)
         assert proc.returncode == 0 and "stopped" in out and "Traceback" not in err
-        if as_json:
-            assert json.loads(out) == {"stopped": str(path)}
+        if as_json:  # one JSON line, as the help promises
+            assert out.strip().count("\n") == 0 and json.loads(out) == {"stopped": str(path)}
     finally:
         if proc.poll() is None:
             proc.kill()

@@ -25,11 +25,16 @@ STATIC = resources.files("footfall.teach") / "static"
 
 
 def test_the_page_loads_nothing_from_outside_the_package():
-    for name in ("index.html", "teach.js", "teach.css"):
+    scripts = sorted(p.name for p in STATIC.iterdir() if p.name.endswith(".js"))
+    assert "teach.js" in scripts
+    for name in ["index.html", "teach.css", *scripts]:
         text = (STATIC / name).read_text()
         assert not re.search(r"(https?:)?//[a-z0-9.-]+\.[a-z]{2,}/", text), name
-    imports = re.findall(r'from "([^"]+)"', (STATIC / "teach.js").read_text())
-    assert imports and set(imports) <= {"three", "three/addons/OrbitControls.js"}
+    imports = {i for name in scripts for i in re.findall(r'from "([^"]+)"',
+                                                         (STATIC / name).read_text())}
+    local = {i for i in imports if i.startswith("./")}
+    assert imports - local == {"three", "three/addons/OrbitControls.js"}
+    assert {i.removeprefix("./") for i in local} <= set(scripts)
     html = (STATIC / "index.html").read_text()
     for target in re.findall(r'"(/static/[^"]+)"', html):  # the import map and the page's files
         if target.endswith("/"):

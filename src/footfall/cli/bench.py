@@ -15,6 +15,7 @@ from footfall.experiments.bench.rankers import bench_rankers, format_rankers
 from footfall.experiments.bench.sampling import bench_sampling, format_sampling
 from footfall.experiments.bench.scoring import bench_scoring, format_scoring
 from footfall.experiments.bench.sim import bench_sim, format_sim
+from footfall.teach.bench import bench_teach, format_teach
 
 
 @click.group()
@@ -113,6 +114,27 @@ def bench_expert_cmd(runs: int, sets: int, as_json: bool) -> None:
     time), and its terrain terms compiled against the NumPy rules."""
     result = bench_expert(runs=runs, sets=sets)
     emit(as_json, result, format_expert(result))
+
+
+@bench.command("teach")
+@click.option("--walks", type=click.IntRange(1, 20), default=2, show_default=True,
+              help="Runs walked with the hand-tuned reward.")
+@click.option("--copies", type=click.IntRange(1, 100), default=10, show_default=True,
+              help="Times each walked run is stored (the store holds walks x copies runs).")
+@click.option("--runs", type=click.IntRange(1, 50), default=3, show_default=True,
+              help="Runs opened in the page.")
+@click.option("--steps", type=click.IntRange(1, 200), default=10, show_default=True,
+              help="Arrow presses in each opened run.")
+@click.option("--labels", type=click.IntRange(0, 1000), default=9, show_default=True,
+              help="Labels clicked in the top view, over all opened runs.")
+@json_option
+def bench_teach_cmd(walks: int, copies: int, runs: int, steps: int, labels: int,
+                    as_json: bool) -> None:
+    """The teaching page in Chromium: step view, label and a new run's first step [ms] against
+    their targets, and opening a run as the expert judges it (the baseline). Needs Chromium and
+    Playwright."""
+    result = bench_teach(walks=walks, copies=copies, runs=runs, steps=steps, labels=labels)
+    emit(as_json, result, format_teach(result))
 
 
 FUZZ_TARGETS = ("map-file", "model-file", "store", "scan-import", "cli", "lying-file",

@@ -8,10 +8,13 @@ from footfall.cli.choices import RECORDED_STEP, SEED, Finite, count_range
 from footfall.cli.output import emit, json_option, progress_bar
 from footfall.control.footstep import FootstepConfig
 from footfall.data.inventory import store_inventory
+from footfall.data.store import DemoStore
 from footfall.expert.collect import collect_into_store
-from footfall.expert.corrections import correct_stored_runs
+from footfall.expert.corrections import DEFAULT_MARGIN, correct_stored_runs
 from footfall.expert.settings_file import load_expert
 from footfall.expert.synthetic import SyntheticExpert, walking_expert
+from footfall.teach.agreement import agreement_lines
+from footfall.teach.judging import default_expert, labels_agreement
 
 
 @click.group()
@@ -99,6 +102,10 @@ def demos_info(store_path: str, as_json: bool) -> None:
     """Count a store's demonstrations by terrain, swing leg, source and labeler; check the file."""
     inventory = store_inventory(store_path)
     summary = inventory.summary
+    agreement = None
+    if summary["labels"]["by_labeler"]:  # people's labels against the expert and each other
+        with DemoStore(store_path, read_only=True) as store:
+            agreement = labels_agreement(store, SyntheticExpert(default_expert()), DEFAULT_MARGIN)
     lines = [(f"{store_path}: {summary['demonstrations']} demonstrations on "
               f"{summary['terrains']} {_plural(summary['terrains'], 'terrain')} "
               f"({summary['format']} v{summary['schema_version']})")]
@@ -113,8 +120,10 @@ def demos_info(store_path: str, as_json: bool) -> None:
     if summary["labels"]["disagreements"]:
         lines.append(f"  labelers disagree on {summary['labels']['disagreements']} "
                      f"{_plural(summary['labels']['disagreements'], 'step')}")
+    lines += agreement_lines(agreement) if agreement else []
     if summary["candidates"]:
         c = summary["candidates"]
         lines.append(f"  candidates per demonstration: {c['min']} .. {c['max']} "
                      f"(mean {c['mean']:.0f})")
-    emit(as_json, inventory.as_dict(), "\n".join(lines))
+    emit(as_json, inventory.as_dict() | ({"agreement": agreement} if agreement else {}),
+         "\n".join(lines))

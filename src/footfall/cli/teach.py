@@ -7,7 +7,7 @@ import webbrowser
 
 import click
 
-from footfall.cli.output import emit, json_option
+from footfall.cli.output import json_option
 from footfall.teach.server import address, bind, new_token, serve
 from footfall.teach.service import TeachService
 
@@ -42,4 +42,4 @@ def teach(store_path: str, labeler: str | None, host: str, port: int, open_brows
     if open_browser:
         webbrowser.open(url)
     serve(service, sock, token)
-    emit(as_json, {"stopped": store_path}, "footfall teach: stopped")
+    click.echo(json.dumps({"stopped": store_path}) if as_json else "footfall teach: stopped")

@@ -11,7 +11,9 @@ labeler, time). The learner reads it like any other demonstration
 demonstration: the paper labels only sub-optimal choices; it records that
 the step was reviewed, and whether labelers agree.
 
-Each labeler keeps one label per step (a new one replaces their old one);
+Each labeler keeps one label per step (a new one replaces their old one,
+which is kept aside in ``replaced_labels``: undoing the new label restores
+it, so a labeler's undo walks back through their history of that step);
 two labelers who disagree on a step both keep theirs. A label may carry
 the client's request id: a request sent again (a retry after a lost answer)
 returns the label it made the first time instead of adding another.
@@ -99,7 +101,7 @@ class LabelQueries(RunQueries):
         with self._errors(), self._write() as con:
             if request is not None:
                 old = con.execute(f"SELECT {LABEL_COLUMNS} FROM labels WHERE request = ?",
-                                  (request,)).fetchone()
+                                  (request,)).fetchone() or self._replaced_request(con, request)
                 if old is not None:
                     label = _label(old)
                     same = (label.run_id, label.k, label.labeler, label.verdict) == \
@@ -116,28 +118,39 @@ class LabelQueries(RunQueries):
                 chosen = step["chosen"]
             elif not 0 <= chosen < n:
                 raise FootfallError(f"candidate {chosen} is not in F (the step has {n} candidates)")
-            self._delete_labels(con, "run_id = ? AND k = ? AND labeler = ?", (run_id, k, labeler))
-            demo_id = None
-            if verdict == "foothold":
-                if n < 2:
-                    raise FootfallError("the step's F has one candidate: there is nothing to choose")
-                demo_id = self._insert_demonstration(con, Demonstration(
-                    step["terrain_hash"], step["state"], step["candidates"], chosen,
-                    source=human_source(run_id, k),
-                    expert={"kind": HUMAN_SOURCE, "labeler": labeler}))
-            cur = con.execute(
-                "INSERT INTO labels (run_id, k, labeler, verdict, chosen, demonstration_id, "
-                "created, request) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
-                (run_id, k, labeler, verdict, chosen, demo_id, when, request))
+            if verdict == "foothold" and n < 2:
+                raise FootfallError("the step's F has one candidate: there is nothing to choose")
+            current = con.execute(f"SELECT {LABEL_COLUMNS} FROM labels WHERE run_id = ? AND k = ? "
+                                  "AND labeler = ?", (run_id, k, labeler)).fetchone()
+            if current is not None and (current[4], current[5]) == (verdict, chosen):
+                return _label(current), False  # the same verdict again: nothing changes
+            if current is not None:
+                self._delete_labels(con, "id = ?", (current[0],))
+            new_id = self._insert_label(con, step, (None, run_id, k, labeler, verdict, chosen,
+                                                    None, when, request))
+            if current is not None:  # kept aside: undoing the new label restores it
+                con.execute("INSERT INTO replaced_labels (id, run_id, k, labeler, verdict, chosen, "
+                            "created, request, replaced_by) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                            (*current[:6], current[7], current[8], new_id))
             row = con.execute(f"SELECT {LABEL_COLUMNS} FROM labels WHERE id = ?",
-                              (cur.lastrowid,)).fetchone()
+                              (new_id,)).fetchone()
         return _label(row), True
 
     def remove_label(self, label_id: int, labeler: str | None = None) -> Label:
-        """Undo a label: delete it and the demonstration it made, in one transaction.
+        """Undo a label (:meth:`undo_label`) and return the label removed."""
+        return self.undo_label(label_id, labeler)[0]
 
-        ``labeler``: only a label of this labeler is removed (a page undoes its
+    def undo_label(self, label_id: int, labeler: str | None = None) -> tuple[Label, Label | None]:
+        """Undo a label in one transaction: delete it and the demonstration it made, and restore
+        the label it replaced (with its id and a new demonstration), if it replaced one.
+
+        ``labeler``: only a label of this labeler is undone (a page undoes its
         own labels, never another person's).
+
+        Returns
+        -------
+        (Label, Label or None)
+            The label removed, and the one restored in its place (None: none).
 
         Raises
         ------
@@ -154,7 +167,18 @@ class LabelQueries(RunQueries):
                 raise NotFound(f"label {label_id} is not in the store"
                                + ("" if labeler is None else f" (of labeler {labeler!r})"))
             self._delete_labels(con, "id = ?", (label_id,))
-        return _label(row)
+            restored = None
+            if self._has_table("replaced_labels"):
+                old = con.execute("SELECT id, run_id, k, labeler, verdict, chosen, created, request "
+                                  "FROM replaced_labels WHERE replaced_by = ?",
+                                  (label_id,)).fetchone()
+                if old is not None:
+                    con.execute("DELETE FROM replaced_labels WHERE id = ?", (old[0],))
+                    step = self._step(con, old[1], old[2])
+                    self._insert_label(con, step, (*old[:6], None, old[6], old[7]))
+                    restored = _label(con.execute(f"SELECT {LABEL_COLUMNS} FROM labels WHERE id = ?",
+                                                  (old[0],)).fetchone())
+        return _label(row), restored
 
     def labels(self, run_id: int | None = None, k: int | None = None,
                labeler: str | None = None) -> list[Label]:
@@ -171,6 +195,23 @@ class LabelQueries(RunQueries):
             found = self._connection.execute(
                 f"SELECT {LABEL_COLUMNS} FROM labels{where} ORDER BY id", params).fetchall()
         return [_label(row) for row in found]
+
+    def step_labels(self, run_id: int, k: int) -> list[Label]:
+        """The labels of step ``k`` of run ``run_id``, in creation order.
+
+        Raises
+        ------
+        NotFound
+            For a run or step that is not in the store.
+        """
+        run_id, k = check_index(run_id, "a run id"), check_index(k, "a step number")
+        with self._errors(), self._read() as con:
+            head = con.execute("SELECT n_steps FROM runs WHERE id = ?", (run_id,)).fetchone()
+            if head is None:
+                raise NotFound(f"run {run_id} is not in the store")
+            if not 0 <= k < head[0]:
+                raise NotFound(f"run {run_id} has no step {k} (it has {head[0]} steps)")
+        return self.labels(run_id, k)
 
     def label_counts(self) -> dict[str, Any]:
         """Labels by labeler and verdict: ``{labeler: {"foothold": n, "fine": m}}``, and the
@@ -208,6 +249,29 @@ class LabelQueries(RunQueries):
         step = rows.run_step(row)
         return {"terrain_hash": head[0], "state": step.state, "candidates": step.candidates,
                 "chosen": step.chosen}
+
+    def _insert_label(self, con: sqlite3.Connection, step: dict[str, Any], row: tuple) -> int:
+        """Insert a label row (LABEL_COLUMNS order; id None: a new one) with the demonstration a
+        foothold label makes, in the caller's transaction; returns the label's id."""
+        id_, run_id, k, labeler, verdict, chosen, _, when, request = row
+        demo_id = None
+        if verdict == "foothold":
+            demo_id = self._insert_demonstration(con, Demonstration(
+                step["terrain_hash"], step["state"], step["candidates"], chosen,
+                source=human_source(run_id, k), expert={"kind": HUMAN_SOURCE, "labeler": labeler}))
+        cur = con.execute(
+            "INSERT INTO labels (id, run_id, k, labeler, verdict, chosen, demonstration_id, "
+            "created, request) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+            (id_, run_id, k, labeler, verdict, chosen, demo_id, when, request))
+        return int(cur.lastrowid)
+
+    def _replaced_request(self, con: sqlite3.Connection, request: str) -> tuple | None:
+        """A replaced label made by request ``request``, as a labels row (or None)."""
+        if not self._has_table("replaced_labels"):
+            return None
+        old = con.execute("SELECT id, run_id, k, labeler, verdict, chosen, created, request "
+                          "FROM replaced_labels WHERE request = ?", (request,)).fetchone()
+        return None if old is None else (*old[:6], None, old[6], old[7])
 
     @staticmethod
     def _delete_labels(con: sqlite3.Connection, where: str, params: tuple) -> None:

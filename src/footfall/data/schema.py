@@ -15,7 +15,8 @@ from pathlib import Path
 from footfall.core.errors import FootfallError
 
 FORMAT = "footfall.demostore"
-SCHEMA_VERSION = 3  # 1: terrains and demonstrations; 2: + runs and run_steps; 3: + labels
+SCHEMA_VERSION = 4  # 1: terrains and demonstrations; 2: + runs and run_steps; 3: + labels;
+# 4: + replaced labels (undo history) and the expert's judgements of runs (the teaching page)
 SUFFIXES = (".sqlite", ".sqlite3", ".db")  # the file names of a store footfall writes
 STATE_LAYOUT = ("feet LF, RF, LH, RH x y z [m] (12), body position x y z [m] (3), "
                 "body roll pitch yaw [rad] (3), goal x y [m] (2)")
@@ -114,11 +115,39 @@ CREATE TABLE labels (
     "CREATE INDEX labels_step ON labels (run_id, k)",
 )
 
+REVIEW_TABLES = (  # schema version 4: what the teaching page keeps besides the labels
+    """
+CREATE TABLE replaced_labels (
+    id INTEGER PRIMARY KEY,            -- the replaced label's id (restored under it on undo)
+    run_id INTEGER NOT NULL REFERENCES runs(id),
+    k INTEGER NOT NULL,                -- the labelled step of the run
+    labeler TEXT NOT NULL,
+    verdict TEXT NOT NULL CHECK (verdict IN ('foothold', 'fine')),
+    chosen INTEGER,                    -- index in the step's F (as in labels)
+    created REAL NOT NULL,             -- [s] Unix time the label was first stored
+    request TEXT UNIQUE,               -- the client's id of the request that made it
+    replaced_by INTEGER NOT NULL UNIQUE,  -- the label of the same labeler and step that
+                                       -- replaced it: undoing that one restores this one
+    FOREIGN KEY (run_id, k) REFERENCES run_steps(run_id, k)
+)""",
+    """
+CREATE TABLE judgements (
+    run_id INTEGER NOT NULL REFERENCES runs(id),
+    expert TEXT NOT NULL,              -- sha256 of the judging expert's settings and footfall's
+                                       -- version: another expert judges anew
+    best TEXT NOT NULL,                -- JSON list: the expert's best index in each step's F
+    shortfall TEXT NOT NULL,           -- JSON list: the expert's value of its best less that
+                                       -- of the robot's choice, per step [value units]
+    created REAL NOT NULL,             -- [s] Unix time of the judgement
+    PRIMARY KEY (run_id, expert)
+)""",
+)
+
 
 # ---------------------------------------------------------------- a new store
 def create(con: sqlite3.Connection, created_by: str) -> None:
     """Create every table of the current schema and its ``meta`` rows (inside the caller's write)."""
-    for statement in DEMONSTRATION_TABLES + RUN_LOG_TABLES + LABEL_TABLES:
+    for statement in DEMONSTRATION_TABLES + RUN_LOG_TABLES + LABEL_TABLES + REVIEW_TABLES:
         con.execute(statement)
     con.executemany("INSERT INTO meta (key, value) VALUES (?, ?)",
                     [("format", FORMAT), ("schema_version", str(SCHEMA_VERSION)),
@@ -141,8 +170,16 @@ def _add_labels(con: sqlite3.Connection) -> None:
             con.execute(statement)
 
 
+def _add_review(con: sqlite3.Connection) -> None:
+    """Version 3 -> 4: replaced labels and judgements; every other table is untouched."""
+    if not has_table(con, "judgements"):
+        for statement in REVIEW_TABLES:
+            con.execute(statement)
+
+
 # version v -> the step that makes a version-v store a version-(v + 1) store
-MIGRATIONS: dict[int, Callable[[sqlite3.Connection], None]] = {1: _add_run_log, 2: _add_labels}
+MIGRATIONS: dict[int, Callable[[sqlite3.Connection], None]] = {1: _add_run_log, 2: _add_labels,
+                                                               3: _add_review}
 
 
 def migrate(con: sqlite3.Connection, version: int) -> None:
@@ -235,7 +272,7 @@ def check_pages(con: sqlite3.Connection, path: Path) -> None:
 def _tables(version: int) -> tuple[str, ...]:
     """The CREATE statements of a version-``version`` store."""
     return (DEMONSTRATION_TABLES + (RUN_LOG_TABLES if version >= 2 else ())
-            + (LABEL_TABLES if version >= 3 else ()))
+            + (LABEL_TABLES if version >= 3 else ()) + (REVIEW_TABLES if version >= 4 else ()))
 
 
 def _objects(con: sqlite3.Connection) -> dict[tuple[str, str], tuple]:

@@ -27,6 +27,7 @@ from footfall.core.robot import LEG_NAMES
 from footfall.data import codec, rows, schema
 from footfall.data.connection import DEFAULT_BUSY_TIMEOUT
 from footfall.data.demonstration import Demonstration, as_demonstrations
+from footfall.data.judgement_queries import JudgementQueries
 from footfall.data.label_queries import LabelQueries
 from footfall.data.runlog import RunRecord, RunStep
 from footfall.data.schema import FORMAT, SCHEMA_VERSION, STATE_LAYOUT
@@ -36,7 +37,7 @@ __all__ = ["DEFAULT_BUSY_TIMEOUT", "FORMAT", "SCHEMA_VERSION", "STATE_LAYOUT", "
            "Demonstration", "RunRecord", "RunStep"]
 
 
-class DemoStore(LabelQueries, TerrainQueries):
+class DemoStore(LabelQueries, JudgementQueries, TerrainQueries):
     """An SQLite file of terrains and demonstrations, safe to share between processes.
 
     Use as a context manager. Every write is one transaction (``BEGIN

@@ -139,11 +139,18 @@ class ScriptedLabeler:
         labelled with the expert's foothold (as the synthetic corrections do).
     seed : int
         The expert's imperfection (``expert.choose``), step by step in order.
+    noise : float
+        [0-1] the share of steps labelled carelessly: a candidate of F drawn
+        uniformly instead of the expert's verdict (a person of known noise,
+        to test the agreement figures against).
     """
 
     def __init__(self, client: TeachClient, expert: Expert, name: str = "scripted expert",
-                 margin: float = DEFAULT_MARGIN, seed: int = 0) -> None:
+                 margin: float = DEFAULT_MARGIN, seed: int = 0, noise: float = 0.0) -> None:
+        if not 0.0 <= noise <= 1.0:
+            raise FootfallError(f"a labeler's noise is a share in [0, 1], got {noise!r}")
         self.client, self.expert, self.name, self.margin = client, expert, name, float(margin)
+        self.noise = float(noise)
         self.rng = np.random.default_rng(seed)
         self._maps: dict[str, HeightMap] = {}
 
@@ -158,6 +165,11 @@ class ScriptedLabeler:
             hmap = self._maps[s["terrain_hash"]]
             state = RobotState.from_vector(np.array(s["state"], dtype=np.float64), s["leg"])
             candidates = np.array(s["candidates"], dtype=np.float64)
+            if self.noise > 0 and self.rng.random() < self.noise:  # careless: any candidate
+                self.client.label(run_id, k, "foothold", self.name,
+                                  candidate=int(self.rng.integers(len(candidates))))
+                footholds += 1
+                continue
             values = np.asarray(self.expert.values(hmap, state, candidates), dtype=np.float64)
             if values.max() - values[s["chosen"]] > self.margin and len(candidates) >= 2:
                 choice = int(self.expert.choose(hmap, state, candidates, self.rng))

@@ -16,11 +16,15 @@ the API:
 ``GET  /api/runs/{run}/steps/{k}``        a step: terrain, robot, F, rewards, labels
                                           (``?judge=false``: without the expert's best)
 ``GET  /api/terrains/{hash}``              a whole board, as a height-map file (.npz)
+``GET  /api/runs/{run}/steps/{k}/labels`` the step's labels now (the page polls them)
 ``POST /api/labels``                      a label: ``{run, step, verdict, candidate |
                                           point, labeler?, request?}`` (201; 200 for
-                                          a repeated request)
-``DELETE /api/labels/{id}?labeler=NAME``  undo one's own label
+                                          a repeated request or the same verdict again)
+``DELETE /api/labels/{id}?labeler=NAME``  undo one's own label: ``{removed, restored}``
+                                          (the label it had replaced comes back)
 ``GET  /api/counts``                      labels by labeler, demonstrations by source
+``GET  /api/agreement``                   each labeler against the synthetic expert
+                                          and against each other
 ========================================  =============================================
 
 Every bad request -- unknown run or step, a foothold not in F, malformed
@@ -30,8 +34,12 @@ JSON, a missing or wrong token, a body over :data:`MAX_BODY` bytes -- is a
 
 from __future__ import annotations
 
+import contextlib
 import secrets
 import socket
+import threading
+import time
+from collections.abc import Iterator
 from importlib import resources
 from typing import Annotated, Any, Literal
 from urllib.parse import parse_qs
@@ -116,6 +124,14 @@ def create_app(service: TeachService, token: str) -> Guard:
     @app.get("/api/runs/{run_id}/steps/{k}")
     def step(run_id: Id, k: Id, judge: bool = True) -> dict[str, Any]:
         return service.step(run_id, k, judge)
+
+    @app.get("/api/runs/{run_id}/steps/{k}/labels")
+    def step_labels(run_id: Id, k: Id) -> list[dict[str, Any]]:
+        return service.step_labels(run_id, k)
+
+    @app.get("/api/agreement")
+    def agreement() -> dict[str, Any]:
+        return service.agreement()
 
     @app.get("/api/terrains/{terrain_hash}")
     def terrain(terrain_hash: Annotated[str, Path(pattern="^[0-9a-f]{64}$")]) -> Response:
@@ -277,5 +293,31 @@ def serve(service: TeachService, sock: socket.socket, token: str,
     except KeyboardInterrupt:  # uvicorn re-raises the SIGINT it handled, once it has stopped
         pass
     finally:
+        service.close()
+        sock.close()
+
+
+@contextlib.contextmanager
+def serving_in_thread(service: TeachService, timeout: float = 20.0) -> Iterator[tuple[str, str, str]]:
+    """Serve ``service`` from a thread on a free loopback port (for tests and benchmarks);
+    yield (base URL, token, the page's address). The server stops when the block ends."""
+    import uvicorn
+
+    token, sock = new_token(), bind()
+    server = uvicorn.Server(uvicorn.Config(create_app(service, token), log_level="error",
+                                           access_log=False, lifespan="off", ws="none"))
+    thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
+    thread.start()
+    deadline = time.monotonic() + timeout
+    while not server.started:
+        if time.monotonic() > deadline or not thread.is_alive():
+            raise FootfallError("the teaching server did not start")
+        time.sleep(0.01)
+    host, port = sock.getsockname()[:2]
+    try:
+        yield f"http://{host}:{port}", token, address(sock, token)
+    finally:
+        server.should_exit = True
+        thread.join(timeout)
         service.close()
         sock.close()

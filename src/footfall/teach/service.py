@@ -20,7 +20,6 @@ from typing import Any
 
 import numpy as np
 
-from footfall.control.footstep import FootstepConfig
 from footfall.core.errors import FootfallError, NotFound
 from footfall.core.files import plain_json
 from footfall.core.robot import LITTLEDOG, RobotDescription
@@ -28,8 +27,9 @@ from footfall.data.inventory import terrain_label
 from footfall.data.label import check_labeler
 from footfall.data.runlog import RunRecord
 from footfall.data.store import DemoStore
-from footfall.expert.corrections import step_verdicts
-from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
+from footfall.expert.corrections import DEFAULT_MARGIN
+from footfall.expert.synthetic import ExpertConfig, SyntheticExpert
+from footfall.teach.judging import default_expert, expert_key, judged_run, labels_agreement
 from footfall.teach.review import (
     nearest_candidate,
     review_order,
@@ -38,13 +38,7 @@ from footfall.teach.review import (
     terrain_window,
 )
 
-JUDGED_RUNS = 32  # runs whose expert verdicts the service remembers (a few seconds each to judge)
-
-
-def default_expert() -> ExpertConfig:
-    """The synthetic expert that orders the steps: the one that corrects the reproduction's runs
-    (the walking expert at the default gait's foot lead, :func:`walking_expert`)."""
-    return walking_expert(FootstepConfig().lead)
+JUDGED_RUNS = 32  # runs whose expert verdicts the service keeps in memory (and all in the store)
 
 
 class TeachService:
@@ -69,6 +63,7 @@ class TeachService:
         self.labeler = None if labeler is None else check_labeler(labeler)
         self.robot = robot
         self._expert = SyntheticExpert(expert or default_expert(), robot)
+        self._expert_key = expert_key(self._expert)
         self._expert_lock = threading.Lock()  # the expert keeps a cache: one judgement at a time
         self._judged: OrderedDict[int, tuple[np.ndarray, np.ndarray]] = OrderedDict()
         self._local = threading.local()
@@ -98,19 +93,24 @@ class TeachService:
     # --------------------------------------------------------------------- runs
     def runs(self) -> list[dict[str, Any]]:
         """Every stored run, a line each: id, key, board, who chose (reward, model or judge),
-        outcome, slip, steps, labels."""
+        outcome (``failure``: as ``walk-many`` names it), slip, steps, labels, and the steps
+        each labeler labelled (``labelled_by``)."""
         store = self.store()
         boards = {h: terrain_label(t) for h, t in store.terrain_info().items()}
         labelled: dict[int, int] = {}
+        by: dict[int, dict[str, int]] = {}
         for label in store.labels():
             labelled[label.run_id] = labelled.get(label.run_id, 0) + 1
+            mine = by.setdefault(label.run_id, {})
+            mine[label.labeler] = mine.get(label.labeler, 0) + 1
         return [{"id": r["id"], "key": r["key"], "board": boards.get(r["terrain_hash"], "?"),
                  "chooser": _chooser(r["settings"]),
                  "success": bool(r["result"].get("success")),
-                 "reason": r["result"].get("reason"),
+                 "reason": r["result"].get("reason"), "failure": failure(r["result"]),
                  "distance_m": r["result"].get("distance"),
                  "slip_mean_mm": r["result"].get("slip_mean_mm"),
-                 "steps": r["n_steps"], "labels": labelled.get(r["id"], 0)}
+                 "steps": r["n_steps"], "labels": labelled.get(r["id"], 0),
+                 "labelled_by": by.get(r["id"], {})}
                 for r in store.runs()]
 
     def run(self, run_id: int, judge: bool = True) -> dict[str, Any]:
@@ -128,17 +128,19 @@ class TeachService:
         fell = str(run.result.get("reason", "")).startswith("fall")
         to_fall = steps_to_fall(len(run.steps), fell)
         slips = np.array([s.slip for s in run.steps], dtype=np.float64)
-        labels: dict[int, int] = {}
+        labelers: dict[int, list[str]] = {}
         for label in self.store().labels(run_id=run.id):
-            labels[label.k] = labels.get(label.k, 0) + 1
+            labelers.setdefault(label.k, []).append(label.labeler)
         steps = [{"k": s.k, "leg": s.swing_leg, "slip_mm": _mm(s.slip),
                   "steps_to_fall": int(to_fall[i]) if to_fall[i] >= 0 else None,
                   "expert_best": int(best[i]) if judge else None,
                   "shortfall": float(shortfall[i]),
-                  "candidates": len(s.candidates), "labels": labels.get(s.k, 0)}
+                  "candidates": len(s.candidates), "labels": len(labelers.get(s.k, [])),
+                  "labelers": labelers.get(s.k, [])}
                  for i, s in enumerate(run.steps)]
         return plain_json({"id": run.id, "key": run.key, "seed": run.seed,
-                           "result": run.result, "steps": steps, "judged": judge,
+                           "result": run.result, "failure": failure(run.result),
+                           "steps": steps, "judged": judge,
                            "order": review_order(slips, to_fall, shortfall).tolist()},
                           nonfinite="null")
 
@@ -163,7 +165,7 @@ class TeachService:
             "rewards": [None if not np.isfinite(r) else float(r) for r in step.rewards],
             "chosen": step.chosen, "touchdown": step.touchdown, "slip_mm": _mm(step.slip),
             "steps_to_fall": to_fall if to_fall >= 0 else None,
-            "reason": run.result.get("reason"),
+            "reason": run.result.get("reason"), "failure": failure(run.result),
             "expert_best": best, "shortfall": shortfall,
             "labels": [label.to_dict() for label in self.store().labels(run_id=run.id, k=k)],
         }, nonfinite="null")
@@ -182,28 +184,46 @@ class TeachService:
               candidate: int | None = None, point: list[float] | None = None,
               request: str | None = None) -> tuple[dict[str, Any], bool]:
         """Store a label; a clicked ``point`` (x, y [m]) labels the nearest candidate of F.
+        Labelling the robot's own choice as the foothold is the verdict "fine" (it makes no
+        demonstration: the robot chose as the person would have).
 
         Returns the label and whether it was new (False: a repeated request).
         """
         name = labeler if labeler is not None else self.labeler
         if name is None:
             raise FootfallError("who is labelling? give a labeler name")
-        if verdict == "foothold" and candidate is None:
-            if point is None:
-                raise FootfallError("a foothold label needs a candidate index or a point")
-            run = self._run(run_id)
-            candidate = nearest_candidate(self._step(run, k).candidates, np.asarray(point))
+        if verdict == "foothold":
+            step = self._step(self._run(run_id), k)
             if candidate is None:
-                raise FootfallError("no candidate of F lies near that point")
+                if point is None:
+                    raise FootfallError("a foothold label needs a candidate index or a point")
+                candidate = nearest_candidate(step.candidates, np.asarray(point))
+                if candidate is None:
+                    raise FootfallError("no candidate of F lies near that point")
+            if candidate == step.chosen:
+                verdict, candidate = "fine", None
         label, new = self.store().add_label(run_id, k, name, verdict, candidate, request)
         return label.to_dict(), new
 
     def undo(self, label_id: int, labeler: str | None) -> dict[str, Any]:
-        """Remove one of ``labeler``'s labels (and its demonstration)."""
+        """Undo one of ``labeler``'s labels (and its demonstration), restoring the label it had
+        replaced: ``{"removed": label, "restored": label or None}``."""
         name = labeler if labeler is not None else self.labeler
         if name is None:
             raise FootfallError("whose label? give a labeler name")
-        return self.store().remove_label(label_id, labeler=name).to_dict()
+        removed, restored = self.store().undo_label(label_id, labeler=name)
+        return {"removed": removed.to_dict(),
+                "restored": None if restored is None else restored.to_dict()}
+
+    def step_labels(self, run_id: int, k: int) -> list[dict[str, Any]]:
+        """The labels of step ``k`` of a run now (the page polls them: others label too)."""
+        return [label.to_dict() for label in self.store().step_labels(run_id, k)]
+
+    def agreement(self, margin: float = DEFAULT_MARGIN) -> dict[str, Any]:
+        """How often each labeler agrees with the synthetic expert and with each other labeler
+        (:func:`footfall.teach.judging.labels_agreement`)."""
+        with self._expert_lock:
+            return labels_agreement(self.store(), self._expert, margin)
 
     def counts(self) -> dict[str, Any]:
         """Labels by labeler, disagreements, and demonstrations by source."""
@@ -236,18 +256,28 @@ class TeachService:
         return best, float(values[best] - values[step.chosen])
 
     def _verdicts(self, run: RunRecord) -> tuple[np.ndarray, np.ndarray]:
-        """The expert's best index and the robot's shortfall at every step, judged once."""
+        """The expert's best index and the robot's shortfall at every step, judged once per
+        store (kept in it: :func:`footfall.teach.judging.judged_run`)."""
         with self._expert_lock:
             hit = self._judged.get(run.id)
             if hit is None:
-                hmap = self.store().terrain(run.terrain_hash)
-                hit = step_verdicts(run, hmap, self._expert)
+                hit = judged_run(self.store(), run, self._expert, self._expert_key)
                 self._judged[run.id] = hit
                 if len(self._judged) > JUDGED_RUNS:
                     self._judged.popitem(last=False)
             else:
                 self._judged.move_to_end(run.id)
             return hit
+
+
+def failure(result: dict) -> str | None:
+    """What a failed run is put down to, as ``walk-many`` reports it: the cause of its
+    explanation (:data:`footfall.sim.explain.CAUSES`) when the run was explained, else the
+    reason it ended; None for a run that crossed."""
+    if result.get("success"):
+        return None
+    cause = (result.get("explanation") or {}).get("cause")
+    return str(cause) if cause else str(result.get("reason") or "failed")
 
 
 def _chooser(settings: dict) -> str:

@@ -1,0 +1,230 @@
+// footfall teach: the 3D view of a step (three.js). World frame x forward, y left, z up,
+// metres. The terrain and the robot are built once per step; the marks are pins over their
+// candidates, stacked one above the other so that none hides another. Drag orbits, the wheel
+// zooms; the camera stays above the ground, and reset() frames the step again.
+import * as THREE from "three";
+import { OrbitControls } from "three/addons/OrbitControls.js";
+import { COLOURS, rewardColours } from "./marks.js";
+import { heightRange } from "./topview.js";
+
+const PIN_GAP = 0.009;     // [m] between stacked pins
+const ABOVE_GROUND = 0.02; // [m] the camera is kept at least this far above the terrain
+const DRAG = 4;            // [CSS px] farther than this is an orbit, not a click
+const CANDIDATE = 0.0025;  // [m] radius of a candidate's ball
+
+export function createView3D(box, onLabel) {
+  let renderer = null;
+  try {
+    renderer = new THREE.WebGLRenderer({ antialias: false });
+  } catch (e) {
+    box.textContent = "The 3D view needs WebGL, which this browser lacks; the top view works.";
+    return { ok: false, setStep() {}, setMarks() {}, reset() {}, screenOf() { return null; },
+             camera() { return null; }, ground() { return null; } };
+  }
+  renderer.setPixelRatio(window.devicePixelRatio);
+  box.append(renderer.domElement);
+  const scene = new THREE.Scene();
+  scene.background = new THREE.Color("#eceff1");
+  const camera = new THREE.PerspectiveCamera(40, 4 / 3, 0.005, 20);
+  camera.up.set(0, 0, 1);
+  const controls = new OrbitControls(camera, renderer.domElement);
+  controls.maxPolarAngle = 0.47 * Math.PI;  // never below the horizon of the target
+  controls.minDistance = 0.05;
+  controls.maxDistance = 3;
+  scene.add(new THREE.AmbientLight(0xffffff, 1.2));
+  const sun = new THREE.DirectionalLight(0xffffff, 2.0);
+  sun.position.set(0.5, 0.8, 2.0);
+  scene.add(sun);
+  let world = null, marks = null, terrain = null, candidates = null, step = null, home = null;
+  warmUp();
+
+  function warmUp() {  // compile the shaders a step needs now, not when the first step is shown
+    const h = [[0, 0], [0, 0]];
+    const s = { terrain: { x: [0, 0.01], y: [0, 0.01], heights: h, step: 0.01 },
+                candidates: [[0, 0, 0]], rewards: [1] };
+    const warm = new THREE.Group();
+    warm.add(terrainMesh(s.terrain), candidateMesh(s), sphere([0, 0, 0], 0.01, "#fff"));
+    warm.add(new THREE.Mesh(new THREE.BoxGeometry(0.01, 0.01, 0.01),
+      new THREE.MeshLambertMaterial({ color: "#607d8b", transparent: true, opacity: 0.55 })));
+    warm.add(new THREE.Line(new THREE.BufferGeometry().setFromPoints(
+      [new THREE.Vector3(0, 0, 0), new THREE.Vector3(0, 0, 0.01)]), new THREE.LineBasicMaterial()));
+    scene.add(warm);
+    camera.position.set(0.03, 0.03, 0.03);  // looking at it: every shader draws a pixel
+    camera.lookAt(0, 0, 0);
+    renderer.compile(scene, camera);
+    renderer.render(scene, camera);  // and draw once: the software GL compiles its pipelines
+    dispose(warm);
+  }
+
+  function render() { renderer.render(scene, camera); }
+
+  function groundAt(x, y) {  // [m] the terrain's height under (x, y), null off the window
+    const t = step && step.terrain;
+    if (!t) return null;
+    const i = Math.round((x - t.x[0]) / t.step), j = Math.round((y - t.y[0]) / t.step);
+    if (i < 0 || j < 0 || i >= t.x.length || j >= t.y.length) return null;
+    return t.heights[i][j];
+  }
+
+  controls.addEventListener("change", () => {
+    const g = groundAt(camera.position.x, camera.position.y);
+    if (g !== null && camera.position.z < g + ABOVE_GROUND) camera.position.z = g + ABOVE_GROUND;
+    render();
+  });
+
+  function fit() {  // the canvas follows its box (the panel may have been hidden, or resized)
+    const w = box.clientWidth, h = box.clientHeight, size = renderer.getSize(new THREE.Vector2());
+    if (w > 0 && h > 0 && (size.x !== w || size.y !== h)) {
+      renderer.setSize(w, h);
+      camera.aspect = w / h;
+      camera.updateProjectionMatrix();
+      return true;
+    }
+    return false;
+  }
+  new ResizeObserver(() => { if (fit() && step) render(); }).observe(box);
+
+  function sphere(p, radius, colour, lift = 0) {
+    const m = new THREE.Mesh(new THREE.SphereGeometry(radius, 16, 12),
+                             new THREE.MeshLambertMaterial({ color: colour }));
+    m.position.set(p[0], p[1], p[2] + radius + lift);
+    return m;
+  }
+
+  function terrainMesh(t) {
+    const nx = t.x.length, ny = t.y.length, [lo, hi] = heightRange(t.heights);
+    const pos = new Float32Array(nx * ny * 3), col = new Float32Array(nx * ny * 3);
+    const index = [];
+    const a = new THREE.Color("#5d6d4e"), b = new THREE.Color("#d7ccc8"), c = new THREE.Color();
+    for (let i = 0; i < nx; i++) for (let j = 0; j < ny; j++) {
+      const h = t.heights[i][j], v = i * ny + j;
+      pos.set([t.x[i], t.y[j], h === null ? lo : h], 3 * v);
+      c.copy(a).lerp(b, hi > lo && h !== null ? (h - lo) / (hi - lo) : 0);
+      col.set([c.r, c.g, c.b], 3 * v);
+    }
+    for (let i = 0; i + 1 < nx; i++) for (let j = 0; j + 1 < ny; j++) {
+      if (t.heights[i][j] === null || t.heights[i + 1][j] === null ||
+          t.heights[i + 1][j + 1] === null || t.heights[i][j + 1] === null) continue;  // a hole
+      const q = i * ny + j;
+      index.push(q, q + ny, q + ny + 1, q, q + ny + 1, q + 1);
+    }
+    const g = new THREE.BufferGeometry();
+    g.setAttribute("position", new THREE.BufferAttribute(pos, 3));
+    g.setAttribute("color", new THREE.BufferAttribute(col, 3));
+    g.setIndex(index);
+    g.computeVertexNormals();
+    return new THREE.Mesh(g, new THREE.MeshLambertMaterial({ vertexColors: true,
+      side: THREE.DoubleSide }));
+  }
+
+  function robot(r) {
+    const g = new THREE.Group();
+    const trunk = new THREE.Mesh(new THREE.BoxGeometry(...r.body.size),
+      new THREE.MeshLambertMaterial({ color: "#607d8b", transparent: true, opacity: 0.55 }));
+    trunk.position.set(...r.body.position);
+    trunk.rotation.copy(new THREE.Euler(r.body.rpy[0], r.body.rpy[1], r.body.rpy[2], "ZYX"));
+    g.add(trunk);
+    for (const [name, leg] of Object.entries(r.legs)) {
+      const colour = name === r.swing_leg ? COLOURS.swing : COLOURS.stance;
+      g.add(new THREE.Line(new THREE.BufferGeometry().setFromPoints(
+        [new THREE.Vector3(...leg.hip), new THREE.Vector3(...leg.foot)]),
+        new THREE.LineBasicMaterial({ color: colour })));
+      g.add(sphere(leg.foot, r.foot_radius * 0.8, colour));
+    }
+    return g;
+  }
+
+  function candidateMesh(s) {  // F as one instanced mesh: one draw call for every candidate
+    const colours = rewardColours(s.rewards);
+    const mesh = new THREE.InstancedMesh(new THREE.SphereGeometry(CANDIDATE, 10, 8),
+                                         new THREE.MeshLambertMaterial(), s.candidates.length);
+    const m = new THREE.Matrix4(), c = new THREE.Color();
+    s.candidates.forEach((p, i) => {
+      mesh.setMatrixAt(i, m.makeTranslation(p[0], p[1], p[2] + CANDIDATE));
+      mesh.setColorAt(i, c.set(colours[i]));
+    });
+    return mesh;
+  }
+
+  function dispose(group) {
+    if (!group) return;
+    scene.remove(group);
+    group.traverse((o) => { o.geometry?.dispose(); o.material?.dispose(); });
+  }
+
+  function setStep(s, stepMarks) {
+    fit();
+    dispose(world);
+    step = s;
+    world = new THREE.Group();
+    terrain = terrainMesh(s.terrain);
+    world.add(terrain);
+    world.add(robot(s.robot));
+    candidates = candidateMesh(s);
+    world.add(candidates);
+    scene.add(world);
+    const f = s.candidates[s.chosen], b = s.robot.body.position;
+    const target = [(f[0] + b[0]) / 2, (f[1] + b[1]) / 2, f[2]];
+    home = { target, position: [target[0] - 0.28, target[1] - 0.36, target[2] + 0.5] };
+    setMarks(stepMarks, false);
+    reset();
+  }
+
+  function setMarks(list, draw = true) {
+    dispose(marks);
+    marks = new THREE.Group();
+    const levels = new Map();  // candidate -> pins stacked on it so far
+    for (const m of [...list].reverse()) {  // innermost (expert) lowest, others' on top
+      const p = step.candidates[m.index];
+      const level = levels.get(m.index) || 0;
+      for (let n = 0; n < m.count; n++) {
+        const lift = PIN_GAP * (level + n);
+        const pin = sphere(p, m.kind === "mine" ? 0.0045 : 0.0038, COLOURS[m.kind], lift);
+        pin.userData.index = m.index;
+        marks.add(pin);
+      }
+      levels.set(m.index, level + m.count);
+    }
+    scene.add(marks);
+    if (draw) render();
+  }
+
+  function reset() {
+    if (!home) return;
+    controls.target.set(...home.target);
+    camera.position.set(...home.position);
+    controls.update();
+    render();
+  }
+
+  const ray = new THREE.Raycaster(), ndc = new THREE.Vector2();
+  let down = null;
+  renderer.domElement.addEventListener("pointerdown", (e) => { down = [e.clientX, e.clientY]; });
+  renderer.domElement.addEventListener("pointerup", (e) => {
+    if (!down || Math.hypot(e.clientX - down[0], e.clientY - down[1]) > DRAG || !terrain) return;
+    down = null;
+    const rect = renderer.domElement.getBoundingClientRect();
+    ndc.set(((e.clientX - rect.left) / rect.width) * 2 - 1,
+            -((e.clientY - rect.top) / rect.height) * 2 + 1);
+    ray.setFromCamera(ndc, camera);
+    const hit = ray.intersectObjects([candidates, ...(marks ? marks.children : []), terrain],
+                                     false)[0];
+    if (!hit) return;
+    if (hit.object === candidates) onLabel({ candidate: hit.instanceId });
+    else if (hit.object.userData.index !== undefined) onLabel({ candidate: hit.object.userData.index });
+    else onLabel({ point: [hit.point.x, hit.point.y] });
+  });
+
+  function screenOf(i) {  // CSS pixels of candidate i within the view (for tests)
+    const c = step.candidates[i];
+    const p = new THREE.Vector3(c[0], c[1], c[2] + CANDIDATE).project(camera);
+    return { x: (p.x + 1) / 2 * box.clientWidth, y: (1 - p.y) / 2 * box.clientHeight };
+  }
+
+  function cameraNow() {
+    return { position: camera.position.toArray(), target: controls.target.toArray() };
+  }
+
+  return { ok: true, setStep, setMarks, reset, screenOf, camera: cameraNow, ground: groundAt,
+           home: () => home };
+}

@@ -91,30 +91,51 @@ export function createView3D(box, onLabel) {
     return m;
   }
 
-  function terrainMesh(t) {
+  // The terrain as one mesh; `mesh` given (the previous step's), its buffers are refilled in
+  // place when the grid has the same size: no new GL buffers for each step.
+  function terrainMesh(t, mesh = null) {
     const nx = t.x.length, ny = t.y.length, [lo, hi] = heightRange(t.heights);
-    const pos = new Float32Array(nx * ny * 3), col = new Float32Array(nx * ny * 3);
-    const index = [];
+    const g = mesh && mesh.userData.cells === nx * ny ? mesh.geometry : new THREE.BufferGeometry();
+    const fresh = g !== (mesh && mesh.geometry);
+    const pos = fresh ? new Float32Array(nx * ny * 3) : g.attributes.position.array;
+    const col = fresh ? new Float32Array(nx * ny * 3) : g.attributes.color.array;
     const a = new THREE.Color("#5d6d4e"), b = new THREE.Color("#d7ccc8"), c = new THREE.Color();
     for (let i = 0; i < nx; i++) for (let j = 0; j < ny; j++) {
-      const h = t.heights[i][j], v = i * ny + j;
-      pos.set([t.x[i], t.y[j], h === null ? lo : h], 3 * v);
+      const h = t.heights[i][j], v = 3 * (i * ny + j);
+      pos[v] = t.x[i]; pos[v + 1] = t.y[j]; pos[v + 2] = h === null ? lo : h;
       c.copy(a).lerp(b, hi > lo && h !== null ? (h - lo) / (hi - lo) : 0);
-      col.set([c.r, c.g, c.b], 3 * v);
+      col[v] = c.r; col[v + 1] = c.g; col[v + 2] = c.b;
     }
+    const index = [];
     for (let i = 0; i + 1 < nx; i++) for (let j = 0; j + 1 < ny; j++) {
       if (t.heights[i][j] === null || t.heights[i + 1][j] === null ||
           t.heights[i + 1][j + 1] === null || t.heights[i][j + 1] === null) continue;  // a hole
       const q = i * ny + j;
       index.push(q, q + ny, q + ny + 1, q, q + ny + 1, q + 1);
     }
-    const g = new THREE.BufferGeometry();
-    g.setAttribute("position", new THREE.BufferAttribute(pos, 3));
-    g.setAttribute("color", new THREE.BufferAttribute(col, 3));
-    g.setIndex(index);
+    if (fresh) {
+      g.setAttribute("position", new THREE.BufferAttribute(pos, 3));
+      g.setAttribute("color", new THREE.BufferAttribute(col, 3));
+    } else {
+      g.attributes.position.needsUpdate = true;
+      g.attributes.color.needsUpdate = true;
+    }
+    if (!fresh && g.index && g.index.count === index.length) {
+      g.index.array.set(index);
+      g.index.needsUpdate = true;
+    } else {
+      g.setIndex(index);
+    }
     g.computeVertexNormals();
-    return new THREE.Mesh(g, new THREE.MeshLambertMaterial({ vertexColors: true,
+    g.computeBoundingSphere();
+    g.computeBoundingBox();
+    if (!fresh) return mesh;
+    if (mesh) mesh.geometry.dispose();
+    const made = mesh || new THREE.Mesh(g, new THREE.MeshLambertMaterial({ vertexColors: true,
       side: THREE.DoubleSide }));
+    made.geometry = g;
+    made.userData.cells = nx * ny;
+    return made;
   }
 
   function robot(r) {
@@ -154,10 +175,11 @@ export function createView3D(box, onLabel) {
 
   function setStep(s, stepMarks) {
     fit();
+    if (world && terrain) world.remove(terrain);  // kept: refilled for the new step
     dispose(world);
     step = s;
     world = new THREE.Group();
-    terrain = terrainMesh(s.terrain);
+    terrain = terrainMesh(s.terrain, terrain);
     world.add(terrain);
     world.add(robot(s.robot));
     candidates = candidateMesh(s);

@@ -6,8 +6,9 @@ stores each several times over (a store of at least 20 runs, none judged by the 
 serves it, and drives the page in Chromium (Playwright, WebGL in software): it opens runs
 never opened before, steps through each with the arrow key and labels steps by clicks in the
 top view. The page itself times (``window.teach.state.timings``, milliseconds to the next
-painted frame): the step view from its data's arrival, a label from the server's answer, and
-a run's first step from the click that opened it. The baseline, in the same process: what
+painted frame): the step view from its data's arrival when moving through a run, a label from
+the server's answer, and a run's first step from the click that opened it (and, within that,
+the drawing of the run's first step from its data's arrival). The baseline, in the same process: what
 opening a run cost before the page stopped waiting for the expert -- the server's judgement
 of a whole new run (``GET /api/runs/{id}``, judged), and the same request answered by a
 second server start from the judgement kept in the store.
@@ -33,7 +34,9 @@ from footfall.terrain import make_board
 
 TEST_BOARD = ([("rocky", 0.7), ("steps", 0.7)], 500)  # the controller test board and its seed
 SEARCH_RADIUS = 0.03  # [m] F within this of the gait's foothold, as the reproduction walks
-TARGETS = {"step view": 300.0, "label": 200.0, "first step": 1000.0}  # [ms] at most
+TARGETS = {"step view": 300.0, "label": 200.0, "first step": 1000.0}  # [ms] at most: a step
+# drawn when moving through a run, a label confirmed, a run's first step shown from the click
+OPENING = "opening step view"  # [ms] the drawing of a run's first step: part of "first step"
 VIEWPORT = {"width": 1400, "height": 900}
 
 
@@ -68,12 +71,13 @@ def bench_teach(walks: int = 2, copies: int = 10, runs: int = 3, steps: int = 10
             finally:
                 browser.close()
     kinds = {}
-    for what, target in TARGETS.items():
+    for what, target in (*TARGETS.items(), (OPENING, None)):
         ms = [t["ms"] for t in timings if t["what"] == what]
         kinds[what] = {"n": len(ms), "median_ms": statistics.median(ms) if ms else None,
                        "max_ms": max(ms) if ms else None, "target_ms": target,
-                       "median_within": bool(ms) and statistics.median(ms) <= target,
-                       "all_within": bool(ms) and max(ms) <= target}
+                       "median_within": None if target is None else
+                       bool(ms) and statistics.median(ms) <= target,
+                       "all_within": None if target is None else bool(ms) and max(ms) <= target}
     return {"store_runs": walks * copies, "walk_seconds": walk_seconds, "page_ready_s": ready,
             "timings": kinds, "baseline": baseline, "samples": timings, "page_errors": errors,
             "browser": "Chromium (headless, WebGL in SwiftShader)"}
@@ -141,11 +145,14 @@ def format_teach(r: dict) -> str:
              f"{r['page_ready_s']:.2f} s"]
     for what, t in r["timings"].items():
         if not t["n"]:
-            lines.append(f"  {what:<11} not measured")
+            lines.append(f"  {what:<17} not measured")
             continue
-        lines.append(f"  {what:<11} median {t['median_ms']:6.0f} ms, largest {t['max_ms']:6.0f} "
-                     f"ms over {t['n']:3d} (target {t['target_ms']:.0f} ms: "
-                     f"{'met' if t['all_within'] else 'median met' if t['median_within'] else 'NOT met'})")
+        verdict = ("part of the first step" if t["target_ms"] is None else
+                   f"target {t['target_ms']:.0f} ms: " + ("met" if t["all_within"] else
+                                                          "median met" if t["median_within"]
+                                                          else "NOT met"))
+        lines.append(f"  {what:<17} median {t['median_ms']:6.0f} ms, largest {t['max_ms']:6.0f} "
+                     f"ms over {t['n']:3d} ({verdict})")
     b = r["baseline"]
     lines.append(f"  baseline: a new run's steps judged by the expert before the page could show "
                  f"one {b['judged_s']:.2f} s, unjudged {b['unjudged_s']:.2f} s "

@@ -129,7 +129,7 @@ async function openRun(id) {
     $("step-panel").hidden = false;
     document.body.classList.add("run-open");
     if (window.innerWidth < NARROW) setRunsOpen(false);
-    await showStep(0);
+    await showStep(0, "opening step view");
     if (seq !== state.runSeq) return;
     say("");
     // the expert judges once the first step is on screen: its work does not delay the view
@@ -178,7 +178,8 @@ function fetchStep(k) {
   return state.cache.get(k);
 }
 
-async function showStep(pos) {
+// `what`: the name its drawing time is recorded under (a run's first step is part of opening it)
+async function showStep(pos, what = "step view") {
   if (!state.run || !state.order.length) return;
   state.pos = Math.max(0, Math.min(pos, state.order.length - 1));
   const seq = ++state.nav, shown = state.pos, k = state.order[shown];
@@ -190,7 +191,7 @@ async function showStep(pos) {
     state.step = step;
     state.shownPos = shown;
     drawStep(true);
-    timed("step view", start, () => {  // then the next step, ahead of the labeller
+    timed(what, start, () => {  // then the next step, ahead of the labeller
       const next = state.order[shown + 1];
       if (next !== undefined && seq === state.nav) fetchStep(next);
     });

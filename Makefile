@@ -58,13 +58,14 @@ chromium:
 libgomp:
 	$(call apt_install,libgomp1,ldconfig -p 2>/dev/null | grep -q 'libgomp\.so\.1',the boosted ranker cannot learn)
 
-bench: $(STAMP) libgomp
+bench: $(STAMP) libgomp chromium
 	$(BIN)/footfall bench scoring
 	$(BIN)/footfall bench learning
 	$(BIN)/footfall bench rankers
 	$(BIN)/footfall bench expert
 	$(BIN)/footfall bench sim
 	$(BIN)/footfall bench executors
+	$(BIN)/footfall bench teach
 
 clean:
 	rm -rf $(VENV) out

@@ -204,6 +204,21 @@ def test_a_failed_run_is_named_as_walk_many_names_it(tmp_path, open_page):
         assert "(stance foot slipped)" in page.text_content("#facts")
 
 
+def test_a_click_on_a_run_survives_a_refresh_of_the_list(store, open_page):
+    # the list refreshes after a label, a poll or a new name: a press and its release on a row
+    # with a refresh between them still open that run
+    with serving(TeachService(store)) as (_, _, address):
+        page = open_page(address)
+        box = page.locator("#runs tbody tr:nth-child(2)").bounding_box()
+        page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+        page.mouse.down()
+        page.dispatch_event("#labeler", "change")  # a new name: the list is fetched again
+        page.wait_for_timeout(800)
+        page.mouse.up()
+        page.wait_for_function("window.teach.state.step !== null && "
+                               "window.teach.state.step.run === 2", timeout=15_000)
+
+
 # ---------------------------------------------------------------- the labeller's tools
 def test_the_queue_counts_my_steps_and_finds_the_next_unlabelled(store, open_page):
     with serving(TeachService(store)) as (_, _, address):

@@ -55,33 +55,44 @@ function timed(what, start, then = null) {  // [ms] from start to the next paint
 }
 
 // ------------------------------------------------------------------ runs list
+// The runs list; a refresh updates the rows in place (a row replaced under the pointer between
+// a press and its release would swallow the click), adding rows for new runs.
 async function loadRuns(quiet = false) {
   state.runs = await api("/api/runs", { quiet });
   const body = $("runs").querySelector("tbody");
-  body.replaceChildren();
+  const rows = new Map([...body.children].map((tr) => [Number(tr.dataset.run), tr]));
   const name = me();
   for (const r of state.runs) {
-    const tr = document.createElement("tr");
-    tr.dataset.run = r.id;
+    let tr = rows.get(r.id);
+    if (!tr) {
+      tr = document.createElement("tr");
+      tr.dataset.run = r.id;
+      for (let i = 0; i < 9; i++) {
+        const td = document.createElement("td");
+        if (i >= 1 && i <= 4) td.className = "text";
+        if (WIDE.includes(i)) td.classList.add("wide");
+        tr.append(td);
+      }
+      tr.addEventListener("click", () => openRun(r.id));
+      body.append(tr);
+    }
+    rows.delete(r.id);
     const mine = (r.labelled_by || {})[name] || 0;
     const cells = [r.id, r.key ?? "", r.board, r.chooser, r.success ? "crossed" : r.failure,
       r.slip_mean_mm == null ? "-" : r.slip_mean_mm.toFixed(1), r.steps, r.labels,
       name ? `${mine} / ${r.steps}` : "-"];
     tr.title = `${r.key ?? ""} · ${r.board} · ${r.chooser}`;
     cells.forEach((c, i) => {
-      const td = document.createElement("td");
-      td.textContent = c;
-      if (i >= 1 && i <= 4) td.className = "text";
-      if (WIDE.includes(i)) td.classList.add("wide");
-      if (i === 4 && !r.success) {
-        td.classList.add("fail");
-        if (r.reason && r.reason !== r.failure) td.title = `the run ended: ${r.reason}`;
+      const td = tr.children[i];
+      if (td.textContent !== String(c)) td.textContent = c;
+      if (i === 4) {
+        td.classList.toggle("fail", !r.success);
+        td.title = !r.success && r.reason && r.reason !== r.failure ?
+          `the run ended: ${r.reason}` : "";
       }
-      tr.append(td);
     });
-    tr.addEventListener("click", () => openRun(r.id));
-    body.append(tr);
   }
+  for (const gone of rows.values()) gone.remove();  // (a store's runs are never removed)
   if (state.run) markRun(state.run.id);
 }
 

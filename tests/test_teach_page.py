@@ -345,7 +345,7 @@ def test_a_run_opens_at_its_first_step_before_the_expert_has_judged_it(store, op
     with serving(service) as (_, _, address):
         page = open_page(address)
         _open_run(page)
-        assert page.is_visible("#judging")
+        page.wait_for_selector("#judging", state="visible", timeout=5_000)
         assert "the expert is judging" in page.text_content("#facts")
         assert not any(m["kind"] == "expert" for m in page.evaluate("window.teach.marks()"))
         service.judged.set()
@@ -357,7 +357,7 @@ def test_a_slow_step_shows_the_page_is_loading(store, open_page):
     with serving(SlowSteps(store, delays={k: 1.5 for k in range(1, STEPS)})) as (_, _, address):
         page = open_page(address)
         _open_run(page, order="run")
-        assert not page.is_visible("#busy")
+        page.wait_for_selector("#busy", state="hidden", timeout=5_000)
         page.keyboard.press("ArrowRight")
         page.wait_for_selector("#busy", state="visible", timeout=5_000)
         page.wait_for_function("window.teach.state.step.k === 1", timeout=15_000)

@@ -436,20 +436,26 @@ def test_migrated_store_has_the_schema_of_a_new_one(filled, tmp_path):
     assert contents(path) == before  # the demonstrations and terrains are untouched
 
 
-def test_a_version_2_store_gains_the_labels_table_and_loses_nothing(filled, tmp_path):
+@pytest.mark.parametrize("version, newer", [
+    (2, ("judgements", "replaced_labels", "labels")),  # 3: people's labels
+    (3, ("judgements", "replaced_labels")),  # 4: undo history and the expert's judgements
+])
+def test_an_older_store_gains_the_newer_tables_and_loses_nothing(filled, tmp_path, version,
+                                                                 newer):
     path, _, _ = filled
     before = contents(path)
     with DemoStore(tmp_path / "new.sqlite", create=True):
         pass
     with raw(path) as con:
-        con.execute("DROP TABLE judgements")
-        con.execute("DROP TABLE replaced_labels")
-        con.execute("DROP TABLE labels")
-        con.execute("UPDATE meta SET value = '2' WHERE key = 'schema_version'")
+        for table in newer:
+            con.execute(f"DROP TABLE {table}")
+        con.execute("UPDATE meta SET value = ? WHERE key = 'schema_version'", (str(version),))
     con.close()
-    with DemoStore(path, read_only=True) as store:  # read as it is: no labels, none refused
-        assert store.schema_version == 2 and store.labels() == []
-        assert store.summary()["labels"] == {"by_labeler": {}, "disagreements": 0}
+    with DemoStore(path, read_only=True) as store:  # read as it is: nothing refused
+        assert store.schema_version == version and store.judgement(1, "any") is None
+        if "labels" in newer:
+            assert store.labels() == []
+            assert store.summary()["labels"] == {"by_labeler": {}, "disagreements": 0}
     with DemoStore(path) as store:
         assert store.schema_version == SCHEMA_VERSION == 4
     assert _objects(path) == _objects(tmp_path / "new.sqlite")
@@ -468,20 +474,3 @@ def test_migration_leaves_a_store_another_process_upgraded_alone(filled):
             == (str(SCHEMA_VERSION),)
     con.close()
 
-
-def test_a_version_3_store_gains_undo_history_and_judgements_and_loses_nothing(filled, tmp_path):
-    path, _, _ = filled
-    before = contents(path)
-    with DemoStore(tmp_path / "new.sqlite", create=True):
-        pass
-    with raw(path) as con:
-        con.execute("DROP TABLE judgements")
-        con.execute("DROP TABLE replaced_labels")
-        con.execute("UPDATE meta SET value = '3' WHERE key = 'schema_version'")
-    con.close()
-    with DemoStore(path, read_only=True) as store:  # read as it is
-        assert store.schema_version == 3 and store.judgement(1, "any") is None
-    with DemoStore(path) as store:
-        assert store.schema_version == SCHEMA_VERSION == 4
-    assert _objects(path) == _objects(tmp_path / "new.sqlite")
-    assert contents(path) == before

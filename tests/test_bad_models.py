@@ -18,7 +18,8 @@ from footfall.features.config import FeatureConfig
 from footfall.features.pose_features import PoseFeatures
 from footfall.features.reward import analytic_templates
 from footfall.features.scoring import score_footholds
-from footfall.features.templates import BANDWIDTH_RANGE, TemplateFeatures, TemplateLibrary
+from footfall.features.template_library import TemplateLibrary
+from footfall.features.templates import BANDWIDTH_RANGE, TemplateFeatures
 from footfall.features.terrain_features import TerrainFeatures
 from footfall.learning.function import MAX_WEIGHT, LinearFunction
 from footfall.learning.model import LEG_GROUPS, FootholdModel

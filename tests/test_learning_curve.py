@@ -195,6 +195,11 @@ def test_two_points_are_compared_decision_by_decision_over_their_shared_draws(tm
     assert r["a"]["above_margin"] == 0.5 and r["b"]["above_margin"] == pytest.approx(1 / 3)
     assert (r["a_only_above"], r["b_only_above"]) == (2, 1)
     assert r["p"] == pytest.approx(1.0)  # 2 against 1 separates nothing
+    assert r["a"]["mean_shortfall"] == pytest.approx(10.5 / 6)
+    assert r["b"]["mean_shortfall"] == pytest.approx(5.0 / 6)
+    assert r["shortfall_difference"] == pytest.approx(5.5 / 6)
+    lo, hi = r["shortfall_difference_ci"]  # differences 0, 2, 0, -1.5, 5, 0
+    assert -1.5 <= lo < 5.5 / 6 < hi <= 5.0
     with pytest.raises(FootfallError, match="differ in seed"):
         compare_points(curve, _curve([], seed=1), 100, ("both", "l1"), ("both", "l1"))
     with pytest.raises(FootfallError, match="differ in search_radius"):  # other decisions
@@ -208,5 +213,6 @@ def test_two_points_are_compared_decision_by_decision_over_their_shared_draws(tm
     code, out, _ = run(capsys, "curve-compare", str(tmp_path / "c"), "--size", "100",
                        "--other-learner", "kernel")
     assert code == 0 and "only 2, for the second only 1" in out
+    assert "mean shortfall 1.75 against 0.83: first less second +0.92 [" in out
     code, _, err = run(capsys, "curve-compare", str(tmp_path / "none"), "--size", "100")
     assert_user_error(code, err, "not a learning curve's results")

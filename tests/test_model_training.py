@@ -204,3 +204,19 @@ def test_family_options_reach_only_their_family_and_unknown_ones_are_refused(dem
         bandwidths = f.family("templates").bandwidths
         assert bandwidths == direct.functions[group].family("templates").bandwidths
         assert bandwidths != default.functions[group].family("templates").bandwidths
+
+
+def test_a_capped_library_never_offers_more_templates_than_its_size(demos_and_maps, tmp_path):
+    demos, maps = demos_and_maps  # 16 demonstrations: more than 30 / 3 a scale
+    logs = {True: [], False: []}
+    for capped, log in logs.items():
+        model = learn_model(training(demos, maps), "templates", "l1", library_size=30,
+                            library_capped=capped, training_candidates=30, cv=3, Cs=5,
+                            bandwidth_rms=(0.004, 0.004, 0.008), log=log.append)
+    offered = {capped: next(line for line in log if line.startswith("template library"))
+               for capped, log in logs.items()}
+    assert offered[True] == "template library: 30 templates (10, 10, 10)"
+    assert offered[False] == "template library: 48 templates (16, 16, 16)"
+    model.save(tmp_path / "uncapped.npz")
+    back = FootholdModel.load(tmp_path / "uncapped.npz")
+    assert back.info["library_capped"] is False and back.info["library_size"] == 30

@@ -8,7 +8,8 @@ from footfall.core.heightmap import HeightMap
 from footfall.features.config import FeatureConfig
 from footfall.features.dense import score_grid
 from footfall.features.reward import LinearReward
-from footfall.features.templates import TemplateFeatures, extract_templates
+from footfall.features.template_library import extract_templates
+from footfall.features.templates import TemplateFeatures
 from footfall.features.terrain_features import TerrainFeatures
 
 CONFIG = FeatureConfig()

@@ -7,14 +7,14 @@ from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.features.config import FeatureConfig
 from footfall.features.reward import analytic_templates
-from footfall.features.templates import (
+from footfall.features.template_library import (
     TemplateLibrary,
-    bandwidth_for_rms,
     extract_templates,
     merge_libraries,
     rbf_features,
     squared_distances,
 )
+from footfall.features.templates import bandwidth_for_rms
 
 CONFIG = FeatureConfig()
 
@@ -123,3 +123,42 @@ def test_families_with_the_same_library_share_their_columns_once_per_candidate_s
     assert c.columns(a) is c.columns(b)  # computed once, shared
     np.testing.assert_array_equal(c.columns(other_rms), other_rms.compute(c))
     assert c.columns(other_rms) is not c.columns(a)
+
+
+def _demonstrations(n: int, rng: np.random.Generator):
+    """``n`` left-fore-leg decisions on one bumpy map: 5 candidates each, all inside it."""
+    from footfall.core.state import RobotState
+
+    hm = _bumpy_map()
+    states, candidates, chosen = [], [], []
+    for _ in range(n):
+        xy = np.column_stack([rng.uniform(0.15, 0.25, 5), rng.uniform(-0.05, 0.05, 5)])
+        candidates.append(np.column_stack([xy, np.full(5, 0.1)]))
+        states.append(RobotState(np.zeros((4, 3)), np.array([0.2, 0.0, 0.2]), np.zeros(3), "LF"))
+        chosen.append(int(rng.integers(5)))
+    return [hm] * n, states, candidates, chosen
+
+
+def test_a_capped_library_holds_a_sample_of_the_demonstrated_footholds_and_no_more():
+    from footfall.features.template_library import library_from_demonstrations
+
+    maps, states, candidates, chosen = _demonstrations(40, np.random.default_rng(0))
+
+    def lib(n, capped, seed=1):
+        return library_from_demonstrations(maps[:n], states[:n], candidates[:n], chosen[:n],
+                                           CONFIG, np.random.default_rng(seed), size=30,
+                                           capped=capped)
+
+    # Up to a third of the size a scale the cap changes nothing, the random draws included.
+    for a, b in zip(lib(10, True).templates, lib(10, False).templates):
+        np.testing.assert_array_equal(a, b)
+    uncapped, capped = lib(40, False), lib(40, True)
+    assert uncapped.counts == (40, 40, 40)  # every demonstrated foothold, as the paper
+    assert capped.counts == (10, 10, 10)
+    for t_cap, t_all in zip(capped.templates, uncapped.templates):  # a subset, no repeats
+        same = (t_cap[:, None, :] == t_all[None, :, :]).all(axis=2)
+        assert (same.sum(axis=1) == 1).all() and (same.sum(axis=0) <= 1).all()
+    for a, b in zip(capped.templates, lib(40, True).templates):  # seeded
+        np.testing.assert_array_equal(a, b)
+    assert any(not np.array_equal(a, b) for a, b in zip(capped.templates,
+                                                          lib(40, True, seed=2).templates))

@@ -67,6 +67,10 @@ def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
                    "number of templates, or 'none' [default: none].")
 @click.option("--library-size", type=click.IntRange(min=3), default=None,
               help="Templates in the library before selection [default: 1000].")
+@click.option("--library-capped/--library-uncapped", default=None,
+              help="Never more templates than --library-size (more demonstrations than a "
+                   "third of it: a uniform random sample of their footholds), or every "
+                   "demonstrated foothold a template as the paper [default: uncapped].")
 @click.option("--seed", type=SEED, default=0, show_default=True)
 @click.option("--quick", is_flag=True, help="A small curve (two sizes, two draws) for a smoke "
                                             "test.")
@@ -85,7 +89,8 @@ def offline(out: str, seed: int, quick: bool, as_json: bool) -> None:
 def learning_curve(out: str, sizes: str | None, draws: int | None,
                    feature_sets: tuple[str, ...], learners: tuple[str, ...],
                    test_decisions: int | None, folds: str | None, selection: str | None,
-                   template_budget: float | str | None, library_size: int | None, seed: int,
+                   template_budget: float | str | None, library_size: int | None,
+                   library_capped: bool | None, seed: int,
                    quick: bool, search_radius: float | None, path_bias: float | None,
                    processes: int | None, as_json: bool) -> None:
     """Learning curves: each feature set and learner from 25 to 1 600 demonstrations, on
@@ -96,6 +101,7 @@ def learning_curve(out: str, sizes: str | None, draws: int | None,
         changes["sizes"] = _sizes_option(sizes)
     for key, value in (("draws", draws), ("test_decisions", test_decisions), ("folds", folds),
                        ("selection", selection), ("library_size", library_size),
+                       ("library_capped", library_capped),
                        ("feature_sets", feature_sets or None), ("learners", learners or None),
                        ("search_radius", search_radius), ("path_bias", path_bias)):
         if value is not None:
@@ -122,7 +128,7 @@ def learning_curve(out: str, sizes: str | None, draws: int | None,
 def curve_compare(curve: str, other: str | None, n: int, feature_set: str, learner: str,
                   other_features: str | None, other_learner: str | None, as_json: bool) -> None:
     """Two learning-curve points on the same held-out decisions, paired: shares above the
-    margin and the exact McNemar test.
+    margin and the exact McNemar test, mean shortfalls and their paired bootstrap interval.
 
     CURVE is a curve's folder; OTHER a second one whose draws learned from the same
     demonstrations (default: CURVE)."""
@@ -138,6 +144,10 @@ def curve_compare(curve: str, other: str | None, n: int, feature_set: str, learn
                      f"{', '.join(f'{v:.3f}' for v in q['per_draw'])})")
     lines.append(f"  above for the first only {r['a_only_above']}, for the second only "
                  f"{r['b_only_above']}: exact McNemar p = {r['p']:.3g}")
+    lo, hi = r["shortfall_difference_ci"]
+    lines.append(f"  mean shortfall {r['a']['mean_shortfall']:.2f} against "
+                 f"{r['b']['mean_shortfall']:.2f}: first less second {r['shortfall_difference']:+.2f} "
+                 f"[{lo:+.2f}, {hi:+.2f}] (95 % paired bootstrap)")
     emit(as_json, r, "\n".join(lines))
 
 

@@ -42,7 +42,8 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
                        "lines."),
     "curve-compare": ("footfall.cli.experiments", "curve_compare",
                       "Two learning-curve points on the same held-out decisions, paired: shares "
-                      "above the margin and the exact McNemar test."),
+                      "above the margin and the exact McNemar test, mean shortfalls and their "
+                      "paired bootstrap interval."),
     "curve-walk": ("footfall.cli.experiments", "curve_walk",
                    "Walk a learning curve's points on boards never trained on, paired with "
                    "the hand-tuned reward: crossings beside the curve's offline measure."),

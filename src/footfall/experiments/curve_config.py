@@ -54,6 +54,10 @@ class CurveConfig(Params):
                                 doc="held-out decisions every point is measured on")
     library_size: int = param(1000, range=at_least(3),
                               doc="templates in the library before selection")
+    library_capped: bool = param(
+        False, doc="the library never holds more than library_size templates (more "
+                   "demonstrations than a third of it: a uniform random sample of their "
+                   "footholds); False: every demonstrated foothold is a template (paper §III-A)")
     bandwidth_rms: float | None = param(
         0.004, unit="m", range=above(0), doc="RBF bandwidth of every scale, as an RMS height "
         "difference, for every point (the reproduction's rounds' value); None: each learner "

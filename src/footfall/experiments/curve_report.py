@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from footfall.core.errors import FootfallError
-from footfall.core.stats import mcnemar_exact
+from footfall.core.stats import bootstrap_ci, mcnemar_exact
 from footfall.expert.corrections import DEFAULT_MARGIN, SEVERE_SHORTFALL
 
 FORMAT = "footfall.learning-curve"
@@ -43,7 +43,8 @@ def compare_points(a: dict, b: dict, n: int, a_point: tuple[str, str],
 
     Per draw both hold and pooled over them: the share of decisions above the margin, the
     decisions only one of the two got above it, and the exact McNemar p-value of the pooled
-    draw-decision pairs.
+    draw-decision pairs; the mean shortfall [expert value units] of each and the mean of their
+    paired differences (a less b) with its 95 % bootstrap interval over the draw-decisions.
     """
     for key in PAIRED_KEYS:
         if a["config"].get(key) != b["config"].get(key):
@@ -64,13 +65,21 @@ def compare_points(a: dict, b: dict, n: int, a_point: tuple[str, str],
     above_a = np.concatenate([la[d] > margin for d in draws])
     above_b = np.concatenate([lb[d] > margin for d in draws])
     a_only, b_only = int(np.sum(above_a & ~above_b)), int(np.sum(above_b & ~above_a))
+    loss_a = np.concatenate([la[d] for d in draws])
+    loss_b = np.concatenate([lb[d] for d in draws])
+    if loss_a.shape != loss_b.shape:
+        raise FootfallError("the two points were measured on different held-out decisions")
     return {"n": n, "draws": draws, "margin": margin,
             "a": {"point": list(a_point), "above_margin": float(above_a.mean()),
-                  "per_draw": [float(np.mean(la[d] > margin)) for d in draws]},
+                  "per_draw": [float(np.mean(la[d] > margin)) for d in draws],
+                  "mean_shortfall": float(loss_a.mean())},
             "b": {"point": list(b_point), "above_margin": float(above_b.mean()),
-                  "per_draw": [float(np.mean(lb[d] > margin)) for d in draws]},
+                  "per_draw": [float(np.mean(lb[d] > margin)) for d in draws],
+                  "mean_shortfall": float(loss_b.mean())},
             "a_only_above": a_only, "b_only_above": b_only,
-            "p": mcnemar_exact(a_only, b_only)}
+            "p": mcnemar_exact(a_only, b_only),
+            "shortfall_difference": float((loss_a - loss_b).mean()),
+            "shortfall_difference_ci": list(bootstrap_ci(loss_a - loss_b))}
 
 
 def curve_table(summary: dict) -> list[dict]:

@@ -220,7 +220,8 @@ def _learn_point(out: Path, config: CurveConfig, key: tuple, training: list[Trai
     draw, n, fs, ln = key
     t0 = time.perf_counter()
     rms = None if config.bandwidth_rms is None else (config.bandwidth_rms,) * 3
-    learn_model(training[:n], fs, ln, library_size=config.library_size, bandwidth_rms=rms,
+    learn_model(training[:n], fs, ln, library_size=config.library_size,
+                library_capped=config.library_capped, bandwidth_rms=rms,
                 folds=config.folds, selection=config.selection,
                 template_budget=config.template_budget,
                 seed=config.streams.seed_for("learning", draw, n)

@@ -34,7 +34,7 @@ from footfall.expert.scorer import ExpertScorer, judge_name
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
 from footfall.features.scorer import SCORERS
 from footfall.features.scoring import score_footholds
-from footfall.features.templates import reproduced_on
+from footfall.features.template_library import reproduced_on
 from footfall.learning.evaluation import (
     EveryLeg,
     PathBias,
@@ -83,7 +83,7 @@ def library_provenance(model: FootholdModel, maps: Mapping[str, HeightMap], name
 
     Where every terrain a leg group's library names is among ``maps``, each of its templates
     must be the patch its recorded source names on one of them
-    (:func:`~footfall.features.templates.reproduced_on`): a library that claims these terrains
+    (:func:`~footfall.features.template_library.reproduced_on`): a library that claims these terrains
     but whose templates none of them gives is refused.
     """
     named: set[str] = set()

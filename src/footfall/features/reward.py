@@ -26,7 +26,8 @@ from footfall.features.dense import ScoreGrid, linear_values
 from footfall.features.dense_linear import dense_linear
 from footfall.features.family import Candidates, FeatureFamily
 from footfall.features.scorer import SCORERS, FootholdScorer
-from footfall.features.templates import TemplateFeatures, TemplateLibrary
+from footfall.features.template_library import TemplateLibrary
+from footfall.features.templates import TemplateFeatures
 from footfall.features.terrain_features import TerrainFeatures
 
 

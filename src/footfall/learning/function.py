@@ -29,7 +29,8 @@ from footfall.features.config import FeatureConfig
 from footfall.features.family import Candidates, FeatureFamily
 from footfall.features.reward import LinearReward
 from footfall.features.scorer import FootholdScorer
-from footfall.features.templates import TemplateFeatures, TemplateLibrary
+from footfall.features.template_library import TemplateLibrary
+from footfall.features.templates import TemplateFeatures
 
 MAX_WEIGHT = 1e20
 """Largest |weight| [reward per unit of feature] and feature scale a model file may hold.

@@ -36,7 +36,8 @@ from footfall.core.validate import (
 from footfall.features.config import FeatureConfig
 from footfall.features.family import FeatureFamily, family_class, feature_set_families
 from footfall.features.scorer import FootholdScorer
-from footfall.features.templates import TemplateFeatures, TemplateLibrary, check_bandwidths
+from footfall.features.template_library import TemplateLibrary
+from footfall.features.templates import TemplateFeatures, check_bandwidths
 from footfall.learning.function import (
     LinearFunction,
     RankingFunction,

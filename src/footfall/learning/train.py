@@ -30,7 +30,7 @@ from footfall.core.validate import require_int
 from footfall.data.store import Demonstration, DemoStore
 from footfall.features.config import FeatureConfig
 from footfall.features.family import FeatureFamily, check_family_options
-from footfall.features.templates import DEFAULT_LIBRARY_SIZE
+from footfall.features.template_library import DEFAULT_LIBRARY_SIZE
 from footfall.learning.dataset import (
     DEFAULT_TRAINING_CANDIDATES,
     Example,
@@ -159,8 +159,8 @@ def _within_budget(fitted: Any, examples: list[Example], families: tuple[Feature
 
 def _fit_families(unfitted: tuple[FeatureFamily, ...], demos: Sequence[TrainingDemo],
                   trials: Sequence[TrialFoothold], family_options: dict | None,
-                  library_size: int, bandwidth_rms: Sequence[float] | None,
-                  config: FeatureConfig, robot: RobotDescription, rng: np.random.Generator,
+                  library_size: int, library_capped: bool,
+                  bandwidth_rms: Sequence[float] | None, config: FeatureConfig, robot: RobotDescription, rng: np.random.Generator,
                   log: Callable[[str], None]) -> tuple[FeatureFamily, ...]:
     """Each family fitted (a template library built) on the demonstrations, then on trial
     footholds, each alone, drawn at random to fill the library's slots: every demonstrated
@@ -169,7 +169,7 @@ def _fit_families(unfitted: tuple[FeatureFamily, ...], demos: Sequence[TrainingD
     options = {name: dict(opts) for name, opts in (family_options or {}).items()}
     if any(f.name == "templates" for f in unfitted):
         options["templates"] = {"library_size": library_size, "bandwidth_rms": bandwidth_rms,
-                                **options.get("templates", {})}
+                                "capped": library_capped, **options.get("templates", {})}
     slots = max(0, library_size // len(config.scales) - len(demos))
     sample = [trials[i] for i in np.sort(rng.choice(len(trials), min(slots, len(trials)),
                                                     replace=False))] if trials else []
@@ -226,7 +226,7 @@ def _fitted_line(info: dict[str, Any], cv_error: float, scales: int) -> str:
 def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = "l1", *,
                 trials: Sequence[TrialFoothold] = (), trial_pairs: int = DEFAULT_PAIRS,
                 config: FeatureConfig | None = None, robot: RobotDescription = LITTLEDOG,
-                library_size: int = DEFAULT_LIBRARY_SIZE,
+                library_size: int = DEFAULT_LIBRARY_SIZE, library_capped: bool = False,
                 training_candidates: int = DEFAULT_TRAINING_CANDIDATES,
                 bandwidth_rms: Sequence[float] | None = None, Cs=10, cv: int = 5, seed: int = 0,
                 selection: str = "1se", family_options: dict[str, dict[str, Any]] | None = None,
@@ -235,7 +235,9 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     """Learn front- and hind-leg ranking functions from demonstrations.
 
     ``feature_set`` names a registered feature set (``terrain``, ``templates``,
-    ``both``) or joins family names with ``+``. ``library_size`` and
+    ``both``) or joins family names with ``+``. ``library_size``,
+    ``library_capped`` (at most ``library_size`` templates however many the
+    demonstrations: see :func:`footfall.features.template_library.library_from_demonstrations`) and
     ``bandwidth_rms`` (fixed RBF bandwidths, as RMS height differences [m]
     per scale, instead of choosing them by cross-validation) are the template
     family's options; ``family_options`` passes any family's own options by
@@ -266,8 +268,8 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     started = time.perf_counter()
     rng = np.random.default_rng(seed)
     families = _fit_families(create_families(feature_set, config, robot), demos, trials,
-                             family_options, library_size, bandwidth_rms, config, robot, rng,
-                             log)
+                             family_options, library_size, library_capped, bandwidth_rms,
+                             config, robot, rng, log)
     examples = []
     for d in demos:  # one demonstration at a time: each is vectorised over its candidates
         rows = training_rows(d.candidates.shape[0], d.chosen, training_candidates, rng)
@@ -296,6 +298,7 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
                          map_resolution=max(resolutions),
                          info={"n_demonstrations": len(demos), "seed": seed,
                                "library_size": library_size,
+                               "library_capped": library_capped,
                                "training_candidates": training_candidates,
                                "selection": selection, "folds": folds,
                                "template_budget": template_budget, **trial_info,

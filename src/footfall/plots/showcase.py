@@ -19,7 +19,7 @@ from footfall.core.errors import FootfallError
 from footfall.features.config import FeatureConfig
 from footfall.features.dense import score_grid
 from footfall.features.reward import LinearReward, analytic_templates, default_reward
-from footfall.features.templates import extract_templates
+from footfall.features.template_library import extract_templates
 from footfall.features.terrain_features import TerrainFeatures
 from footfall.plots.maps import save_score_maps, save_template_figure
 from footfall.plots.relief import save_relief

@@ -20,7 +20,7 @@ from sklearn.linear_model import LogisticRegressionCV
 from footfall.expert.collect import collect_demonstrations
 from footfall.expert.synthetic import SyntheticExpert
 from footfall.features.config import FeatureConfig
-from footfall.features.templates import TemplateLibrary
+from footfall.features.template_library import TemplateLibrary
 from footfall.learning.dataset import create_families, make_example, stack, training_rows
 from footfall.learning.ranker import FootholdRanker, grouped_folds, pairwise_transform
 from footfall.learning.screening import l1_objective

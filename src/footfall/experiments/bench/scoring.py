@@ -20,7 +20,8 @@ from footfall.features.config import FeatureConfig
 from footfall.features.dense import score_grid
 from footfall.features.family import Candidates
 from footfall.features.reward import LinearReward
-from footfall.features.templates import TemplateFeatures, TemplateLibrary, extract_templates
+from footfall.features.template_library import TemplateLibrary, extract_templates
+from footfall.features.templates import TemplateFeatures
 from footfall.features.terrain_features import TerrainFeatures, feature_names
 from footfall.terrain import make_board
 

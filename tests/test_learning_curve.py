@@ -16,7 +16,12 @@ from footfall.core.state import stance_target
 from footfall.data.store import DemoStore
 from footfall.experiments.curve_report import FORMAT as CURVE_FORMAT
 from footfall.experiments.curve_report import compare_points, curve_table
-from footfall.experiments.learning_curve import CurveConfig, balanced_order, run_learning_curve
+from footfall.experiments.learning_curve import (
+    CurveConfig,
+    balanced_order,
+    point_model_path,
+    run_learning_curve,
+)
 from footfall.expert.synthetic import SyntheticExpert, walking_expert
 from footfall.features.reward import default_reward
 from footfall.learning.evaluation import EveryLeg, PathBias, rank_scores
@@ -69,6 +74,8 @@ def test_a_small_curve_is_measured_written_and_resumed(tmp_path):
     assert 0.0 <= summary["lines"]["hand-tuned"]["above_margin"] <= 1.0
     assert (tmp_path / "learning-curve.png").stat().st_size > 0
     assert "| terrain | l1 | 10 | 1 |" in (tmp_path / "report.md").read_text()
+    assert "template library 30 (every demonstrated foothold a template: more from 11 " \
+        "demonstrations)" in (tmp_path / "report.md").read_text()
     assert curve_table(summary)[0]["above_margin"] == point["above_margin"]
     assert any("learned" in line for line in logs)
 
@@ -216,3 +223,15 @@ def test_two_points_are_compared_decision_by_decision_over_their_shared_draws(tm
     assert "mean shortfall 1.75 against 0.83: first less second +0.92 [" in out
     code, _, err = run(capsys, "curve-compare", str(tmp_path / "none"), "--size", "100")
     assert_user_error(code, err, "not a learning curve's results")
+
+
+def test_a_capped_curve_learns_every_point_from_at_most_its_library_size(tmp_path):
+    from footfall.learning.model import FootholdModel
+
+    config = CurveConfig(**{**vars(TINY), "sizes": (12,), "feature_sets": ("templates",),
+                            "library_capped": True})  # 12 demonstrations, 10 templates a scale
+    run_learning_curve(tmp_path, config, log=lambda _: None)
+    model = FootholdModel.load(point_model_path(tmp_path, 0, 12, "templates", "l1"))
+    assert model.info["library_capped"] is True
+    assert "template library 30 (at most: from 11 demonstrations a random sample" in \
+        (tmp_path / "report.md").read_text()

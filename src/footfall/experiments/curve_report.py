@@ -114,7 +114,10 @@ def curve_report(summary: dict) -> str:
            f"(kinds {', '.join(cfg['train_kinds'])}, difficulties "
            f"{', '.join(map(str, cfg['test_difficulties']))}); {cfg['draws']} draws of training "
            f"boards and demonstrations per point; folds by {cfg['folds']}; template library "
-           f"{cfg['library_size']}; F: " + (
+           f"{cfg['library_size']} (" + (
+               "at most: from {} demonstrations a random sample of their footholds"
+               if cfg.get("library_capped") else "every demonstrated foothold a template: more "
+               "from {} demonstrations").format(cfg["library_size"] // 3 + 1) + "); F: " + (
                "every reachable foothold" if cfg.get("search_radius") is None else
                f"the reachable footholds within {cfg['search_radius'] * 100:g} cm of the "
                f"gait-nominal foothold") + (

@@ -221,6 +221,13 @@ def test_two_points_are_compared_decision_by_decision_over_their_shared_draws(tm
                        "--other-learner", "kernel")
     assert code == 0 and "only 2, for the second only 1" in out
     assert "mean shortfall 1.75 against 0.83: first less second +0.92 [" in out
+    sizes = compare_points(curve, curve, 100, ("both", "l1"), ("both", "kernel"), b_n=50)
+    assert sizes["draws"] == [1] and (sizes["a"]["n"], sizes["b"]["n"]) == (100, 50)
+    assert sizes["shortfall_difference"] == pytest.approx(5.5 / 6)  # the same losses as above
+    code, out, _ = run(capsys, "curve-compare", str(tmp_path / "c"), "--size", "100",
+                       "--other-learner", "kernel", "--other-size", "50")
+    assert code == 0 and out.startswith("100 against 50 demonstrations, draws 1;")
+    assert "both/kernel at 50: 0.333" in out
     code, _, err = run(capsys, "curve-compare", str(tmp_path / "none"), "--size", "100")
     assert_user_error(code, err, "not a learning curve's results")
 

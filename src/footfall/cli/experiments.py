@@ -124,9 +124,12 @@ def learning_curve(out: str, sizes: str | None, draws: int | None,
 @click.option("--learner", default="l1", show_default=True, help="The first point's learner.")
 @click.option("--other-features", default=None, help="The second point's [default: --features].")
 @click.option("--other-learner", default=None, help="The second point's [default: --learner].")
+@click.option("--other-size", type=click.IntRange(min=1), default=None,
+              help="The second point's demonstrations [default: --size].")
 @json_option
 def curve_compare(curve: str, other: str | None, n: int, feature_set: str, learner: str,
-                  other_features: str | None, other_learner: str | None, as_json: bool) -> None:
+                  other_features: str | None, other_learner: str | None,
+                  other_size: int | None, as_json: bool) -> None:
     """Two learning-curve points on the same held-out decisions, paired: shares above the
     margin and the exact McNemar test, mean shortfalls and their paired bootstrap interval.
 
@@ -135,12 +138,14 @@ def curve_compare(curve: str, other: str | None, n: int, feature_set: str, learn
     a = read_curve(Path(curve))
     b = a if other is None else read_curve(Path(other))
     r = compare_points(a, b, n, (feature_set, learner),
-                       (other_features or feature_set, other_learner or learner))
-    lines = [f"{n} demonstrations, draws {', '.join(map(str, r['draws']))}; share of held-out "
-             f"decisions above the margin ({r['margin']:g}):"]
+                       (other_features or feature_set, other_learner or learner), other_size)
+    sizes = f"{n}" if r["b_n"] == n else f"{n} against {r['b_n']}"
+    lines = [f"{sizes} demonstrations, draws {', '.join(map(str, r['draws']))}; share of "
+             f"held-out decisions above the margin ({r['margin']:g}):"]
     for side in ("a", "b"):
         q = r[side]
-        lines.append(f"  {'/'.join(q['point'])}: {q['above_margin']:.3f} (per draw "
+        at = "" if r["b_n"] == n else f" at {q['n']}"
+        lines.append(f"  {'/'.join(q['point'])}{at}: {q['above_margin']:.3f} (per draw "
                      f"{', '.join(f'{v:.3f}' for v in q['per_draw'])})")
     lines.append(f"  above for the first only {r['a_only_above']}, for the second only "
                  f"{r['b_only_above']}: exact McNemar p = {r['p']:.3g}")

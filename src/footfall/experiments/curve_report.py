@@ -35,11 +35,12 @@ def read_curve(out: Path) -> dict:
 
 
 def compare_points(a: dict, b: dict, n: int, a_point: tuple[str, str],
-                   b_point: tuple[str, str]) -> dict:
-    """Paired comparison of two curve points at ``n`` demonstrations: ``a_point`` (feature
-    set, learner) of curve ``a`` against ``b_point`` of curve ``b`` (the same curve or another
-    with the same boards, decisions and seed, whose draws learned from the same
-    demonstrations).
+                   b_point: tuple[str, str], b_n: int | None = None) -> dict:
+    """Paired comparison of two curve points: ``a_point`` (feature set, learner) of curve
+    ``a`` at ``n`` demonstrations against ``b_point`` of curve ``b`` at ``b_n`` (default
+    ``n``; ``b`` the same curve or another with the same boards, decisions and seed, whose
+    draws learned from the same demonstrations). Every size is measured on the same held-out
+    decisions, so two sizes pair too.
 
     Per draw both hold and pooled over them: the share of decisions above the margin, the
     decisions only one of the two got above it, and the exact McNemar p-value of the pooled
@@ -50,14 +51,16 @@ def compare_points(a: dict, b: dict, n: int, a_point: tuple[str, str],
         if a["config"].get(key) != b["config"].get(key):
             raise FootfallError(f"the curves differ in {key}: their points are not paired")
 
-    def find(summary: dict, point: tuple[str, str]) -> dict[int, np.ndarray]:
+    b_n = n if b_n is None else b_n
+
+    def find(summary: dict, point: tuple[str, str], size: int) -> dict[int, np.ndarray]:
         found = {p["draw"]: np.asarray(p["losses"], dtype=float) for p in summary["points"]
-                 if p["n"] == n and (p["feature_set"], p["learner"]) == point}
+                 if p["n"] == size and (p["feature_set"], p["learner"]) == point}
         if not found:
-            raise FootfallError(f"no point {point[0]}/{point[1]} at {n} demonstrations")
+            raise FootfallError(f"no point {point[0]}/{point[1]} at {size} demonstrations")
         return found
 
-    la, lb = find(a, a_point), find(b, b_point)
+    la, lb = find(a, a_point, n), find(b, b_point, b_n)
     draws = sorted(set(la) & set(lb))
     if not draws:
         raise FootfallError("the two points share no draw")
@@ -69,11 +72,11 @@ def compare_points(a: dict, b: dict, n: int, a_point: tuple[str, str],
     loss_b = np.concatenate([lb[d] for d in draws])
     if loss_a.shape != loss_b.shape:
         raise FootfallError("the two points were measured on different held-out decisions")
-    return {"n": n, "draws": draws, "margin": margin,
-            "a": {"point": list(a_point), "above_margin": float(above_a.mean()),
+    return {"n": n, "b_n": b_n, "draws": draws, "margin": margin,
+            "a": {"point": list(a_point), "n": n, "above_margin": float(above_a.mean()),
                   "per_draw": [float(np.mean(la[d] > margin)) for d in draws],
                   "mean_shortfall": float(loss_a.mean())},
-            "b": {"point": list(b_point), "above_margin": float(above_b.mean()),
+            "b": {"point": list(b_point), "n": b_n, "above_margin": float(above_b.mean()),
                   "per_draw": [float(np.mean(lb[d] > margin)) for d in draws],
                   "mean_shortfall": float(loss_b.mean())},
             "a_only_above": a_only, "b_only_above": b_only,

@@ -228,6 +228,9 @@ def test_two_points_are_compared_decision_by_decision_over_their_shared_draws(tm
                        "--other-learner", "kernel", "--other-size", "50")
     assert code == 0 and out.startswith("100 against 50 demonstrations, draws 1;")
     assert "both/kernel at 50: 0.333" in out
+    shorter = _curve([(0, 100, "both", "l1", a[:4]), (0, 100, "both", "kernel", b)])
+    with pytest.raises(FootfallError, match="different held-out decisions"):
+        compare_points(shorter, shorter, 100, ("both", "l1"), ("both", "kernel"))
     code, _, err = run(capsys, "curve-compare", str(tmp_path / "none"), "--size", "100")
     assert_user_error(code, err, "not a learning curve's results")
 

@@ -65,13 +65,12 @@ def compare_points(a: dict, b: dict, n: int, a_point: tuple[str, str],
     if not draws:
         raise FootfallError("the two points share no draw")
     margin = float(a["points"][0]["margin"])
-    above_a = np.concatenate([la[d] > margin for d in draws])
-    above_b = np.concatenate([lb[d] > margin for d in draws])
-    a_only, b_only = int(np.sum(above_a & ~above_b)), int(np.sum(above_b & ~above_a))
     loss_a = np.concatenate([la[d] for d in draws])
     loss_b = np.concatenate([lb[d] for d in draws])
     if loss_a.shape != loss_b.shape:
         raise FootfallError("the two points were measured on different held-out decisions")
+    above_a, above_b = loss_a > margin, loss_b > margin
+    a_only, b_only = int(np.sum(above_a & ~above_b)), int(np.sum(above_b & ~above_a))
     return {"n": n, "b_n": b_n, "draws": draws, "margin": margin,
             "a": {"point": list(a_point), "n": n, "above_margin": float(above_a.mean()),
                   "per_draw": [float(np.mean(la[d] > margin)) for d in draws],

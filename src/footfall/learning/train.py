@@ -160,7 +160,8 @@ def _within_budget(fitted: Any, examples: list[Example], families: tuple[Feature
 def _fit_families(unfitted: tuple[FeatureFamily, ...], demos: Sequence[TrainingDemo],
                   trials: Sequence[TrialFoothold], family_options: dict | None,
                   library_size: int, library_capped: bool,
-                  bandwidth_rms: Sequence[float] | None, config: FeatureConfig, robot: RobotDescription, rng: np.random.Generator,
+                  bandwidth_rms: Sequence[float] | None, config: FeatureConfig,
+                  robot: RobotDescription, rng: np.random.Generator,
                   log: Callable[[str], None]) -> tuple[FeatureFamily, ...]:
     """Each family fitted (a template library built) on the demonstrations, then on trial
     footholds, each alone, drawn at random to fill the library's slots: every demonstrated

@@ -228,6 +228,18 @@ def test_two_points_are_compared_decision_by_decision_over_their_shared_draws(tm
                        "--other-learner", "kernel", "--other-size", "50")
     assert code == 0 and out.startswith("100 against 50 demonstrations, draws 1;")
     assert "both/kernel at 50: 0.333" in out
+    lined = {**curve, "lines": {"hand-tuned": {"losses": b}}}  # each draw against the line
+    r = compare_points(lined, lined, 100, ("both", "l1"), "hand-tuned")
+    assert r["draws"] == [0, 1] and r["b"]["point"] == ["hand-tuned"]
+    assert r["shortfall_difference"] == pytest.approx(5.5 / 6)
+    assert (r["a_only_above"], r["b_only_above"]) == (4, 2)
+    with pytest.raises(FootfallError, match="no line 'expert'"):
+        compare_points(lined, lined, 100, ("both", "l1"), "expert")
+    (tmp_path / "c" / "results.json").write_text(json.dumps(lined))
+    code, out, _ = run(capsys, "curve-compare", str(tmp_path / "c"), "--size", "100",
+                       "--other-line", "hand-tuned")
+    assert code == 0 and out.startswith("100 demonstrations, draws 0, 1;")
+    assert "  hand-tuned: 0.333 (per draw 0.333, 0.333)" in out
     shorter = _curve([(0, 100, "both", "l1", a[:4]), (0, 100, "both", "kernel", b)])
     with pytest.raises(FootfallError, match="different held-out decisions"):
         compare_points(shorter, shorter, 100, ("both", "l1"), ("both", "kernel"))

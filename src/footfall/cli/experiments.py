@@ -14,7 +14,7 @@ from footfall.cli.output import emit, json_option, progress_log
 from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
 from footfall.experiments.ablation import VARIANTS, AblationConfig, ablation_markdown, run_ablation
-from footfall.experiments.curve_report import compare_points, read_curve
+from footfall.experiments.curve_report import LINES, compare_points, read_curve
 from footfall.experiments.curve_walk import (
     CurveWalkConfig,
     report_name,
@@ -126,10 +126,12 @@ def learning_curve(out: str, sizes: str | None, draws: int | None,
 @click.option("--other-learner", default=None, help="The second point's [default: --learner].")
 @click.option("--other-size", type=click.IntRange(min=1), default=None,
               help="The second point's demonstrations [default: --size].")
+@click.option("--other-line", type=click.Choice(LINES), default=None,
+              help="Compare with one of the curve's lines instead of a second point.")
 @json_option
 def curve_compare(curve: str, other: str | None, n: int, feature_set: str, learner: str,
                   other_features: str | None, other_learner: str | None,
-                  other_size: int | None, as_json: bool) -> None:
+                  other_size: int | None, other_line: str | None, as_json: bool) -> None:
     """Two learning-curve points on the same held-out decisions, paired: shares above the
     margin and the exact McNemar test, mean shortfalls and their paired bootstrap interval.
 
@@ -138,13 +140,14 @@ def curve_compare(curve: str, other: str | None, n: int, feature_set: str, learn
     a = read_curve(Path(curve))
     b = a if other is None else read_curve(Path(other))
     r = compare_points(a, b, n, (feature_set, learner),
-                       (other_features or feature_set, other_learner or learner), other_size)
-    sizes = f"{n}" if r["b_n"] == n else f"{n} against {r['b_n']}"
+                       other_line or (other_features or feature_set, other_learner or learner),
+                       other_size)
+    sizes = f"{n}" if r["b_n"] == n or other_line else f"{n} against {r['b_n']}"
     lines = [f"{sizes} demonstrations, draws {', '.join(map(str, r['draws']))}; share of "
              f"held-out decisions above the margin ({r['margin']:g}):"]
     for side in ("a", "b"):
         q = r[side]
-        at = "" if r["b_n"] == n else f" at {q['n']}"
+        at = "" if r["b_n"] == n or q["n"] is None else f" at {q['n']}"
         lines.append(f"  {'/'.join(q['point'])}{at}: {q['above_margin']:.3f} (per draw "
                      f"{', '.join(f'{v:.3f}' for v in q['per_draw'])})")
     lines.append(f"  above for the first only {r['a_only_above']}, for the second only "

@@ -35,12 +35,13 @@ def read_curve(out: Path) -> dict:
 
 
 def compare_points(a: dict, b: dict, n: int, a_point: tuple[str, str],
-                   b_point: tuple[str, str], b_n: int | None = None) -> dict:
+                   b_point: tuple[str, str] | str, b_n: int | None = None) -> dict:
     """Paired comparison of two curve points: ``a_point`` (feature set, learner) of curve
     ``a`` at ``n`` demonstrations against ``b_point`` of curve ``b`` at ``b_n`` (default
     ``n``; ``b`` the same curve or another with the same boards, decisions and seed, whose
     draws learned from the same demonstrations). Every size is measured on the same held-out
-    decisions, so two sizes pair too.
+    decisions, so two sizes pair too. ``b_point`` may name one of curve ``b``'s
+    :data:`LINES` instead: each draw of ``a`` is paired with it decision by decision.
 
     Per draw both hold and pooled over them: the share of decisions above the margin, the
     decisions only one of the two got above it, and the exact McNemar p-value of the pooled
@@ -60,7 +61,13 @@ def compare_points(a: dict, b: dict, n: int, a_point: tuple[str, str],
             raise FootfallError(f"no point {point[0]}/{point[1]} at {size} demonstrations")
         return found
 
-    la, lb = find(a, a_point, n), find(b, b_point, b_n)
+    la = find(a, a_point, n)
+    if isinstance(b_point, str):
+        if b_point not in LINES or b_point not in b.get("lines", {}):
+            raise FootfallError(f"no line {b_point!r}; the lines are {', '.join(LINES)}")
+        lb = {d: np.asarray(b["lines"][b_point]["losses"], dtype=float) for d in la}
+    else:
+        lb = find(b, b_point, b_n)
     draws = sorted(set(la) & set(lb))
     if not draws:
         raise FootfallError("the two points share no draw")
@@ -75,7 +82,8 @@ def compare_points(a: dict, b: dict, n: int, a_point: tuple[str, str],
             "a": {"point": list(a_point), "n": n, "above_margin": float(above_a.mean()),
                   "per_draw": [float(np.mean(la[d] > margin)) for d in draws],
                   "mean_shortfall": float(loss_a.mean())},
-            "b": {"point": list(b_point), "n": b_n, "above_margin": float(above_b.mean()),
+            "b": {"point": [b_point] if isinstance(b_point, str) else list(b_point),
+                  "n": None if isinstance(b_point, str) else b_n, "above_margin": float(above_b.mean()),
                   "per_draw": [float(np.mean(lb[d] > margin)) for d in draws],
                   "mean_shortfall": float(loss_b.mean())},
             "a_only_above": a_only, "b_only_above": b_only,

@@ -240,6 +240,9 @@ def test_two_points_are_compared_decision_by_decision_over_their_shared_draws(tm
                        "--other-line", "hand-tuned")
     assert code == 0 and out.startswith("100 demonstrations, draws 0, 1;")
     assert "  hand-tuned: 0.333 (per draw 0.333, 0.333)" in out
+    code, _, err = run(capsys, "curve-compare", str(tmp_path / "c"), "--size", "100",
+                       "--other-line", "hand-tuned", "--other-size", "50")
+    assert_user_error(code, err, "--other-line compares with a line")
     shorter = _curve([(0, 100, "both", "l1", a[:4]), (0, 100, "both", "kernel", b)])
     with pytest.raises(FootfallError, match="different held-out decisions"):
         compare_points(shorter, shorter, 100, ("both", "l1"), ("both", "kernel"))

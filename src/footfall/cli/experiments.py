@@ -137,6 +137,9 @@ def curve_compare(curve: str, other: str | None, n: int, feature_set: str, learn
 
     CURVE is a curve's folder; OTHER a second one whose draws learned from the same
     demonstrations (default: CURVE)."""
+    if other_line and (other_size or other_features or other_learner):
+        raise FootfallError("--other-line compares with a line: it takes no --other-size, "
+                            "--other-features or --other-learner")
     a = read_curve(Path(curve))
     b = a if other is None else read_curve(Path(other))
     r = compare_points(a, b, n, (feature_set, learner),

@@ -17,8 +17,9 @@ TINY = ReproduceConfig(
     calibration_boards=1, calibration_runs=1, test_boards=2, sweep_runs=1, rounds=2, target_demos=1000, corrections_per_run=None, margin=2.0, library_size=30,
     training_candidates=20, cv=2, final_bandwidth_rms=0.004, eval_runs=1, offline_demos=4,
     walk=WalkConfig(max_steps=8),  # eight steps a run: small, but every stage runs
-    expert=ExpertConfig())  # the expert who values progress corrects most of eight steps (the
-# walking expert, who wants the foot where this gait puts it, too few of them to learn from)
+    expert=ExpertConfig(), teacher="expert")  # the expert who values progress corrects most of
+# eight steps (the walking expert, who wants the foot where this gait puts it, too few of them to
+# learn from; the guarded teacher fewer still)
 
 
 def _stored(out):
@@ -101,7 +102,8 @@ def test_the_reproduction_has_every_table(uninterrupted):
             assert 0 <= v["severe"] <= v["above_margin"] <= 1
     md = (uninterrupted / "report.md").read_text()
     assert "Table I" in md and "Table II" in md and "Wilson" in md
-    assert "Expert choosing (reference)" in md and "Hand-tuned reward (reference)" in md
+    assert "Teacher choosing (reference)" in md and "Hand-tuned reward (reference)" in md
+    assert "The teacher (the synthetic expert) on" in md  # which teacher, in words
     assert "The expert's verdict on the robot's choices" in md
 
 

@@ -302,3 +302,25 @@ def test_cli_walk_many_with_a_log_walks_only_the_runs_it_does_not_hold(tmp_path,
     with DemoStore(log) as store:
         runs = store.runs()
         assert len(runs) == 5 and runs[-1]["settings"]["walk"]["footstep"]["friction_safety"] == 1.5
+
+
+def test_cli_walk_many_with_a_teacher_logs_it_and_refuses_an_unknown_one(tmp_path, capsys):
+    from footfall.data.store import DemoStore
+
+    board, log = tmp_path / "board.npz", tmp_path / "runs.sqlite"
+    assert run(capsys, "terrain", "board", "flat", "flat", "flat", "--seed", "1",
+               "-o", board)[0] == 0
+    code, out, _ = run(capsys, "walk-many", "--terrain", board, "--seed", "0", "--runs", "1",
+                       "--teacher", "guarded", "--log", log, "--json")
+    assert code == 0 and json.loads(out)["teacher"] == "guarded"
+    with DemoStore(log) as store:
+        (row,) = store.runs()
+        settings = store.run(row["id"]).settings
+    assert row["key"].split("/")[2] == "guarded"  # not the expert's nor the hand-tuned runs
+    assert set(settings["reward"]) == {"hand-tuned default, expert veto 10"}
+    code, _, err = run(capsys, "walk-many", "--terrain", board, "--seed", "0", "--runs", "1",
+                       "--teacher", "nobody")
+    assert_user_error(code, err, "nobody")
+    code, _, err = run(capsys, "walk", "--terrain", board, "--seed", "0", "--teacher",
+                       "accepted", "--model", tmp_path / "model.npz")
+    assert_user_error(code, err, "chooses the footholds itself")

@@ -16,6 +16,7 @@ from footfall.core.errors import FootfallError
 from footfall.core.limits import current_limits
 from footfall.core.robot import LEG_NAMES
 from footfall.expert.collect import RECORDED_STEPS
+from footfall.expert.teachers import TEACHERS
 from footfall.features.family import FEATURE_SETS, feature_set_families
 from footfall.learning import ranker
 from footfall.learning.learner import LEARNERS
@@ -79,6 +80,10 @@ def _learners() -> tuple[str, ...]:
     return LEARNERS.names()  # read when used: plugins and later registrations count
 
 
+def _teachers() -> tuple[str, ...]:
+    return TEACHERS.names()  # read when used, as the learners
+
+
 def _selections() -> tuple[str, ...]:
     return tuple(ranker.SELECTIONS)
 
@@ -93,6 +98,7 @@ def _recorded_steps() -> tuple[str, ...]:
 
 LEG = RegistryChoice(_legs)  # footfall.core.robot.LEG_NAMES
 LEARNER = RegistryChoice(_learners)  # footfall.learning.learner.LEARNERS
+TEACHER = RegistryChoice(_teachers)  # footfall.expert.teachers.TEACHERS
 SELECTION = RegistryChoice(_selections)  # footfall.learning.ranker.SELECTIONS
 TERRAIN_KIND = RegistryChoice(  # footfall.terrain.KINDS, refused in the generator's words
     _terrain_kinds, invalid="unknown terrain module kind {value!r}; known kinds: {choices}")

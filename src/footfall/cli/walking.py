@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import click
 
-from footfall.cli.choices import SEED, count_range
+from footfall.cli.choices import SEED, TEACHER, count_range
 from footfall.cli.executors import executor_options, opened_executor
 from footfall.cli.output import emit, json_option, progress_bar
 from footfall.experiments.batch import check_picture_outputs, walk_batch, walk_once
@@ -36,11 +36,22 @@ def _chooser_options(f):
                           "the gait-nominal position (the reproduction uses 0.03); "
                           "default: every reachable one.")(f)
     f = click.option("--expert-config", "expert_config", default=None, metavar="EXPERT.json",
-                     help="With --expert: the expert of these settings chooses (e.g. the one "
-                          "`footfall outcomes --fit` grounded); default: the walking expert.")(f)
+                     help="With --expert or --teacher: the expert of these settings (e.g. the "
+                          "one `footfall outcomes --fit` grounded); default: the walking "
+                          "expert.")(f)
+    f = click.option("--teacher", type=TEACHER, default=None,
+                     help="This teacher chooses every foothold (no --model): 'expert', the "
+                          "synthetic expert (as --expert); 'guarded', the hand-tuned reward "
+                          "with the expert's veto of severe footholds (the reproduction's "
+                          "teacher).")(f)
     return click.option("--expert", is_flag=True,
                         help="The synthetic walking expert chooses every foothold (no --model): "
                              "what learning from its demonstrations can reach at best.")(f)
+
+
+def _teacher(expert: bool, teacher: str | None) -> tuple[bool, str]:
+    """Whether a teacher chooses, and which: ``--teacher``, or the expert for ``--expert``."""
+    return expert or teacher is not None, teacher or "expert"
 
 
 def _expert_settings(path: str | None):
@@ -81,16 +92,17 @@ def _run_text(result: dict) -> str:
 def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: str | None,
              frames: int, video: str | None, log_path: str | None, explain: bool,
              explain_plot: str | None, expert: bool, expert_config: str | None,
-             search_radius: float | None, friction_safety: float | None,
+             teacher: str | None, search_radius: float | None, friction_safety: float | None,
              path_bias: float | None, as_json: bool) -> None:
     """One run of the simulated robot across a board (success, slip, speed)."""
     check_picture_outputs(snapshots, video, explain_plot, as_options=True,
                           inputs=(terrain_path, model_path, log_path, expert_config))
+    expert, teacher = _teacher(expert, teacher)
     outcome = walk_once(terrain_path, seed, model_path=model_path, expert=expert,
                         search_radius=search_radius, friction_safety=friction_safety,
                         path_bias=path_bias, snapshots=snapshots, frames=frames,
                         video=video, log_path=log_path, explain_plot=explain_plot,
-                        expert_config=_expert_settings(expert_config))
+                        expert_config=_expert_settings(expert_config), teacher=teacher)
     text = _run_text(outcome.record.result)
     explanation = outcome.record.result.get("explanation")
     if explain and explanation is not None:
@@ -112,10 +124,12 @@ def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: st
 @json_option
 def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: int,
                   log_path: str | None, expert: bool, expert_config: str | None,
+                  teacher: str | None,
                   search_radius: float | None, friction_safety: float | None,
                   path_bias: float | None, processes: int | None, executor_name: str,
                   ray_address: str | None, as_json: bool) -> None:
     """N runs in parallel: success rate (Wilson 95 % CI), slip, speed."""
+    expert, teacher = _teacher(expert, teacher)
     todo = {"runs": runs}
 
     def reused(count: int) -> None:
@@ -131,7 +145,7 @@ def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: in
                            search_radius=search_radius, friction_safety=friction_safety,
                            path_bias=path_bias, log_path=log_path, progress=step,
                            executor=executor, reused=reused,
-                           expert_config=_expert_settings(expert_config))
+                           expert_config=_expert_settings(expert_config), teacher=teacher)
     s = batch.summary
     slip = ("no successful run" if s.slip_mean_mm is None else
             f"slip {s.slip_mean_mm:.1f} +- {s.slip_std_mm:.1f} mm over "

@@ -33,6 +33,7 @@ from footfall.experiments.executors import Executor, LocalPool
 from footfall.experiments.runs import RunJob, reward_source
 from footfall.expert.scorer import ExpertScorer, judge_name, settings_hash
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
+from footfall.expert.teachers import TEACHERS, Walker
 from footfall.plots.explain import save_explain_plot
 from footfall.sim.episode import Frames, Walk, WalkConfig
 
@@ -61,18 +62,20 @@ def walk_many(terrain_path: str | os.PathLike, model_path: str | os.PathLike | N
               seed: int, config: WalkConfig = WalkConfig(), processes: int | None = None,
               progress: Callable[[RunRecord], None] | None = None,
               expert: bool = False, executor: Executor | None = None,
-              expert_config: ExpertConfig | None = None) -> list[RunRecord]:
+              expert_config: ExpertConfig | None = None, teacher: str = "expert"
+              ) -> list[RunRecord]:
     """``runs`` runs with seeds ``seed .. seed + runs - 1``, in parallel; returned in seed order.
 
     Each worker loads the terrain and the model itself (nothing is shipped
     but paths or file bytes, seeds and the frozen config). ``expert``: the
-    walking expert chooses the footholds (:func:`expert_judge`), not a reward.
+    teacher chooses the footholds (the walking expert: :func:`expert_judge`), not a reward.
     The runs are walked on ``executor`` [default: a local pool of
     ``processes`` workers, one per run at most]. ``expert_config``: the settings of the
-    expert that chooses [default: the walking expert].
+    expert that chooses [default: the walking expert]; ``teacher``: which teacher chooses with
+    ``expert`` (:data:`footfall.expert.teachers.TEACHERS`).
     """
     jobs = batch_jobs(terrain_path, model_path, runs, seed, config, expert,
-                      expert_config=expert_config)
+                      expert_config=expert_config, teacher=teacher)
     executor = executor or LocalPool(min(processes or usable_cores(), runs))
     out = {job.seed: record for job, record in _walked(executor, jobs, progress)}
     return [out[job.seed] for job in jobs]
@@ -80,8 +83,8 @@ def walk_many(terrain_path: str | os.PathLike, model_path: str | os.PathLike | N
 
 def batch_jobs(terrain_path: str | os.PathLike, model_path: str | os.PathLike | None, runs: int,
                seed: int, config: WalkConfig = WalkConfig(), expert: bool = False,
-               hmap: HeightMap | None = None, expert_config: ExpertConfig | None = None
-               ) -> list[RunJob]:
+               hmap: HeightMap | None = None, expert_config: ExpertConfig | None = None,
+               teacher: str = "expert") -> list[RunJob]:
     """The jobs of :func:`walk_many`, in seed order, without run keys.
 
     ``hmap``: the board at ``terrain_path`` if already loaded (it is read otherwise, to
@@ -102,8 +105,9 @@ def batch_jobs(terrain_path: str | os.PathLike, model_path: str | os.PathLike | 
     reward_source(model_path, hmap)  # fail early, in this process, on a bad model
     model = None if model_path is None else str(model_path)
     judge = chooser_expert(config, expert, expert_config)
-    return [RunJob(None, str(terrain_path), model, s, config, expert=judge, judge=expert)
-            for s in range(seed, seed + runs)]
+    TEACHERS.get(teacher).expert(judge, config.footstep.bias_weight, config.footstep.lead)
+    return [RunJob(None, str(terrain_path), model, s, config, expert=judge, judge=expert,
+                   teacher=teacher) for s in range(seed, seed + runs)]
 
 
 def _walked(executor: Executor, jobs: list[RunJob],
@@ -121,17 +125,18 @@ def _walked(executor: Executor, jobs: list[RunJob],
 
 def batch_run_keys(hmap: HeightMap, model_path: str | os.PathLike | None, expert: bool,
                    config: WalkConfig, seeds: list[int],
-                   expert_config: ExpertConfig | None = None) -> dict[int, str]:
+                   expert_config: ExpertConfig | None = None, teacher: str = "expert"
+                   ) -> dict[int, str]:
     """Each seed's run key in a log store: board, chooser, settings and seed decide a run.
 
-    ``walk-many/<board hash>/<hand | expert | model-<file hash>>/<settings hash>/s<seed>``:
+    ``walk-many/<board hash>/<hand | teacher | model-<file hash>>/<settings hash>/s<seed>``:
     the same run walked again has the same key, so a batch logged to a store and
     interrupted walks only what is missing when run again.
     """
     if expert:
         judge = chooser_expert(config, expert, expert_config)
-        chooser = ("expert" if judge == walking_expert(config.footstep.lead)
-                   else f"expert-{settings_hash(judge)}")
+        chooser = (teacher if judge == walking_expert(config.footstep.lead)
+                   else f"{teacher}-{settings_hash(judge)}")
     elif model_path is None:
         chooser = "hand"
     else:
@@ -266,11 +271,12 @@ class WalkOutcome:
     seed: int  # the run seed
     record: RunRecord  # the run: result (success, slip, speed, ...) and every step
     run_id: int | None = None  # the run's id in the log store, if logged
+    teacher: str | None = None  # with ``expert``: which teacher chose
 
     def as_dict(self) -> dict:
         """Plain data for JSON: the settings, the run's result, then its log id if logged."""
         data = {"terrain": self.terrain, "model": self.model, "expert": self.expert,
-                "seed": self.seed, **self.record.result}
+                "teacher": self.teacher, "seed": self.seed, **self.record.result}
         if self.run_id is not None:
             data["run_id"] = self.run_id
         return data
@@ -318,12 +324,13 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
               snapshots: str | os.PathLike | None = None, frames: int = 6, video: str | os.PathLike | None = None,
               log_path: str | os.PathLike | None = None,
               explain_plot: str | os.PathLike | None = None,
-              expert_config: ExpertConfig | None = None) -> WalkOutcome:
+              expert_config: ExpertConfig | None = None, teacher: str = "expert") -> WalkOutcome:
     """One run across the board at ``terrain_path`` with the reward of ``model_path``.
 
     Without a model the hand-tuned reward chooses the footholds; with
-    ``expert`` the walking expert does, or the expert of ``expert_config`` if given
-    (:func:`chooser_expert`). ``search_radius`` [m] limits the candidate set F and
+    ``expert`` the teacher ``teacher`` does (:data:`footfall.expert.teachers.TEACHERS`: the
+    walking expert, or the hand-tuned reward it guards), with the expert of ``expert_config``
+    if given (:func:`chooser_expert`). ``search_radius`` [m] limits the candidate set F and
     ``friction_safety`` [-] sets the friction check and ``path_bias`` [hand-tuned reward/m]
     the footstep planner's path bias (:func:`walk_config`).
     ``snapshots`` writes a strip of ``frames`` pictures (.png), ``video`` an
@@ -347,8 +354,12 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
     if snapshots or video:
         pictures = Frames(snapshot_count=frames if snapshots else 0,
                           video_fps=25.0 if video else 0.0)
-    run = Walk(hmap, reward_for, seed, config, frames=pictures,
-               judge=expert_judge(judge) if expert else None)
+    walker = Walker()
+    if expert:
+        walker = TEACHERS.get(teacher).walker(judge, config.footstep.bias_weight,
+                                              config.footstep.lead)
+        reward_for = reward_for if walker.reward is None else lambda leg: walker.reward
+    run = Walk(hmap, reward_for, seed, config, frames=pictures, judge=walker.judge)
     record = run.run()
     run_id = None
     if log is not None:  # stored before any picture: a picture that fails loses no run
@@ -362,7 +373,8 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
         save_strip(pictures.snapshots, snapshots)
     if video:
         save_video(pictures.video, video, pictures.video_fps)
-    return WalkOutcome(str(terrain_path), _path_or_none(model_path), expert, seed, record, run_id)
+    return WalkOutcome(str(terrain_path), _path_or_none(model_path), expert, seed, record, run_id,
+                       teacher if expert else None)
 
 
 @dataclass(frozen=True)
@@ -375,11 +387,12 @@ class BatchOutcome:
     seed: int  # seed of the first run
     summary: RunSummary  # success rate, slip, speed, ...
     records: tuple[RunRecord, ...]  # the runs, in seed order
+    teacher: str | None = None  # with ``expert``: which teacher chose
 
     def as_dict(self) -> dict:
         """Plain data for JSON: the settings, the summary's keys, then each run's result."""
         return {"terrain": self.terrain, "model": self.model, "expert": self.expert,
-                "seed": self.seed, **self.summary.as_dict(),
+                "teacher": self.teacher, "seed": self.seed, **self.summary.as_dict(),
                 "runs_detail": [{"seed": self.seed + i, **r.result}
                                 for i, r in enumerate(self.records)]}
 
@@ -392,7 +405,8 @@ def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
                progress: Callable[[RunRecord], None] | None = None,
                executor: Executor | None = None,
                reused: Callable[[int], None] | None = None,
-               expert_config: ExpertConfig | None = None) -> BatchOutcome:
+               expert_config: ExpertConfig | None = None, teacher: str = "expert"
+               ) -> BatchOutcome:
     """``runs`` runs in parallel (:func:`walk_many`), each logged to ``log_path`` as it ends.
 
     Settings as for :func:`walk_once`; ``progress`` is called with each
@@ -411,13 +425,13 @@ def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
     hmap = load_board(terrain_path)
     log = _checked_log(log_path, inputs=(terrain_path, model_path))
     jobs = batch_jobs(terrain_path, model_path, runs, seed, config, expert, hmap,
-                      expert_config=expert_config)
+                      expert_config=expert_config, teacher=teacher)
     store = DemoStore(log) if log is not None and log.exists() else None  # a new one is made
     try:  # with the first run kept: a batch refused before any run leaves no file
         records: dict[int, RunRecord] = {}
         if log is not None:
             keys = batch_run_keys(hmap, model_path, expert, config, [j.seed for j in jobs],
-                                  expert_config)
+                                  expert_config, teacher)
             jobs = [replace(j, key=keys[j.seed]) for j in jobs]
         if store is not None:
             held = {r["key"]: r["id"] for r in store.runs(key_prefix="walk-many/")}
@@ -440,4 +454,4 @@ def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
             store.close()
     ordered = [records[j.seed] for j in jobs]
     return BatchOutcome(str(terrain_path), _path_or_none(model_path), expert, seed,
-                        summarise(ordered), tuple(ordered))
+                        summarise(ordered), tuple(ordered), teacher if expert else None)

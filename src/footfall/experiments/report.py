@@ -32,7 +32,7 @@ METHODS = ("terrain", "templates", "both", "expert", "default")  # every test an
 PAPER_TABLE1 = {"both": (1, 19, 23), "templates": (10, 24, 28)}  # templates kept of 946
 NAMES = {"terrain": "Features only", "templates": "Templates only",
          "both": "Templates + Features", "flat": "Baseline (flat terrain)",
-         "expert": "Expert choosing (reference)", "default": "Hand-tuned reward (reference)"}
+         "expert": "Teacher choosing (reference)", "default": "Hand-tuned reward (reference)"}
 
 
 def _figures(out: Path, results: dict, maps: dict, models: dict, config, log) -> list[tuple[str, str]]:
@@ -146,7 +146,7 @@ def _boards(results: dict) -> list[str]:
 
 
 def _demonstration_rounds(results: dict) -> list[str]:
-    lines = ["## Demonstrations (expert corrections of run logs)", "",
+    lines = ["## Demonstrations (the teacher's corrections of run logs)", "",
              "| round | robot's reward | crossings | corrections so far |",
              "| --- | --- | --- | --- |"]
     for r in results["rounds"]:
@@ -174,19 +174,27 @@ def _table1(results: dict) -> list[str]:
     return lines + [""]
 
 
+def _teacher(config: dict) -> str:
+    """Which teacher a reproduction's config names (before there was a choice: the expert)."""
+    return {"expert": "the synthetic expert", "guarded": "the hand-tuned reward, the expert "
+            "vetoing severe footholds", "accepted": "the hand-tuned reward among the footholds "
+            "the expert accepts"}.get(config.get("teacher", "expert"), config.get("teacher"))
+
+
 def _calibration(results: dict) -> list[str]:
     c = results["calibration"]
     lines = ["## The test difficulty, by a rule", "",
              f"Rule: {c['rule']}. Test difficulty: **{c['difficulty']:g}**"
-             + ("" if c["met"] else " (not met: the expert missed the threshold even at the "
+             + ("" if c["met"] else " (not met: the teacher missed the threshold even at the "
                                     "easiest level, which is used)") + ".", ""]
     if not c["levels"]:
         return lines
     cfg = results["config"]
-    lines += [f"The expert on {cfg['calibration_boards']} calibration board(s) per level "
+    lines += [f"The teacher ({_teacher(cfg)}) on {cfg['calibration_boards']} calibration "
+              f"board(s) per level "
               f"(boards of the test kinds with their own seeds, never trained or tested on), "
               f"{cfg['calibration_runs']} runs each (run seeds of each board's own):", "",
-              "| difficulty | expert crossed | 95 % CI (Wilson) | fitted (non-increasing) | "
+              "| difficulty | teacher crossed | 95 % CI (Wilson) | fitted (non-increasing) | "
               f"fit at least {c['threshold']:.0%} |", "| --- | --- | --- | --- | --- |"]
     for d, v in c["levels"].items():
         lines.append(f"| {d} | {v['successes']} / {v['runs']} | {_pct(v['success_ci'][0])} - "
@@ -195,7 +203,7 @@ def _calibration(results: dict) -> list[str]:
     held = c.get("held_on_test")
     if held:
         (k, n), (t, m), (lo, hi) = held["calibration"], held["test"], held["calibration_ci"]
-        lines += ["", f"Did the calibration hold? The expert crossed {t} / {m} "
+        lines += ["", f"Did the calibration hold? The teacher crossed {t} / {m} "
                       f"({_pct(held['test_rate'])}) of its test-board runs against {k} / {n} on "
                       f"the calibration boards of that difficulty: "
                       + ("inside" if held["inside"] else "**outside**")
@@ -225,9 +233,10 @@ def _table2(results: dict) -> list[str]:
         paper = "-" if p is None else f"{p[0]:.1f} %, {p[1]:.1f} +- {p[2]:.1f}"
         lines.append(f"| {NAMES[k]} | {_row_cells(results['table2'][k])} | {paper} |")
     return lines + [
-        "", "The references walk the same test boards with the same seeds: the synthetic "
-        "expert choosing every foothold itself bounds what a function learned from its "
-        "corrections can do; the hand-tuned reward is the robot before any learning. The "
+        "", "The references walk the same test boards with the same seeds: the teacher "
+        f"({_teacher(results['config'])}) choosing every foothold itself bounds what a function "
+        "learned from its corrections can do; the hand-tuned reward is the robot before any "
+        "learning. The "
         "baseline is the templates + features function on the flat board. Distance walked: "
         "the mean over all runs of how far the robot got (a crossing walks the whole course).",
         "", "How runs ended: " + "; ".join(
@@ -303,7 +312,7 @@ def _sweep(results: dict) -> list[str]:
 
 
 def _ranking(results: dict) -> list[str]:
-    lines = ["## Offline ranking on expert demonstrations over the first test board", "",
+    lines = ["## Offline ranking on the teacher's demonstrations over the first test board", "",
              "Loss: the expert's value of its best candidate minus its value of the function's "
              "pick (1 unit = 1 cm off the gait-nominal foothold for the walking expert), 95 % "
              "bootstrap interval.", "",

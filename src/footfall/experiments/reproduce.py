@@ -4,10 +4,10 @@
    and boards of the test kinds (a rocky module among them; fresh seeds
    each) on a difficulty grid: calibration boards and sweep boards.
 2. Corrections (§II-B): the robot crosses every training board with its
-   current reward function (the hand-tuned default first); the synthetic
-   expert inspects each run log and labels a better foothold wherever the
-   robot's choice fell short of its own best by more than a margin
-   (:mod:`footfall.expert.corrections`). footfall learns from all corrections so far
+   current reward function (the hand-tuned default first); the teacher
+   (:mod:`footfall.expert.teachers`) inspects each run log and labels a better
+   foothold wherever the robot's choice fell short of its best by more than a
+   margin (:mod:`footfall.expert.corrections`). footfall learns from all corrections so far
    and the robot walks again, for a few rounds, until about 100
    demonstrations are collected (and, for a few extra rounds, while the
    front or the hind legs have too few to learn from).
@@ -17,7 +17,7 @@
    cross-validation error (the paper's rule); Table I.
 4. Unseen terrain (Table II; :mod:`footfall.experiments.unseen`): the test
    difficulty chosen by a rule on the calibration boards (the hardest grid
-   level at which the expert choosing every foothold still crosses 90 % of
+   level at which the teacher choosing every foothold still crosses 90 % of
    its runs, its success fitted non-increasing over the grid); the three functions, the expert and the hand-tuned reward on
    several fresh test boards at that difficulty with the same 21 run seeds
    (paired runs), the templates + features function on the flat board (the
@@ -77,8 +77,9 @@ from footfall.experiments.workspace import (
     test_boards,
 )
 from footfall.expert.collect import collect_demonstrations
-from footfall.expert.corrections import SEVERE_SHORTFALL, step_verdicts
+from footfall.expert.corrections import REPRODUCTION_MARGIN, SEVERE_SHORTFALL, step_verdicts
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
+from footfall.expert.teachers import TEACHERS
 from footfall.features.family import PAPER_FEATURE_SETS
 from footfall.learning.evaluation import expert_values, rank_scores
 from footfall.learning.learner import LEARNERS, get_learner
@@ -155,7 +156,7 @@ class ReproduceConfig(Params):
     corrections_per_run: int | None = param(
         6, range=at_least(1), doc="the expert labels the worst this many steps of a run whose "
                                   "shortfall exceeds the margin (None: all of them)")
-    margin: float = param(2.0, unit="value", range=at_least(0),
+    margin: float = param(REPRODUCTION_MARGIN, unit="value", range=at_least(0),
                           doc="shortfall against the expert's best that counts (the walking "
                               "expert's unit: 1 cm off the gait-nominal foothold)")
     library_size: int = param(1000, range=at_least(1),
@@ -192,14 +193,21 @@ class ReproduceConfig(Params):
     walk: WalkConfig = param(factory=lambda: reproduction_walk(),
                              doc="every run's settings (F within REPRODUCTION_SEARCH_RADIUS)")
     expert: ExpertConfig | None = param(
-        None, doc="the synthetic expert who corrects and demonstrates; None: "
-                  "walking_expert(walk.footstep.lead), filled in so that config.json states it")
+        None, doc="the synthetic expert who judges (and, as or within the teacher, corrects "
+                  "and demonstrates); None: walking_expert(walk.footstep.lead), filled in so "
+                  "that config.json states it")
+    teacher: str = param("accepted", check=lambda v: v in TEACHERS, must="a registered teacher",
+                         doc="who corrects the runs and walks as the reference: 'accepted' (the "
+                             "hand-tuned reward among the footholds the expert accepts; picked "
+                             "by the rule of docs/learning/teacher.md), 'guarded' or 'expert'")
 
     def __post_init__(self) -> None:
         if self.expert is None and isinstance(self.walk, WalkConfig):
             object.__setattr__(self, "expert", walking_expert(self.walk.footstep.lead))
         super().__post_init__()
         check_budget(get_learner(self.learner), self.template_budget)
+        step = self.walk.footstep  # a teacher these settings cannot make fails here, not mid-run
+        TEACHERS.get(self.teacher).expert(self.expert, step.bias_weight, step.lead)
 
     @classmethod
     def quick(cls, seed: int = 0) -> ReproduceConfig:
@@ -313,7 +321,7 @@ def correction_rounds(ws: Workspace, runner: Runner) -> Corrections:
     for r in range(config.rounds + config.extra_rounds):
         jobs = [RunJob(f"correct/r{r}/{name}", str(ws.paths[name]), model_path, seed, config.walk,
                      True, config.margin, config.corrections_per_run, config.expert,
-                     inspect_seed=inspect)
+                     inspect_seed=inspect, teacher=config.teacher)
                 for name, (seed, inspect) in zip(train, correction_seeds(config, r))]
         runner.run(jobs, f"round {r} runs")
         demos = _corrections(runner.store, r + 1)
@@ -475,9 +483,10 @@ def _choice_quality(store: DemoStore, maps: dict[str, HeightMap], config: Reprod
 
 
 def _ranking(ws: Workspace, store: DemoStore, models: dict, log: Callable[[str], None]) -> dict:
-    """Rank-eval of the three functions on the expert's demonstrations over the test board."""
+    """Rank-eval of the three functions on the teacher's demonstrations over the test board."""
     config, test = ws.config, ws.maps["test0"]
-    expert = SyntheticExpert(config.expert)
+    step = config.walk.footstep
+    expert = TEACHERS.get(config.teacher).expert(config.expert, step.bias_weight, step.lead)
     demos = store.demonstrations(source_prefix="walker:test")
     if len(demos) < config.offline_demos:  # collected and stored in one transaction: all or none
         made = collect_demonstrations([test], expert, config.offline_demos,
@@ -485,7 +494,7 @@ def _ranking(ws: Workspace, store: DemoStore, models: dict, log: Callable[[str],
                                       source="walker:test")
         store.add_demonstrations(made, terrains=[test])
         demos = store.demonstrations(source_prefix="walker:test")
-    log(f"ranking on {len(demos)} expert demonstrations over the test board")
+    log(f"ranking on {len(demos)} of the teacher's demonstrations over the test board")
     terrain = {test.content_hash(): test}.__getitem__
     values = expert_values(demos, terrain, expert)
     return {fs: rank_scores(m, demos, terrain, values=values).as_dict() for fs, m in models.items()}

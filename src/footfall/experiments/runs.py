@@ -37,8 +37,8 @@ from footfall.expert.corrections import (
     inspect_run,
     worst_corrections,
 )
-from footfall.expert.scorer import ExpertScorer, judge_name
-from footfall.expert.synthetic import ExpertConfig, SyntheticExpert
+from footfall.expert.synthetic import ExpertConfig
+from footfall.expert.teachers import TEACHERS
 from footfall.features.scorer import SCORERS
 from footfall.learning.model import FootholdModel
 from footfall.sim.episode import WalkConfig, walk
@@ -63,8 +63,9 @@ class RunJob:
     margin: float = 0.0  # [value units] shortfall the expert corrects (with ``correct``)
     cap: int | None = None  # most corrections labelled per run (the worst ones)
     expert: ExpertConfig = field(default_factory=ExpertConfig)
-    judge: bool = False  # the expert chooses every foothold itself (model unused)
+    judge: bool = False  # the teacher chooses every foothold itself (model unused)
     inspect_seed: int = 0  # the expert's randomness while it inspects the run
+    teacher: str = "expert"  # who judges and corrects (footfall.expert.teachers.TEACHERS)
 
 
 def reward_source(model_path: str | os.PathLike | None, hmap: HeightMap):
@@ -88,14 +89,20 @@ def execute(job: RunJob) -> RunOutput:
     hmap = _board(job.terrain)
     # One core per run: the stack's small matrix products only lose to BLAS threads
     # fighting over the cores the other runs use.
+    teacher = TEACHERS.get(job.teacher)
+    footstep = job.walk.footstep
     with threadpool_limits(limits=1):
-        judge = (ExpertScorer(SyntheticExpert(job.expert), name=judge_name(job.expert))
-                 if job.judge else None)
-        record = walk(hmap, reward_source(job.model, hmap), job.seed, job.walk, judge=judge)
+        judge, reward_for = None, reward_source(job.model, hmap)
+        if job.judge:
+            walker = teacher.walker(job.expert, footstep.bias_weight, footstep.lead)
+            judge = walker.judge
+            if walker.reward is not None:
+                reward_for = lambda leg: walker.reward  # noqa: E731
+        record = walk(hmap, reward_for, job.seed, job.walk, judge=judge)
         record = replace(record, key=job.key)
         demos = []
         if job.correct:
-            expert = SyntheticExpert(job.expert)
+            expert = teacher.expert(job.expert, footstep.bias_weight, footstep.lead)
             found = inspect_run(record, hmap, expert, job.margin, rng=job.inspect_seed)
             found = worst_corrections(found, job.margin, job.cap)
             demos = corrections_to_demonstrations(record, job.key, found, expert)

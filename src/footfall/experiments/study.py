@@ -58,7 +58,7 @@ PAPER_ORDERINGS = (("both", "templates"), ("templates", "terrain"), ("both", "te
 AGAINST_START = (("expert", "default"), ("both", "default"), ("templates", "default"))
 # the teacher and the learned functions against the hand-tuned reward learning starts from
 NAMES = {"terrain": "terrain features", "templates": "templates",
-         "both": "templates + features", "expert": "expert", "default": "hand-tuned"}
+         "both": "templates + features", "expert": "teacher", "default": "hand-tuned"}
 
 
 SEED_FILE = "study-seed.json"  # a finished seed's results and paired outcomes

@@ -41,7 +41,7 @@ from footfall.experiments.workspace import (
 )
 from footfall.features.family import PAPER_FEATURE_SETS
 
-REFERENCES = ("expert", "default")  # the synthetic expert choosing every foothold; the
+REFERENCES = ("expert", "default")  # the teacher choosing every foothold; the
 # hand-tuned reward (the robot before learning)
 METHODS = (*PAPER_FEATURE_SETS, *REFERENCES)  # what walks every test and sweep board
 COMPARED = ("both", "templates", "terrain", *REFERENCES)  # pairs (a, b) in this order: the
@@ -54,7 +54,8 @@ def method_job(ws: Workspace, key: str, board: str, method: str, seed: int) -> R
     config = ws.config
     path = str(ws.paths[board])
     if method == "expert":
-        return RunJob(key, path, None, seed, config.walk, expert=config.expert, judge=True)
+        return RunJob(key, path, None, seed, config.walk, expert=config.expert, judge=True,
+                      teacher=config.teacher)
     if method == "default":
         return RunJob(key, path, None, seed, config.walk)
     return RunJob(key, path, str(ws.model_path(method)), seed, config.walk)
@@ -77,8 +78,8 @@ def calibrate(ws: Workspace, runner: Runner) -> DifficultyChoice:
                 for d, level in jobs.items()}
     choice = choose_difficulty(outcomes, config.calibration_success)
     runner.log("test difficulty " + f"{choice.difficulty:g}" + (
-        "" if choice.met else " (the expert missed the threshold even at the easiest level)")
-        + ": the expert crossed " + ", ".join(
+        "" if choice.met else " (the teacher missed the threshold even at the easiest level)")
+        + ": the teacher crossed " + ", ".join(
             f"{v['successes']}/{v['runs']} at {k}" for k, v in choice.levels.items()))
     return choice
 

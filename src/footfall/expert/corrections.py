@@ -29,6 +29,8 @@ from footfall.expert.protocol import Expert, expert_settings
 DEFAULT_MARGIN = 1.0  # [value units; 1 unit = 1 cm of progress for the synthetic expert] a choice
 # this much worse than the expert's best is corrected: about the value spread of footholds a few
 # millimetres apart on smooth ground, so near-ties are not labelled as mistakes
+REPRODUCTION_MARGIN = 2.0  # [value units] the reproduction's correction margin (its config's
+# default), and the veto of the teacher that accepts only what the expert does ("accepted")
 SEVERE_SHORTFALL = 10.0  # [value units; 1 cm off the gait-nominal foothold] a choice this much
 # worse than the expert's best: a foothold on a slanted face, a pit's rim or a riser's edge
 

@@ -61,6 +61,12 @@ class FootholdScorer(ABC):
 
     # ------------------------------------------------------------ optional
     @property
+    def spread_basis(self) -> FootholdScorer:
+        """The scorer whose spread sets a planner's path bias for this one: itself, unless it
+        is another's values with something no spread should count (a veto)."""
+        return self
+
+    @property
     def has_state_part(self) -> bool:
         """Whether the value has a part that needs the robot's state."""
         return False

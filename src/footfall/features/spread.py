@@ -104,6 +104,7 @@ def path_bias_weight(reward: FootholdScorer, bias_weight: float) -> float:
     """
     if reward.own_path_preference:
         return 0.0
+    reward = reward.spread_basis
     default = default_reward(reward.config)
     if spread_key(reward) == spread_key(default):
         return float(bias_weight)

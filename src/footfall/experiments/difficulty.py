@@ -3,9 +3,9 @@
 The paper's Table II compares ranking functions on one test terrain; whether
 10 against 13 crossings out of 21 is a difference depends on how hard that
 terrain is. Too easy, and every function crosses; too hard, and the robot
-falls whatever it chooses. So the reproduction walks the synthetic expert --
-choosing every foothold itself, the best a function learned from its
-demonstrations can hope to do -- on calibration boards of the test kinds
+falls whatever it chooses. So the reproduction walks its teacher --
+choosing every foothold itself, what a function learned from its
+corrections imitates (:mod:`footfall.expert.teachers`) -- on calibration boards of the test kinds
 (their own board and run seeds, never trained or tested on) at each
 difficulty of a grid, and tests at
 
@@ -46,7 +46,7 @@ from sklearn.isotonic import IsotonicRegression
 from footfall.core.errors import FootfallError
 from footfall.core.stats import wilson_interval
 
-RULE = ("the hardest grid difficulty at which the synthetic expert, choosing every foothold, "
+RULE = ("the hardest grid difficulty at which the teacher, choosing every foothold, "
         "crosses at least {threshold:.0%} of its runs, its success against difficulty fitted "
         "non-increasing (isotonic regression over every level, weighted by runs)")
 

@@ -483,18 +483,18 @@ def _choice_quality(store: DemoStore, maps: dict[str, HeightMap], config: Reprod
 
 
 def _ranking(ws: Workspace, store: DemoStore, models: dict, log: Callable[[str], None]) -> dict:
-    """Rank-eval of the three functions on the teacher's demonstrations over the test board."""
+    """The three functions ranked on the teacher's test-board demonstrations, by the expert."""
     config, test = ws.config, ws.maps["test0"]
     step = config.walk.footstep
-    expert = TEACHERS.get(config.teacher).expert(config.expert, step.bias_weight, step.lead)
+    teacher = TEACHERS.get(config.teacher).expert(config.expert, step.bias_weight, step.lead)
     demos = store.demonstrations(source_prefix="walker:test")
     if len(demos) < config.offline_demos:  # collected and stored in one transaction: all or none
-        made = collect_demonstrations([test], expert, config.offline_demos,
+        made = collect_demonstrations([test], teacher, config.offline_demos,
                                       seed=ws.streams.seed_for("demonstrations", 0),
                                       source="walker:test")
         store.add_demonstrations(made, terrains=[test])
         demos = store.demonstrations(source_prefix="walker:test")
     log(f"ranking on {len(demos)} of the teacher's demonstrations over the test board")
     terrain = {test.content_hash(): test}.__getitem__
-    values = expert_values(demos, terrain, expert)
+    values = expert_values(demos, terrain, SyntheticExpert(config.expert))
     return {fs: rank_scores(m, demos, terrain, values=values).as_dict() for fs, m in models.items()}

@@ -72,7 +72,7 @@ def calibrate(ws: Workspace, runner: Runner) -> DifficultyChoice:
     jobs = {d: [method_job(ws, f"calibrate/{d:g}/{i}/s{s}", f"cal{d:g}-{i}", "expert", s)
                 for i in range(config.calibration_boards) for s in calibration_seeds(config, j, i)]
             for j, d in enumerate(config.difficulties)}
-    runner.run([j for level in jobs.values() for j in level], "calibration runs (the expert)")
+    runner.run([j for level in jobs.values() for j in level], "calibration runs (the teacher)")
     stored = {r["key"]: r["result"] for r in runner.store.runs(key_prefix="calibrate/")}
     outcomes = {d: (sum(bool(stored[j.key]["success"]) for j in level), len(level))
                 for d, level in jobs.items()}

@@ -198,7 +198,7 @@ def test_one_walk_logged_and_a_batch_of_one(flat_board, tmp_path):
     outcome = walk_once(flat_board, 1, search_radius=0.03, log_path=tmp_path / "log.sqlite")
     assert isinstance(outcome, WalkOutcome) and outcome.record.result["success"]
     assert outcome.run_id == 1 and outcome.as_dict()["run_id"] == 1
-    assert list(outcome.as_dict())[:4] == ["terrain", "model", "expert", "seed"]
+    assert list(outcome.as_dict())[:5] == ["terrain", "model", "expert", "teacher", "seed"]
     batch = walk_batch(flat_board, 1, 1, search_radius=0.03, log_path=tmp_path / "log.sqlite")
     assert isinstance(batch, BatchOutcome) and batch.summary.runs == 1
     for key in ("success", "distance", "steps", "slip_mean_mm"):  # the same seed, the same run

@@ -188,8 +188,8 @@ class ReproduceConfig(Params):
                                "board (the paper's 21)")
     sweep_runs: int = param(3, range=at_least(1),
                             doc="runs per method at each difficulty of the grid (one board each)")
-    offline_demos: int = param(40, range=at_least(1), doc="expert demonstrations on the test "
-                                                          "board for the ranking table")
+    offline_demos: int = param(40, range=at_least(1), doc="the teacher's demonstrations on the "
+                                                          "test board for the ranking table")
     walk: WalkConfig = param(factory=lambda: reproduction_walk(),
                              doc="every run's settings (F within REPRODUCTION_SEARCH_RADIUS)")
     expert: ExpertConfig | None = param(

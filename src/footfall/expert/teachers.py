@@ -71,12 +71,16 @@ TEACHERS.register("expert", Teacher(
     lambda expert, bias_weight, lead: Walker(judge=ExpertScorer(SyntheticExpert(expert),
                                                        name=judge_name(expert))),
     "the synthetic expert: its own value chooses and corrects"))
-TEACHERS.register("guarded", Teacher(
-    _guarded,
-    lambda expert, bias_weight, lead: Walker(reward=_guarded(expert, bias_weight, lead).scorer),
-    "the hand-tuned reward with the expert's veto of footholds severely short of its best"))
-TEACHERS.register("accepted", Teacher(
-    lambda expert, bias_weight, lead: _guarded(expert, bias_weight, lead, REPRODUCTION_MARGIN),
-    lambda expert, bias_weight, lead: Walker(
-        reward=_guarded(expert, bias_weight, lead, REPRODUCTION_MARGIN).scorer),
-    "the hand-tuned reward among the footholds the expert accepts (within the margin)"))
+def _guarded_teacher(threshold: float, doc: str) -> Teacher:
+    """The hand-tuned reward guarded at ``threshold`` [value units], as both faces."""
+    return Teacher(lambda expert, bias_weight, lead: _guarded(expert, bias_weight, lead, threshold),
+                   lambda expert, bias_weight, lead: Walker(
+                       reward=_guarded(expert, bias_weight, lead, threshold).scorer), doc)
+
+
+TEACHERS.register("guarded", _guarded_teacher(
+    SEVERE_SHORTFALL, "the hand-tuned reward with the expert's veto of footholds severely "
+                      "short of its best"))
+TEACHERS.register("accepted", _guarded_teacher(
+    REPRODUCTION_MARGIN, "the hand-tuned reward among the footholds the expert accepts (within "
+                         "the margin)"))

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from footfall.control.controller import Controller
-from footfall.control.load import load_offsets, load_shares
+from footfall.control.load import load_offsets, load_shares, pressed
 from footfall.control.lowlevel import LowLevelConfig
 from scenes import staged
 
@@ -81,6 +81,26 @@ def test_a_negative_force_reading_counts_as_no_load():
     stance = np.array([True, True, False, False])
     out = load_offsets(np.zeros(4), np.array([-3.0, 10.0, 0.0, 0.0]), shares, stance, 1e-3, 1.0)
     assert out[0] == pytest.approx(-5e-3)  # it carries 0 of its 5 N: down
+
+
+def test_a_new_foot_short_of_its_load_is_pressed_down_a_step_at_a_time_to_the_depth():
+    new = np.array([True, True, True, False])
+    owed = np.full(4, 4.0)  # [N]
+    measured = np.array([1.0, 6.0, 0.0, 0.0])  # LF short, RF loaded, LH short, RH not new
+    offsets = np.array([0.0, 0.0, -0.0035, 0.0])
+    out = pressed(offsets, new, measured, owed, step=0.001, depth=0.004)
+    assert out[0] == pytest.approx(-0.001)  # one step down
+    assert out[1] == 0.0  # carries what it is owed: left alone
+    assert out[2] == pytest.approx(-0.004)  # no deeper than the depth
+    assert out[3] == 0.0  # not new: the load control's alone
+    again = pressed(np.array([-0.006, 0.0, 0.0, 0.0]), new, measured, owed, 0.001, 0.004)
+    assert again[0] == -0.006  # an offset the load control already put lower is never raised
+
+
+def test_pressing_leaves_its_arguments_alone():
+    offsets = np.zeros(4)
+    pressed(offsets, np.ones(4, dtype=bool), np.zeros(4), np.ones(4), 0.001, 0.004)
+    assert not offsets.any()
 
 
 # ---------------------------------------------------------------- on the robot, standing

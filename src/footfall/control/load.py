@@ -114,3 +114,36 @@ def support_torques(jacobians: np.ndarray, forces: np.ndarray) -> np.ndarray:
         Upward ground forces [N] each foot is to carry (0 for a swing leg).
     """
     return -np.asarray(forces, dtype=np.float64)[:, None] * np.asarray(jacobians)[:, 2, :]
+
+
+
+def pressed(offsets: np.ndarray, new: np.ndarray, measured: np.ndarray, owed: np.ndarray,
+            step: float, depth: float) -> np.ndarray:
+    """Target height offsets (4,) [m] after one period in which the feet just set down are
+    pressed onto the ground while they carry less than they are owed.
+
+    A foot stops at the first touch of a few newtons, bounces and hangs a
+    millimetre or two above its touch-down point, or touches only now and
+    then, while the body shifts; the load control's proportional step is too
+    slow to put it back in time, and an unloaded foot is carried along by its
+    stiff leg (the "stance foot slipped" of rough ground). Each period, a
+    ``new`` foot whose vertical force is below what it is ``owed`` [N] has
+    its offset lowered by ``step`` [m], to at most ``depth`` [m] below its
+    touch-down point (an offset already lower stays). Other feet keep theirs.
+
+    Parameters
+    ----------
+    offsets : array of shape (4,)
+        The load control's offsets [m] (0 at touch-down).
+    new : array of shape (4,), bool
+        The feet just set down.
+    measured : array of shape (4,)
+        Vertical foot forces [N].
+    owed : array of shape (4,)
+        The force [N] below which a new foot is pressed.
+    """
+    short = np.asarray(new, dtype=bool) & (np.asarray(measured, dtype=np.float64) <
+                                           np.asarray(owed, dtype=np.float64))
+    out = np.asarray(offsets, dtype=np.float64).copy()
+    out[short] = np.minimum(out[short], np.maximum(out[short] - step, -depth))  # never up
+    return out

@@ -57,6 +57,9 @@ def test_each_variant_changes_only_its_part():
     margin = config.variant_walk("with-joint-margin")
     assert margin == replace(base, footstep=replace(base.footstep, joint_margin=0.1))
     assert base.footstep.joint_margin is None
+    pressing = config.variant_walk("with-press-to-load")
+    assert pressing == replace(base, lowlevel=replace(base.lowlevel, press_speed=0.1))
+    assert base.lowlevel.press_speed == 0
     none = config.variant_walk("none")
     assert not any(getattr(none.reflexes, r) for r in
                    ("lift_off_gate", "touchdown_check", "tilt_reflex", "slip_reflex"))

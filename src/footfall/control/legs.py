@@ -166,12 +166,13 @@ class Legs:
         if cfg.load_gain > 0:  # each stance foot carries its share (its force sensor)
             self.press = load_offsets(self.press, forces, shares, stance,
                                       cfg.load_gain * self.period, cfg.load_limit)
-            new = stance & (est.time - self.since < cfg.press_time)
-            if cfg.press_speed > 0 and new.any():  # new feet pressed down while unloaded
-                owed = cfg.press_share * self._weight * load_shares(
-                    est.feet[:, :2], est.com[:2], np.where(stance, self.unload, 0.0))
-                self.press = pressed(self.press, new, forces, owed,
-                                     cfg.press_speed * self.period, cfg.press_depth)
+            if cfg.press_speed > 0:  # new feet pressed down while they carry too little
+                new = stance & (est.time - self.since < cfg.press_time)
+                if new.any():
+                    owed = cfg.press_share * self._weight * load_shares(
+                        est.feet[:, :2], est.com[:2], np.where(stance, self.unload, 0.0))
+                    self.press = pressed(self.press, new, forces, owed,
+                                         cfg.press_speed * self.period, cfg.press_depth)
             self.targets[:, 2] += self.press
         if cfg.support_feedforward > 0:  # the servos are given the torques that carry it
             return support_torques(est.jacobians(),

@@ -116,7 +116,6 @@ def support_torques(jacobians: np.ndarray, forces: np.ndarray) -> np.ndarray:
     return -np.asarray(forces, dtype=np.float64)[:, None] * np.asarray(jacobians)[:, 2, :]
 
 
-
 def pressed(offsets: np.ndarray, new: np.ndarray, measured: np.ndarray, owed: np.ndarray,
             step: float, depth: float) -> np.ndarray:
     """Target height offsets (4,) [m] after one period in which the feet just set down are

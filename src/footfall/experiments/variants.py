@@ -93,6 +93,7 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
                      "default)",
                      lambda w: replace(w, footstep=replace(w.footstep, joint_margin=0.1))),
     register_variant("with-press-to-load", "with a foot just set down pressed down at 0.1 m/s "
-                     "until it reads half its part of the weight, at most 4 mm (off by default)",
+                     "for 0.2 s whenever it reads under half its part of the weight, at most "
+                     "4 mm (off by default)",
                      lambda w: _lowlevel(w, press_speed=0.1)),
 ))  # the controller's own variants, in table order: an ablation walks them all by default

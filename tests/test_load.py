@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from footfall.control.controller import Controller
-from footfall.control.load import load_offsets, load_shares, pressed
+from footfall.control.load import load_held, load_offsets, load_shares, pressed
 from footfall.control.lowlevel import LowLevelConfig
 from scenes import staged
 
@@ -95,6 +95,16 @@ def test_a_new_foot_short_of_its_load_is_pressed_down_a_step_at_a_time_to_the_de
     assert out[3] == 0.0  # not new: the load control's alone
     again = pressed(np.array([-0.006, 0.0, 0.0, 0.0]), new, measured, owed, 0.001, 0.004)
     assert again[0] == -0.006  # an offset the load control already put lower is never raised
+
+
+def test_the_offsets_are_held_while_a_stance_foot_set_down_lately_settles():
+    stance = np.array([True, True, False, True])
+    elapsed = np.array([0.5, 0.15, 0.01, 0.9])  # [s] leg 1 touched down 0.15 s ago
+    assert load_held(stance, elapsed, 0.2)
+    assert not load_held(stance, elapsed, 0.1)  # settled by then
+    assert not load_held(stance, elapsed, 0.0)  # off
+    # a leg that lifted lately (not in stance) holds nothing
+    assert not load_held(stance, np.array([0.5, 0.3, 0.01, 0.9]), 0.2)
 
 
 def test_pressing_leaves_its_arguments_alone():

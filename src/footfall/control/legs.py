@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from footfall.control.estimate import BodyEstimate
-from footfall.control.load import load_offsets, load_shares, pressed, support_torques
+from footfall.control.load import load_held, load_offsets, load_shares, pressed, support_torques
 from footfall.control.lowlevel import (
     BodyCorrection,
     LowLevelConfig,
@@ -164,8 +164,11 @@ class Legs:
         shares = load_shares(est.feet[:, :2], est.com[:2],
                              np.where(stance, ramp, 0.0) * self.unload)
         if cfg.load_gain > 0:  # each stance foot carries its share (its force sensor)
-            self.press = load_offsets(self.press, forces, shares, stance,
-                                      cfg.load_gain * self.period, cfg.load_limit)
+            if load_held(stance, est.time - self.since, cfg.load_hold):  # a new foot settles
+                self.press = np.where(stance, self.press, 0.0)
+            else:
+                self.press = load_offsets(self.press, forces, shares, stance,
+                                          cfg.load_gain * self.period, cfg.load_limit)
             if cfg.press_speed > 0:  # new feet pressed down while they carry too little
                 new = stance & (est.time - self.since < cfg.press_time)
                 if new.any():

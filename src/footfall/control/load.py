@@ -116,6 +116,30 @@ def support_torques(jacobians: np.ndarray, forces: np.ndarray) -> np.ndarray:
     return -np.asarray(forces, dtype=np.float64)[:, None] * np.asarray(jacobians)[:, 2, :]
 
 
+def load_held(stance: np.ndarray, elapsed: np.ndarray, hold: float) -> bool:
+    """Whether the load control holds its offsets this period: a stance foot touched down
+    less than ``hold`` [s] ago.
+
+    Just after a touch-down the force readings are an impact and a foot that
+    bounces on and off the ground (the readings swing between 0 and twice the
+    foot's part from one period to the next), not the load's distribution;
+    the load control, which integrates them, then lowers the other feet and
+    lifts the new one. Holding the offsets until the new foot has settled
+    keeps that out.
+
+    Parameters
+    ----------
+    stance : array of shape (4,), bool
+        The stance legs.
+    elapsed : array of shape (4,)
+        Time [s] since each leg's last change of role.
+    hold : float
+        [s] how long after a touch-down the offsets are held; 0: never.
+    """
+    return bool(hold > 0 and np.any(np.asarray(stance, dtype=bool)
+                                    & (np.asarray(elapsed, dtype=np.float64) < hold)))
+
+
 def pressed(offsets: np.ndarray, new: np.ndarray, measured: np.ndarray, owed: np.ndarray,
             step: float, depth: float) -> np.ndarray:
     """Target height offsets (4,) [m] after one period in which the feet just set down are

@@ -96,4 +96,7 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
                      "for 0.2 s whenever it reads under half its part of the weight, at most "
                      "4 mm (off by default)",
                      lambda w: _lowlevel(w, press_speed=0.1)),
+    register_variant("with-load-hold", "with the load control's offsets held while a foot "
+                     "set down less than 0.2 s ago settles (off by default)",
+                     lambda w: _lowlevel(w, load_hold=0.2)),
 ))  # the controller's own variants, in table order: an ablation walks them all by default

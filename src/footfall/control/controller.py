@@ -239,12 +239,14 @@ class Controller:
         leg = self.slip.watch(feet, speed, legs.targets, legs.stance & legs.settled, legs.forces)
         if leg is not None:
             self.alarm = ("slip", leg)
+            legs.hold_yields = True
             self.event("stance slip", leg, moved_mm=round(
                 1e3 * float(np.hypot(*(feet[leg, :2] - legs.down[leg, :2]))), 1))
             return
         error = self.tilt.watch(self.pose[1], desired_rpy, self.recovering)
         if error is not None:
             self.alarm = ("tilt", None)
+            legs.hold_yields = True
             self.event("tilt", None, error_rad=round(error, 3))
 
     def touching_down(self, leg: int) -> bool:

@@ -67,6 +67,9 @@ class Legs:
         [-] each leg's availability to carry load (1 - the share unloaded before a lift-off).
     correction : BodyCorrection
         The integral correction of the commanded body pose.
+    hold_yields : bool
+        Whether the load hold (``load_hold``) yields: from the stance watch's alarm until the
+        recovery ends, the load control moves the load whatever touched down.
     settled, forces : ndarray (4,) bool, ndarray (4,) or None
         Of the last period: the legs whose role change is complete, and the vertical force
         sensor readings [N] (None when nothing needed them), for the stance watch.
@@ -94,6 +97,7 @@ class Legs:
         self.down = self.targets.copy()
         self.shin0 = shin_rotations(self.q, body_rotation(est.pose[1]))  # (4, 3, 3) shins then
         self.press = np.zeros(4)  # [m] stance feet's load control offsets (target heights)
+        self.hold_yields = False  # the load hold yields (the stance watch raised an alarm)
         self.unload = np.ones(4)
         self.settled, self.forces = np.ones(4, dtype=bool), None
 
@@ -164,7 +168,8 @@ class Legs:
         shares = load_shares(est.feet[:, :2], est.com[:2],
                              np.where(stance, ramp, 0.0) * self.unload)
         if cfg.load_gain > 0:  # each stance foot carries its share (its force sensor)
-            if load_held(stance, est.time - self.since, cfg.load_hold):  # a new foot settles
+            if not self.hold_yields and load_held(stance, est.time - self.since,
+                                                  cfg.load_hold):  # a new foot settles
                 self.press = np.where(stance, self.press, 0.0)
             else:
                 self.press = load_offsets(self.press, forces, shares, stance,

@@ -36,6 +36,7 @@ def recover(ctl: Controller) -> Generator[JointTargets, None, None]:
         ctl.alarm = None
         yield from _posture(ctl, t0)
     ctl.held = False
+    ctl.legs.hold_yields = False  # (the load hold acts again)
     ctl.legs.unload[:] = 1.0  # a step called off keeps its leg's load
     ctl.rebase.after_recovery(ctl)
     ctl.cog = ctl.desired[0][:2].copy(), np.zeros(2)  # the body at rest where it is

@@ -60,9 +60,9 @@ def test_each_variant_changes_only_its_part():
     pressing = config.variant_walk("with-press-to-load")
     assert pressing == replace(base, lowlevel=replace(base.lowlevel, press_speed=0.1))
     assert base.lowlevel.press_speed == 0
-    holding = config.variant_walk("with-load-hold")
-    assert holding == replace(base, lowlevel=replace(base.lowlevel, load_hold=0.2))
-    assert base.lowlevel.load_hold == 0
+    unheld = config.variant_walk("no-load-hold")
+    assert unheld == replace(base, lowlevel=replace(base.lowlevel, load_hold=0.0))
+    assert base.lowlevel.load_hold == 0.2
     none = config.variant_walk("none")
     assert not any(getattr(none.reflexes, r) for r in
                    ("lift_off_gate", "touchdown_check", "tilt_reflex", "slip_reflex"))

@@ -91,9 +91,10 @@ class LowLevelConfig(Params):
                                  "this times its load error (footfall.control.load); 0: off")
     load_limit: float = param(0.015, unit="m", range=within(0, math.inf),
                               doc="bound of a stance foot's load control offset")
-    load_hold: float = param(0.0, unit="s", range=within(0, math.inf),
+    load_hold: float = param(0.2, unit="s", range=within(0, math.inf),
                              doc="the load control holds every offset while a stance foot "
-                                 "touched down less than this long ago (load_held); 0: off")
+                                 "touched down less than this long ago (load_held), unless "
+                                 "the stance watch raised an alarm; 0: off")
     support_feedforward: float = param(0.5, unit="-", range=within(0, 1),
                                        doc="this share of each stance foot's part of the weight "
                                            "(load_shares) is fed forward to its leg's servos as "

@@ -57,9 +57,9 @@ def test_each_variant_changes_only_its_part():
     margin = config.variant_walk("with-joint-margin")
     assert margin == replace(base, footstep=replace(base.footstep, joint_margin=0.1))
     assert base.footstep.joint_margin is None
-    pressing = config.variant_walk("with-press-to-load")
-    assert pressing == replace(base, lowlevel=replace(base.lowlevel, press_speed=0.1))
-    assert base.lowlevel.press_speed == 0
+    unpressed = config.variant_walk("no-press-to-load")
+    assert unpressed == replace(base, lowlevel=replace(base.lowlevel, press_speed=0.0))
+    assert base.lowlevel.press_speed == 0.1
     unheld = config.variant_walk("no-load-hold")
     assert unheld == replace(base, lowlevel=replace(base.lowlevel, load_hold=0.0))
     assert base.lowlevel.load_hold == 0.2

@@ -111,12 +111,12 @@ class LowLevelConfig(Params):
                                 "body correction is handed to the stance feet's anchors, their "
                                 "set-points unchanged, so the new foot enters a commanded frame "
                                 "without it and is not dragged by it (handed_over)")
-    press_speed: float = param(0.0, unit="m/s", range=within(0, math.inf),
+    press_speed: float = param(0.1, unit="m/s", range=within(0, math.inf),
                                doc="with load control, for press_time after touch-down a foot "
                                    "is pressed down at this speed in every period it reads less "
                                    "than press_share of the load it will carry, at most "
                                    "press_depth below where it touched down "
-                                   "(footfall.control.load.pressed); 0: off (the default)")
+                                   "(footfall.control.load.pressed); 0: off")
     press_share: float = param(0.5, unit="-", range=within(0, 1),
                                doc="a new foot is pressed while its vertical force is below this "
                                    "share of its part of the weight with every stance leg loaded")

@@ -68,6 +68,8 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
                      lambda w: _lowlevel(w, load_gain=0.0)),
     register_variant("no-load-hold", "without the load control's offsets held while a foot "
                      "set down less than 0.2 s ago settles", lambda w: _lowlevel(w, load_hold=0.0)),
+    register_variant("no-press-to-load", "without a foot just set down pressed down while it "
+                     "reads under half its part of the weight", lambda w: _lowlevel(w, press_speed=0.0)),
     register_variant("no-cog-reach", "without the COG plan within the legs' reach", _no_reach),
     register_variant("no-hand-over", "without the body correction handed to the stance anchors "
                      "at each touch-down", lambda w: _lowlevel(w, hand_over=False)),
@@ -94,8 +96,4 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
                      "within 0.1 rad of a joint limit at touch-down or a stride on (off by "
                      "default)",
                      lambda w: replace(w, footstep=replace(w.footstep, joint_margin=0.1))),
-    register_variant("with-press-to-load", "with a foot just set down pressed down at 0.1 m/s "
-                     "for 0.2 s whenever it reads under half its part of the weight, at most "
-                     "4 mm (off by default)",
-                     lambda w: _lowlevel(w, press_speed=0.1)),
 ))  # the controller's own variants, in table order: an ablation walks them all by default

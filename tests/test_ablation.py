@@ -60,6 +60,9 @@ def test_each_variant_changes_only_its_part():
     unpressed = config.variant_walk("no-press-to-load")
     assert unpressed == replace(base, lowlevel=replace(base.lowlevel, press_speed=0.0))
     assert base.lowlevel.press_speed == 0.1
+    slow = config.variant_walk("with-slow-shift")
+    assert slow == replace(base, cog=replace(base.cog, shift_duration=0.3))
+    assert base.cog.shift_duration == 0.15
     unheld = config.variant_walk("no-load-hold")
     assert unheld == replace(base, lowlevel=replace(base.lowlevel, load_hold=0.0))
     assert base.lowlevel.load_hold == 0.2

@@ -234,6 +234,19 @@ def test_walk_config_limits_the_candidate_set_and_sets_the_path_bias():
     assert walk_config(path_bias=0.0).footstep == replace(walk_config().footstep, bias_weight=0)
 
 
+def test_walk_config_walks_a_controller_variant_on_top_of_its_own_settings():
+    from footfall.experiments.variants import VARIANTS
+
+    assert walk_config(variant="defaults") == walk_config()
+    base = walk_config(search_radius=0.03)
+    unheld = walk_config(search_radius=0.03, variant="no-load-hold")
+    assert unheld == VARIANTS.get("no-load-hold").change(base)
+    assert unheld.lowlevel.load_hold == 0 and base.lowlevel.load_hold == 0.2
+    assert unheld.footstep.search_radius == 0.03  # the variant changes only its own part
+    with pytest.raises(FootfallError, match="nobody"):
+        walk_config(variant="nobody")
+
+
 # -------------------------------------------------- the commands print them
 def test_a_command_prints_its_result_objects_json(boards, tmp_path, capsys):
     code, out, _ = run(capsys, "terrain", "make", "rocky", "--seed", 4, "-o", tmp_path / "c.npz",

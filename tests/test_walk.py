@@ -302,6 +302,13 @@ def test_cli_walk_many_with_a_log_walks_only_the_runs_it_does_not_hold(tmp_path,
     with DemoStore(log) as store:
         runs = store.runs()
         assert len(runs) == 5 and runs[-1]["settings"]["walk"]["footstep"]["friction_safety"] == 1.5
+    code, _, err = run(capsys, *common, "--runs", "1", "--variant", "no-press-to-load")
+    assert code == 0 and "already" not in err  # another controller: another run
+    with DemoStore(log) as store:
+        runs = store.runs()
+        assert len(runs) == 6 and runs[-1]["settings"]["walk"]["lowlevel"]["press_speed"] == 0
+    code, _, err = run(capsys, *common, "--runs", "1", "--variant", "no-such-controller")
+    assert_user_error(code, err, "no-such-controller")
 
 
 def test_cli_walk_many_with_a_teacher_logs_it_and_refuses_an_unknown_one(tmp_path, capsys):

@@ -15,6 +15,7 @@ import click
 from footfall.core.errors import FootfallError
 from footfall.core.limits import current_limits
 from footfall.core.robot import LEG_NAMES
+from footfall.experiments.variants import VARIANTS
 from footfall.expert.collect import RECORDED_STEPS
 from footfall.expert.teachers import TEACHERS
 from footfall.features.family import FEATURE_SETS, feature_set_families
@@ -84,6 +85,10 @@ def _teachers() -> tuple[str, ...]:
     return TEACHERS.names()  # read when used, as the learners
 
 
+def _variants() -> tuple[str, ...]:
+    return VARIANTS.names()
+
+
 def _selections() -> tuple[str, ...]:
     return tuple(ranker.SELECTIONS)
 
@@ -99,6 +104,7 @@ def _recorded_steps() -> tuple[str, ...]:
 LEG = RegistryChoice(_legs)  # footfall.core.robot.LEG_NAMES
 LEARNER = RegistryChoice(_learners)  # footfall.learning.learner.LEARNERS
 TEACHER = RegistryChoice(_teachers)  # footfall.expert.teachers.TEACHERS
+VARIANT = RegistryChoice(_variants)  # footfall.experiments.variants.VARIANTS
 SELECTION = RegistryChoice(_selections)  # footfall.learning.ranker.SELECTIONS
 TERRAIN_KIND = RegistryChoice(  # footfall.terrain.KINDS, refused in the generator's words
     _terrain_kinds, invalid="unknown terrain module kind {value!r}; known kinds: {choices}")

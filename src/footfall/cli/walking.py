@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import click
 
-from footfall.cli.choices import SEED, TEACHER, count_range
+from footfall.cli.choices import SEED, TEACHER, VARIANT, count_range
 from footfall.cli.executors import executor_options, opened_executor
 from footfall.cli.output import emit, json_option, progress_bar
 from footfall.experiments.batch import check_picture_outputs, walk_batch, walk_once
@@ -19,8 +19,11 @@ MODEL_OPTION = click.option("--model", "model_path", default=None,
 
 
 def _chooser_options(f):
-    """--expert, --search-radius, --friction-safety and --path-bias: who chooses the
-    footholds, and among which."""
+    """--expert, --search-radius, --friction-safety, --path-bias and --variant: who chooses
+    the footholds, among which, and with which controller."""
+    f = click.option("--variant", type=VARIANT, default="defaults", show_default=True,
+                     help="The controller variant that walks (as `footfall ablation` names "
+                          "them, e.g. no-load-hold, with-friction-check).")(f)
     f = click.option("--path-bias", type=click.FloatRange(min=0), default=None,
                      metavar="REWARD/M",
                      help="The footstep planner's pull toward the path: a candidate loses this "
@@ -93,14 +96,15 @@ def walk_cmd(terrain_path: str, model_path: str | None, seed: int, snapshots: st
              frames: int, video: str | None, log_path: str | None, explain: bool,
              explain_plot: str | None, expert: bool, expert_config: str | None,
              teacher: str | None, search_radius: float | None, friction_safety: float | None,
-             path_bias: float | None, as_json: bool) -> None:
+             path_bias: float | None, variant: str, as_json: bool) -> None:
     """One run of the simulated robot across a board (success, slip, speed)."""
     check_picture_outputs(snapshots, video, explain_plot, as_options=True,
                           inputs=(terrain_path, model_path, log_path, expert_config))
     expert, teacher = _teacher(expert, teacher)
     outcome = walk_once(terrain_path, seed, model_path=model_path, expert=expert,
                         search_radius=search_radius, friction_safety=friction_safety,
-                        path_bias=path_bias, snapshots=snapshots, frames=frames,
+                        path_bias=path_bias, variant=variant, snapshots=snapshots,
+                        frames=frames,
                         video=video, log_path=log_path, explain_plot=explain_plot,
                         expert_config=_expert_settings(expert_config), teacher=teacher)
     text = _run_text(outcome.record.result)
@@ -126,7 +130,8 @@ def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: in
                   log_path: str | None, expert: bool, expert_config: str | None,
                   teacher: str | None,
                   search_radius: float | None, friction_safety: float | None,
-                  path_bias: float | None, processes: int | None, executor_name: str,
+                  path_bias: float | None, variant: str, processes: int | None,
+                  executor_name: str,
                   ray_address: str | None, as_json: bool) -> None:
     """N runs in parallel: success rate (Wilson 95 % CI), slip, speed."""
     expert, teacher = _teacher(expert, teacher)
@@ -143,7 +148,8 @@ def walk_many_cmd(terrain_path: str, model_path: str | None, runs: int, seed: in
                        log_lines=True) as step):
         batch = walk_batch(terrain_path, runs, seed, model_path=model_path, expert=expert,
                            search_radius=search_radius, friction_safety=friction_safety,
-                           path_bias=path_bias, log_path=log_path, progress=step,
+                           path_bias=path_bias, variant=variant, log_path=log_path,
+                           progress=step,
                            executor=executor, reused=reused,
                            expert_config=_expert_settings(expert_config), teacher=teacher)
     s = batch.summary

@@ -31,6 +31,7 @@ from footfall.data.schema import SUFFIXES as STORE_SUFFIXES
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor, LocalPool
 from footfall.experiments.runs import RunJob, reward_source
+from footfall.experiments.variants import VARIANTS
 from footfall.expert.scorer import ExpertScorer, judge_name, settings_hash
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
 from footfall.expert.teachers import TEACHERS, Walker
@@ -241,16 +242,18 @@ def load_board(path: str | os.PathLike) -> HeightMap:
 
 def walk_config(model_path: str | os.PathLike | None = None, expert: bool = False,
                 search_radius: float | None = None, friction_safety: float | None = None,
-                path_bias: float | None = None) -> WalkConfig:
+                path_bias: float | None = None, variant: str = "defaults") -> WalkConfig:
     """The default walk, with the candidate set F limited to ``search_radius`` [m], the
     footstep planner's friction check at ``friction_safety`` [-] and its path bias at
     ``path_bias`` [hand-tuned reward/m] if given
-    (:class:`~footfall.control.footstep.FootstepConfig`).
+    (:class:`~footfall.control.footstep.FootstepConfig`), then changed as the controller
+    variant ``variant`` changes it (:data:`footfall.experiments.variants.VARIANTS`).
 
     Raises
     ------
     FootfallError
-        For the expert together with a model, or a bad search radius, safety factor or bias.
+        For the expert together with a model, or a bad search radius, safety factor, bias or
+        variant.
     """
     if expert and model_path is not None:
         raise FootfallError("--expert chooses the footholds itself: give no --model with it")
@@ -258,7 +261,8 @@ def walk_config(model_path: str | os.PathLike | None = None, expert: bool = Fals
     changes = {k: v for k, v in (("search_radius", search_radius),
                                  ("friction_safety", friction_safety),
                                  ("bias_weight", path_bias)) if v is not None}
-    return replace(base, footstep=replace(base.footstep, **changes)) if changes else base
+    config = replace(base, footstep=replace(base.footstep, **changes)) if changes else base
+    return config if variant == "defaults" else VARIANTS.get(variant).change(config)
 
 
 @dataclass(frozen=True)
@@ -320,7 +324,7 @@ def check_picture_outputs(snapshots: str | os.PathLike | None, video: str | os.P
 def walk_once(terrain_path: str | os.PathLike, seed: int, *,
               model_path: str | os.PathLike | None = None, expert: bool = False,
               search_radius: float | None = None, friction_safety: float | None = None,
-              path_bias: float | None = None,
+              path_bias: float | None = None, variant: str = "defaults",
               snapshots: str | os.PathLike | None = None, frames: int = 6, video: str | os.PathLike | None = None,
               log_path: str | os.PathLike | None = None,
               explain_plot: str | os.PathLike | None = None,
@@ -331,8 +335,9 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
     ``expert`` the teacher ``teacher`` does (:data:`footfall.expert.teachers.TEACHERS`: the
     walking expert, or the hand-tuned reward it guards), with the expert of ``expert_config``
     if given (:func:`chooser_expert`). ``search_radius`` [m] limits the candidate set F and
-    ``friction_safety`` [-] sets the friction check and ``path_bias`` [hand-tuned reward/m]
-    the footstep planner's path bias (:func:`walk_config`).
+    ``friction_safety`` [-] sets the friction check, ``path_bias`` [hand-tuned reward/m]
+    the footstep planner's path bias and ``variant`` the controller variant
+    (:func:`walk_config`).
     ``snapshots`` writes a strip of ``frames`` pictures (.png), ``video`` an
     .mp4 at 25 frames/s, ``log_path`` appends the run to a store,
     ``explain_plot`` draws the run's last seconds (.png,
@@ -344,7 +349,8 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
         For bad settings, a missing board, a model for another robot or map,
         or a bad output path: all before the run.
     """
-    config = walk_config(model_path, expert, search_radius, friction_safety, path_bias)
+    config = walk_config(model_path, expert, search_radius, friction_safety, path_bias,
+                         variant)
     judge = chooser_expert(config, expert, expert_config)
     hmap = load_board(terrain_path)
     reward_for = reward_source(model_path, hmap)
@@ -400,7 +406,7 @@ class BatchOutcome:
 def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
                model_path: str | os.PathLike | None = None, expert: bool = False,
                search_radius: float | None = None, friction_safety: float | None = None,
-               path_bias: float | None = None,
+               path_bias: float | None = None, variant: str = "defaults",
                log_path: str | os.PathLike | None = None,
                progress: Callable[[RunRecord], None] | None = None,
                executor: Executor | None = None,
@@ -421,7 +427,8 @@ def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
     FootfallError
         As :func:`walk_once` and :func:`walk_many`.
     """
-    config = walk_config(model_path, expert, search_radius, friction_safety, path_bias)
+    config = walk_config(model_path, expert, search_radius, friction_safety, path_bias,
+                         variant)
     hmap = load_board(terrain_path)
     log = _checked_log(log_path, inputs=(terrain_path, model_path))
     jobs = batch_jobs(terrain_path, model_path, runs, seed, config, expert, hmap,

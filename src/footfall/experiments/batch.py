@@ -262,7 +262,7 @@ def walk_config(model_path: str | os.PathLike | None = None, expert: bool = Fals
                                  ("friction_safety", friction_safety),
                                  ("bias_weight", path_bias)) if v is not None}
     config = replace(base, footstep=replace(base.footstep, **changes)) if changes else base
-    return config if variant == "defaults" else VARIANTS.get(variant).change(config)
+    return VARIANTS.get(variant).change(config)
 
 
 @dataclass(frozen=True)

@@ -97,5 +97,6 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
                      "default)",
                      lambda w: replace(w, footstep=replace(w.footstep, joint_margin=0.1))),
     register_variant("with-slow-shift", "with the body's shift between swings taking 0.3 s "
-                     "instead of 0.15 s", lambda w: replace(w, cog=replace(w.cog, shift_duration=0.3))),
+                     "instead of 0.15 s (off by default)",
+                     lambda w: replace(w, cog=replace(w.cog, shift_duration=0.3))),
 ))  # the controller's own variants, in table order: an ablation walks them all by default

@@ -133,7 +133,7 @@ class Legs:
         cfg = self.config
         mpos, mrpy = est.pose
         cpos, crpy = self.correction.update(position, rpy, mpos, mrpy)
-        rot = body_rotation(crpy), body_rotation(mrpy)  # commanded, measured
+        rot = body_rotation(crpy), est.rotation  # commanded, measured
         ramp = transfer_weight(est.time - self.since, cfg.transfer_time)
         weight = np.where(self.stance, ramp, 1.0 - ramp)
         stance = self.stance
@@ -148,7 +148,7 @@ class Legs:
             self.correction.shift(shift)
         # Stance feet: where they touched down, moved on as far as their balls have rolled since.
         self.targets[stance] = self.anchor[stance] + rolled(
-            self.shin0[stance], shin_rotations(est.q, rot[1])[stance], self.robot.foot_radius)
+            self.shin0[stance], est.shins()[stance], self.robot.foot_radius)
         torque = self._supported(est, ramp, forces)
         q, _ = joint_targets(self.robot, self.targets, (cpos, rot[0]), (mpos, rot[1]), weight,
                              self.q)

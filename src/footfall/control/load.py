@@ -25,6 +25,7 @@ not have to.
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 
@@ -40,6 +41,9 @@ def load_shares(feet_xy: np.ndarray, com_xy: np.ndarray, availability: np.ndarra
     the spare degree of freedom. Shares are clipped at 0 (a centre of mass
     outside the support cannot be balanced) and scaled back to sum 1.
 
+    Compiled (:func:`_shares`): called once or twice every control period on
+    four feet, where NumPy's per-call overhead would be nearly all its cost.
+
     Parameters
     ----------
     feet_xy : array of shape (k, 2)
@@ -49,25 +53,56 @@ def load_shares(feet_xy: np.ndarray, com_xy: np.ndarray, availability: np.ndarra
     availability : array of shape (k,)
         Availability [-] in [0, 1] of each foot to carry load.
     """
-    p = np.asarray(feet_xy, dtype=np.float64) - np.asarray(com_xy, dtype=np.float64)
-    a = np.clip(np.asarray(availability, dtype=np.float64), 0.0, 1.0)
-    if not a.any():
-        return np.zeros(a.shape)
-    rows = np.vstack([np.ones(len(a)), p.T])  # (3, k): total, moment about x and y
-    shares = _balanced(rows, a)
-    if shares.min() < 0 and (a < 1).any():  # the partly available feet cannot be spared:
-        shares = _balanced(rows, (a > 0).astype(np.float64))  # every foot down takes its part
+    return _shares(np.ascontiguousarray(feet_xy, dtype=np.float64),
+                   np.ascontiguousarray(com_xy, dtype=np.float64),
+                   np.ascontiguousarray(availability, dtype=np.float64))
+
+
+@numba.njit(cache=True, nogil=True)
+def _shares(feet_xy, com_xy, availability):  # pragma: no cover - compiled
+    """:func:`load_shares` of float64 arrays (k, 2), (2,), (k,)."""
+    k = availability.shape[0]
+    px = feet_xy[:, 0] - com_xy[0]
+    py = feet_xy[:, 1] - com_xy[1]
+    a = np.minimum(np.maximum(availability, 0.0), 1.0)
+    if not np.any(a != 0.0):
+        return np.zeros(k)
+    shares = _balanced(px, py, a)
+    if shares.min() < 0 and np.any(a < 1):  # the partly available feet cannot be spared:
+        shares = _balanced(px, py, (a > 0).astype(np.float64))  # every foot down takes its part
     shares = np.maximum(shares, 0.0)
     total = shares.sum()
     return shares / total if total > 0 else a / a.sum()
 
 
-def _balanced(rows: np.ndarray, a: np.ndarray) -> np.ndarray:
-    """Least ``sum s^2 / a`` shares (k,) with ``rows @ s = (1, 0, 0)``; ``rows`` (3, k)."""
-    gram = (rows * a) @ rows.T
-    # the pseudo-inverse: two available feet (or three on a line) balance in the least-squares
-    # sense instead of failing
-    return a * (rows.T @ (np.linalg.pinv(gram, rcond=1e-9) @ np.array([1.0, 0.0, 0.0])))
+@numba.njit(cache=True, nogil=True)
+def _balanced(px, py, a):  # pragma: no cover - compiled
+    """Least ``sum s^2 / a`` shares (k,) with ``sum s = 1``, ``sum s px = sum s py = 0``
+    (feet at ``px``, ``py`` [m] from the centre of mass): ``s = a R^T G^+ e1`` with the rows
+    ``R = (1, px, py)`` and their Gram matrix ``G = R diag(a) R^T`` (3, 3)."""
+    g00 = g01 = g02 = g11 = g12 = g22 = 0.0
+    for i in range(a.shape[0]):
+        g00 += a[i]
+        g01 += a[i] * px[i]
+        g02 += a[i] * py[i]
+        g11 += a[i] * px[i] * px[i]
+        g12 += a[i] * px[i] * py[i]
+        g22 += a[i] * py[i] * py[i]
+    # G^-1 e1 is G's first adjugate column over its determinant -- while G is well
+    # conditioned (three feet or more, not on a line); else the pseudo-inverse: two
+    # available feet (or three on a line) balance in the least-squares sense
+    c0 = g11 * g22 - g12 * g12
+    c1 = g12 * g02 - g01 * g22
+    c2 = g01 * g12 - g11 * g02
+    det = g00 * c0 + g01 * c1 + g02 * c2
+    trace = g00 + g11 + g22
+    if det > 1e-6 * trace * trace * trace:
+        c0, c1, c2 = c0 / det, c1 / det, c2 / det
+    else:
+        gram = np.array([[g00, g01, g02], [g01, g11, g12], [g02, g12, g22]])
+        inverse = np.linalg.pinv(gram, 1e-9)
+        c0, c1, c2 = inverse[0, 0], inverse[1, 0], inverse[2, 0]
+    return a * (c0 + px * c1 + py * c2)
 
 
 def load_offsets(offsets: np.ndarray, measured: np.ndarray, shares: np.ndarray,
@@ -92,7 +127,8 @@ def load_offsets(offsets: np.ndarray, measured: np.ndarray, shares: np.ndarray,
     """
     f = np.where(stance, np.maximum(np.asarray(measured, dtype=np.float64), 0.0), 0.0)
     error = f - shares * f.sum()
-    out = np.clip(np.asarray(offsets, dtype=np.float64) + gain * error, -limit, limit)
+    out = np.minimum(np.maximum(np.asarray(offsets, dtype=np.float64) + gain * error, -limit),
+                     limit)
     return np.where(stance, out, 0.0)
 
 
@@ -136,8 +172,8 @@ def load_held(stance: np.ndarray, elapsed: np.ndarray, hold: float) -> bool:
     hold : float
         [s] how long after a touch-down the offsets are held; 0: never.
     """
-    return bool(hold > 0 and np.any(np.asarray(stance, dtype=bool)
-                                    & (np.asarray(elapsed, dtype=np.float64) < hold)))
+    return bool(hold > 0 and (np.asarray(stance, dtype=bool)
+                              & (np.asarray(elapsed, dtype=np.float64) < hold)).any())
 
 
 def pressed(offsets: np.ndarray, new: np.ndarray, measured: np.ndarray, owed: np.ndarray,

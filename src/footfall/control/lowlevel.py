@@ -58,6 +58,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from footfall.control import period_kernels as kernels
 from footfall.core.errors import FootfallError
 from footfall.core.params import Params, param, within
 from footfall.core.robot import Leg, RobotDescription
@@ -191,15 +192,11 @@ def shin_rotations(q: np.ndarray, body_rotation: np.ndarray) -> np.ndarray:
 
     ``body_rotation`` (3, 3) turns the body frame into the world; then hip
     roll about x, then hip pitch plus knee about the rolled y axis (see
-    :mod:`footfall.core.kinematics`): Rx(q1) Ry(q2 + q3).
+    :mod:`footfall.core.kinematics`): Rx(q1) Ry(q2 + q3). Compiled
+    (:func:`footfall.control.period_kernels.shins`).
     """
-    legs = []
-    for roll, hip_pitch, knee in np.asarray(q, dtype=np.float64).tolist():  # Python floats: four
-        c1, s1 = math.cos(roll), math.sin(roll)  # legs at 100 Hz, where NumPy's overhead dominates
-        pitch = hip_pitch + knee
-        c2, s2 = math.cos(pitch), math.sin(pitch)
-        legs.append(((c2, 0.0, s2), (s1 * s2, c1, -s1 * c2), (-c1 * s2, s1, c1 * c2)))
-    return np.asarray(body_rotation) @ np.array(legs)
+    return kernels.shins(np.ascontiguousarray(q, dtype=np.float64),
+                         np.ascontiguousarray(body_rotation, dtype=np.float64))
 
 
 def rolled(start: np.ndarray, now: np.ndarray, radius: float) -> np.ndarray:
@@ -216,9 +213,12 @@ def rolled(start: np.ndarray, now: np.ndarray, radius: float) -> np.ndarray:
     radius : float
         Ball radius [m].
     """
-    delta = np.asarray(now) @ np.swapaxes(np.asarray(start), -1, -2)  # start -> now, world frame
-    if delta.ndim == 3 and delta.shape[0] <= 4:  # the stance feet at 100 Hz: Python floats
-        return _rolled_few(delta.tolist(), radius)
+    start, now = np.asarray(start, dtype=np.float64), np.asarray(now, dtype=np.float64)
+    if start.ndim == 3 and start.shape == now.shape and start.shape[0] <= 4:  # the stance feet
+        # at 100 Hz: compiled
+        return kernels.rolled_few(np.ascontiguousarray(start), np.ascontiguousarray(now),
+                                  float(radius))
+    delta = now @ np.swapaxes(start, -1, -2)  # start -> now, world frame
     cos = np.minimum(np.maximum(0.5 * (delta[..., 0, 0] + delta[..., 1, 1] + delta[..., 2, 2]
                                        - 1.0), -1.0), 1.0)
     angle = np.arccos(cos)
@@ -230,23 +230,6 @@ def rolled(start: np.ndarray, now: np.ndarray, radius: float) -> np.ndarray:
     out = np.zeros(delta.shape[:-1])
     out[..., 0] = scale * (delta[..., 0, 2] - delta[..., 2, 0])  # radius * phi_y
     out[..., 1] = scale * (delta[..., 1, 2] - delta[..., 2, 1])  # radius * -phi_x
-    return out
-
-
-def _rolled_few(delta: list, radius: float) -> np.ndarray:
-    """:func:`rolled` from the rotations start -> now (k, 3, 3) as nested lists, k a few.
-
-    The same operations on Python floats (the same numbers to the last bit),
-    without NumPy's per-call overhead on a handful of values.
-    """
-    out = np.zeros((len(delta), 3))
-    for k, ((d00, _, d02), (_, d11, d12), (d20, d21, d22)) in enumerate(delta):
-        cos = min(max(0.5 * (d00 + d11 + d22 - 1.0), -1.0), 1.0)
-        sin = math.sqrt(1.0 - cos * cos)
-        factor = 0.5 if sin <= 1e-9 else math.acos(cos) / max(2.0 * sin, 1e-18)
-        scale = radius * factor
-        out[k, 0] = scale * (d02 - d20)
-        out[k, 1] = scale * (d12 - d21)
     return out
 
 
@@ -333,9 +316,11 @@ class _LegStack:
     flip_angles: np.ndarray  # (4, 3) factor on the solved angles: pitch, knee by -1 if reflected
     lower: np.ndarray  # (4, 3) [rad] joint limits of each leg
     upper: np.ndarray  # (4, 3) [rad]
-    scalars: tuple  # per leg (hip x, y, z [m], side * hip_offset [m], angle flips (3,), lower (3,)
-    # [rad], upper (3,) [rad]) as Python floats, and the stacked leg's limits ((3,), (3,)) [rad]:
-    # what _solve_legs reads, without NumPy scalar indexing
+    table: np.ndarray  # (4, 13) per leg: hip x, y, z [m], side * hip_offset [m], angle flips (3,),
+    # lower (3,) and upper (3,) limits [rad] (what period_kernels.solve_legs reads)
+    limits: np.ndarray  # (2, 3) [rad] the stacked leg's lower and upper limits
+    lengths: np.ndarray  # (3,) [m] upper leg, lower leg, hip offset
+    knee: float  # +1: the stacked leg's knee points forward, -1 back
 
 
 _LAST_STACK: list = [None, None]  # (robot, its _LegStack): the one robot of a run, found by
@@ -374,78 +359,26 @@ def _stacked_legs(robot: RobotDescription) -> _LegStack:
     mirrored_hi = np.maximum(ref_lo * angle_flip, ref_hi * angle_flip)
     if not (np.allclose(lower, mirrored_lo) and np.allclose(upper, mirrored_hi)):
         raise FootfallError("knee-backward legs must be the knee-forward ones reflected")
-    per_leg = tuple((*hips[k].tolist(), float(stacked.side[k] * robot.hip_offset),
-                     tuple(angle_flip[k].tolist()), tuple(lower[k].tolist()),
-                     tuple(upper[k].tolist())) for k in range(len(robot.legs)))
-    scalars = (per_leg, (tuple(ref_lo.tolist()), tuple(ref_hi.tolist())))
-    return _LegStack(stacked, flip, angle_flip, lower, upper, scalars)
-
-
-def _solve_legs(local: list, legs: _LegStack, robot: RobotDescription, previous: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`footfall.core.kinematics.inverse_kinematics` of the stacked legs, one leg at a time.
-
-    ``local`` holds the four reflected body-frame targets [m] as lists of
-    three floats. The same closed form, operation for operation (so the same
-    angles to the last bit: NumPy's and Python's math functions are the same
-    C library calls here), on Python floats: for four points NumPy's
-    per-call overhead would be the whole cost of the 100 Hz tick. Returns the
-    set-points (4, 3) [rad] -- unflipped, clipped to each leg's limits, a
-    leg without a solution keeping ``previous`` -- and ``ok`` (4,).
-    """
-    l1, l2, d = robot.upper_leg, robot.lower_leg, robot.hip_offset
-    knee = 1.0 if legs.leg.knee_forward else -1.0
-    per_leg, (lo, hi) = legs.scalars
-    out = previous.tolist()
-    ok = [False] * 4
-    pi, tau = math.pi, 2 * math.pi
-    for k in range(4):  # four legs; the three joints written out (no per-joint loops at 100 Hz)
-        hx, hy, hz, side_d, flip, low, high = per_leg[k]
-        x, y, z = local[k]
-        px, py, pz = x - hx, y - hy, z - hz
-        rho2 = py * py + pz * pz - d * d
-        if not rho2 >= 0:  # out of the roll plane's reach (or NaN): keep the previous set-points
-            continue
-        zp = -math.sqrt(rho2)
-        q1 = (math.atan2(pz, py) - math.atan2(zp, side_d) + pi) % tau - pi
-        c3 = (px * px + zp * zp - l1 * l1 - l2 * l2) / (2 * l1 * l2)
-        if not abs(c3) <= 1.0:  # out of the leg's length
-            continue
-        q3 = math.acos(c3) * knee
-        q2 = (math.atan2(-px, -zp) - math.atan2(l2 * math.sin(q3), l1 + l2 * math.cos(q3))
-              + pi) % tau - pi
-        ok[k] = (lo[0] <= q1 <= hi[0]) and (lo[1] <= q2 <= hi[1]) and (lo[2] <= q3 <= hi[2])
-        out[k] = [min(max(q1 * flip[0], low[0]), high[0]), min(max(q2 * flip[1], low[1]), high[1]),
-                  min(max(q3 * flip[2], low[2]), high[2])]
-    return np.array(out), np.array(ok)
+    table = np.column_stack([hips, stacked.side * robot.hip_offset, angle_flip, lower, upper])
+    return _LegStack(stacked, flip, angle_flip, lower, upper, np.ascontiguousarray(table),
+                     np.array([ref_lo, ref_hi]),
+                     np.array([robot.upper_leg, robot.lower_leg, robot.hip_offset]),
+                     1.0 if reference.knee_forward else -1.0)
 
 
 def body_rotation(rpy: np.ndarray) -> np.ndarray:
     """Rotation matrix (3, 3) of one body attitude: roll, pitch, yaw (3,) [rad], Z-Y-X.
 
     The same matrix as :func:`footfall.core.kinematics.rotation_matrix`, by
-    way of a quaternion on Python floats: a single pose at control rate,
-    where the vectorised NumPy version's overhead would dominate. The
-    operations are MuJoCo's ``mju_euler2Quat`` (intrinsic z, y, x) and
-    ``mju_quat2Mat``, one for one, so the matrix is the simulator's to the
-    last bit (``tests/test_walk.py``) without the controller calling it.
+    way of a quaternion, compiled (:func:`footfall.control.period_kernels.rotation`):
+    a single pose at control rate, where the vectorised NumPy version's
+    overhead would dominate. The operations are MuJoCo's ``mju_euler2Quat``
+    (intrinsic z, y, x) and ``mju_quat2Mat``, one for one, so the matrix is
+    the simulator's to the last bit (``tests/test_walk.py``) without the
+    controller calling it.
     """
-    roll, pitch, yaw = (float(a) for a in rpy)
-    w, x, y, z = 1.0, 0.0, 0.0, 0.0
-    for angle, axis in ((yaw, 3), (pitch, 2), (roll, 1)):  # each turn about a moving axis
-        c, s = math.cos(angle / 2), math.sin(angle / 2)
-        b = (c, s if axis == 1 else 0.0, s if axis == 2 else 0.0, s if axis == 3 else 0.0)
-        w, x, y, z = (w * b[0] - x * b[1] - y * b[2] - z * b[3],
-                      w * b[1] + x * b[0] + y * b[3] - z * b[2],
-                      w * b[2] - x * b[3] + y * b[0] + z * b[1],
-                      w * b[3] + x * b[2] - y * b[1] + z * b[0])
-    if w == 1 and x == 0 and y == 0 and z == 0:
-        return np.eye(3)
-    ww, wx, wy, wz = w * w, w * x, w * y, w * z
-    xx, xy, xz, yy, yz, zz = x * x, x * y, x * z, y * y, y * z, z * z
-    return np.array([[ww + xx - yy - zz, 2 * (xy - wz), 2 * (xz + wy)],
-                     [2 * (xy + wz), ww - xx + yy - zz, 2 * (yz - wx)],
-                     [2 * (xz - wy), 2 * (yz + wx), ww - xx - yy + zz]])
+    roll, pitch, yaw = rpy
+    return kernels.rotation(float(roll), float(pitch), float(yaw))
 
 
 def joint_targets(robot: RobotDescription, feet_world: np.ndarray, commanded: Pose,
@@ -483,4 +416,7 @@ def joint_targets(robot: RobotDescription, feet_world: np.ndarray, commanded: Po
     w = np.asarray(stance, dtype=np.float64)[:, None]
     legs = _leg_stack(robot)
     local = (in_measured + w * (in_commanded - in_measured)) * legs.flip_point
-    return _solve_legs(local.tolist(), legs, robot, np.asarray(previous, dtype=np.float64))
+    # the closed form of :func:`footfall.core.kinematics.inverse_kinematics` for the four
+    # stacked legs, compiled (NumPy's per-call overhead would be the whole cost at 100 Hz)
+    return kernels.solve_legs(local, legs.table, legs.limits, legs.lengths, legs.knee,
+                              np.ascontiguousarray(previous, dtype=np.float64))

@@ -410,12 +410,18 @@ class HeightMap:
                          {**self.metadata, "mirrored_y": True})
 
     def content_hash(self) -> str:
-        """SHA-256 of the heights and geometry: the map's identity in stores and models."""
-        digest = hashlib.sha256()
-        digest.update(struct.pack("<2q3d", *self.shape, self.resolution, *self.origin))
-        digest.update(self.frame.encode())
-        digest.update(np.ascontiguousarray(self.heights, dtype="<f8").tobytes())
-        return digest.hexdigest()
+        """SHA-256 of the heights and geometry: the map's identity in stores and models.
+
+        Worked out once (the map cannot change: its heights are a private read-only copy)."""
+        known = self.__dict__.get("_content_hash")
+        if known is None:
+            digest = hashlib.sha256()
+            digest.update(struct.pack("<2q3d", *self.shape, self.resolution, *self.origin))
+            digest.update(self.frame.encode())
+            digest.update(np.ascontiguousarray(self.heights, dtype="<f8").tobytes())
+            known = digest.hexdigest()
+            object.__setattr__(self, "_content_hash", known)
+        return known
 
     # --------------------------------------------------------------------- I/O
     def save(self, path: str | os.PathLike) -> None:

@@ -13,8 +13,10 @@ and the roll rotates the plane about the hip's x axis.
 
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 
+import numba
 import numpy as np
 
 from footfall.core.robot import Leg, RobotDescription
@@ -95,27 +97,40 @@ def _ik_angles(p: np.ndarray, side: float | np.ndarray, knee: float | np.ndarray
     sign ``knee`` (+1: forward); and whether each is within reach (...), limits not checked.
 
     ``side`` and ``knee`` broadcast against ``p``'s leading shape (one leg, or every leg at once).
-    NaN angles where there is no solution.
+    NaN angles where there is no solution. Compiled (:func:`_ik_kernel`): the footstep planner
+    and the pose finder solve thousands of points a step, and the controller four a period.
     """
-    # The low-level controller calls this for 4 points at 100 Hz, where NumPy's per-call overhead
-    # is the whole cost: the angles are written into one preallocated array, and clipping and
-    # stacking wrappers are avoided (the arithmetic is the same, operation for operation).
-    px, py, pz = p[..., 0], p[..., 1], p[..., 2]
-    l1, l2, d = robot.upper_leg, robot.lower_leg, robot.hip_offset
-    rho2 = py * py + pz * pz - d * d
-    in_plane = rho2 >= 0
-    zp = -np.sqrt(np.where(in_plane, rho2, np.nan))
-    q = np.empty(p.shape)
-    q1 = np.arctan2(pz, py) - np.arctan2(zp, side)
-    q[..., 0] = (q1 + np.pi) % (2 * np.pi) - np.pi
-    r2 = px * px + zp * zp
-    c3 = (r2 - l1 * l1 - l2 * l2) / (2 * l1 * l2)
-    reach = np.abs(c3) <= 1.0
-    q3 = np.arccos(np.where(reach, c3, np.nan)) * knee
-    q[..., 2] = q3
-    q2 = np.arctan2(-px, -zp) - np.arctan2(l2 * np.sin(q3), l1 + l2 * np.cos(q3))
-    q[..., 1] = (q2 + np.pi) % (2 * np.pi) - np.pi
-    return q, in_plane & reach
+    p = np.asarray(p, dtype=np.float64)
+    lead = p.shape[:-1]
+    flat = np.ascontiguousarray(p).reshape(-1, 3)
+    sides = np.ascontiguousarray(np.broadcast_to(side, lead), dtype=np.float64).reshape(-1)
+    knees = np.ascontiguousarray(np.broadcast_to(knee, lead), dtype=np.float64).reshape(-1)
+    q, reached = _ik_kernel(flat, sides, knees, robot.upper_leg, robot.lower_leg,
+                            robot.hip_offset)
+    return q.reshape(p.shape), reached.reshape(lead)
+
+
+@numba.njit(cache=True, nogil=True)
+def _ik_kernel(p, side, knee, l1, l2, d):  # pragma: no cover - compiled
+    """:func:`_ik_angles` of points ``p`` (n, 3) [m] with ``side`` (n,) [m], ``knee`` (n,)."""
+    n = p.shape[0]
+    q = np.empty((n, 3))
+    reached = np.empty(n, dtype=np.bool_)
+    pi, tau = np.pi, 2 * np.pi
+    for i in range(n):
+        px, py, pz = p[i, 0], p[i, 1], p[i, 2]
+        rho2 = py * py + pz * pz - d * d
+        in_plane = rho2 >= 0
+        zp = -math.sqrt(rho2) if in_plane else np.nan
+        q[i, 0] = (math.atan2(pz, py) - math.atan2(zp, side[i]) + pi) % tau - pi
+        c3 = (px * px + zp * zp - l1 * l1 - l2 * l2) / (2 * l1 * l2)
+        reach = abs(c3) <= 1.0
+        q3 = (math.acos(c3) if reach else np.nan) * knee[i]
+        q[i, 2] = q3
+        q[i, 1] = (math.atan2(-px, -zp) - math.atan2(l2 * math.sin(q3), l1 + l2 * math.cos(q3))
+                   + pi) % tau - pi
+        reached[i] = in_plane and reach
+    return q, reached
 
 
 @lru_cache(maxsize=64)

@@ -57,6 +57,16 @@ def test_the_trace_keeps_the_last_rows_in_time_order():
         RunTrace(0.0, 0.01)
 
 
+def test_an_infinite_trace_window_keeps_the_whole_run():
+    # (WalkConfig.trace_window allows inf: the flight recorder over a whole run, for a diagnosis)
+    trace = RunTrace(window=float("inf"), period=0.01)
+    feet = np.zeros((4, 3))
+    for i in range(2500):  # past the first buffer of 1 024 rows, and the second
+        trace.record(trace_row(0.01 * i, np.zeros(3), np.zeros(3), np.zeros(3), feet, feet,
+                               np.ones(4, bool), feet, feet, feet, None))
+    np.testing.assert_allclose(trace.series().time, 0.01 * np.arange(2500))
+
+
 def _trace(slide: float = 0.0, com_x: float = 0.0, tilt_end: float = 0.7):
     """Two seconds of a robot standing on a 0.2 x 0.16 m rectangle; the LF foot slides by
     ``slide`` [m] over the first second, the COM sits at ``com_x``; the trunk then rolls."""

@@ -113,7 +113,8 @@ class WalkConfig(Params):
                               doc="longest run, in simulated time")
     trace_window: float = param(5.0, unit="s", range=_POSITIVE_OR_INF,
                                 doc="the flight recorder keeps this much of the run's end, at "
-                                    "the control rate (footfall walk --explain)")
+                                    "the control rate (footfall walk --explain); inf: the "
+                                    "whole run")
     max_steps: int | None = param(None, unit="steps", range=at_least(1),
                                   doc="stop (reason \"step limit\", no success) after this many "
                                       "steps; None: no limit (short test runs)")

@@ -13,6 +13,7 @@ run costs no more than a short one, and a row costs one array copy.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,17 +63,23 @@ class TraceSeries:
 
 
 class RunTrace:
-    """A ring buffer of the last ``window`` [s] of a run at ``period`` [s] per row."""
+    """A ring buffer of the last ``window`` [s] of a run at ``period`` [s] per row; an infinite
+    ``window`` keeps the whole run (the buffer grows)."""
 
     def __init__(self, window: float, period: float) -> None:
         if not (window > 0 and period > 0):
             raise FootfallError("a run trace needs a window and a period > 0 s")
-        self.size = max(1, int(round(window / period)))
+        self.grows = not math.isfinite(window)  # keep every row
+        self.size = 1024 if self.grows else max(1, int(round(window / period)))
         self._rows = np.full((self.size, ROW_WIDTH), np.nan)
         self._count = 0
 
     def record(self, row: np.ndarray) -> None:
-        """Keep one row (ROW_WIDTH,), made by :func:`trace_row`; the oldest goes if full."""
+        """Keep one row (ROW_WIDTH,), made by :func:`trace_row`; the oldest goes if full
+        (unless the trace keeps the whole run)."""
+        if self.grows and self._count == self.size:
+            self._rows = np.vstack([self._rows, np.full((self.size, ROW_WIDTH), np.nan)])
+            self.size *= 2
         self._rows[self._count % self.size] = row
         self._count += 1
 

@@ -16,18 +16,16 @@ steps, every round evaluating all its poses at once.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
+from footfall.core.bilinear import _map_point
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.core.kinematics import (
-    legs_inverse_kinematics,
-    legs_joint_limit_margin,
-    legs_knee_position,
-    rotation_matrix,
-)
+from footfall.core.kinematics import _leg_arrays, rotation_matrix
 from footfall.core.params import Params, above, at_least, param, within
 from footfall.core.robot import LITTLEDOG, RobotDescription
 
@@ -211,35 +209,96 @@ class _Problem:
 def _measures(problem: _Problem, poses: np.ndarray, exact: bool = False) -> dict[str, np.ndarray]:
     """Margins and clearances of poses (n, 4) = (height, roll, pitch, yaw) -> dict of (n,).
 
-    Unless ``exact``, the trunk clearance of a pose whose lowest possible
-    underside point clears the highest cell by the wanted clearance is
-    reported as that lower bound (its cost is zero either way).
+    The legs' terms -- joint margins, reach, the shins' clearance above the
+    map -- by one compiled pass over the poses (:func:`_leg_measures`); the
+    trunk's by :func:`_trunk_clearance`. Unless ``exact``, the trunk clearance
+    of a pose whose lowest possible underside point clears the highest cell by
+    the wanted clearance is reported as that lower bound (its cost is zero
+    either way).
     """
-    robot, cfg = problem.robot, problem.config
+    robot, cfg, hmap = problem.robot, problem.config, problem.hmap
     n = poses.shape[0]
     body = np.column_stack([np.broadcast_to(problem.body_xy, (n, 2)), poses[:, 0]])
     rot = rotation_matrix(poses[:, 1:])  # (n, 3, 3)
-    local = (problem.centres[None] - body[:, None]) @ rot  # (n, 4, 3) body-frame foot centres
-
-    frac = np.linspace(0.0, cfg.shin_fraction, cfg.shin_samples)
-    q, ok = legs_inverse_kinematics(robot, local)  # the four legs and all poses at once
-    ok_all = ok.all(axis=1)
-    margin = legs_joint_limit_margin(robot, q)
-    joint = np.where(np.isnan(margin), _NO_SOLUTION_MARGIN, margin)  # (n, 4)
-    hips = np.array([leg.hip for leg in robot.legs])
-    reach = robot.max_reach - np.linalg.norm(local - hips, axis=2)  # (n, 4)
-    knee = legs_knee_position(robot, q)
-    leg_points = knee[:, :, None] + frac[None, None, :, None] * (local - knee)[:, :, None]
-    world = (leg_points.reshape(n, -1, 3) @ rot.transpose(0, 2, 1)).reshape(leg_points.shape)
-    world += body[:, None, None]
-    ground = problem.hmap.height_at(world[..., :2])
-    clear = world[..., 2] - ground - robot.lower_leg_radius
-    # No data below (or no IK solution, already charged as unreachable): no collision.
-    clear = np.where(np.isnan(clear), np.inf, clear).min(axis=(1, 2))
-
-    return {"joint": joint.min(axis=1), "reach": reach.min(axis=1), "leg_clearance": clear,
+    hips, side, knee, lower, upper = _leg_arrays(robot)
+    joint, reach, clear, ok_all = _leg_measures(
+        np.ascontiguousarray(problem.centres, dtype=np.float64), body, rot, hips, side, knee,
+        lower, upper, np.array([robot.upper_leg, robot.lower_leg, robot.hip_offset,
+                                robot.max_reach, robot.lower_leg_radius]),
+        np.linspace(0.0, cfg.shin_fraction, cfg.shin_samples), hmap.heights,
+        np.array([hmap.origin[0], hmap.origin[1], hmap.resolution]))
+    return {"joint": joint, "reach": reach, "leg_clearance": clear,
             "trunk_clearance": _trunk_clearance(problem, poses, body, rot, exact),
             "reachable": ok_all}
+
+
+@numba.njit(cache=True, nogil=True)
+def _leg_measures(centres, body, rot, hips, side, knee, lower, upper, lengths, frac, heights,
+                  grid):  # pragma: no cover - compiled
+    """Per pose (n,): the least joint margin [rad] of the four legs (a leg without an IK
+    solution counts ``_NO_SOLUTION_MARGIN``), the least reach margin [m], the least
+    clearance [m] of the shin samples (``frac`` (S,) of the way from knee to foot) above the
+    map ``heights`` (``grid``: origin x, y [m], resolution [m/cell]; no data: no collision),
+    and whether every leg reaches within its limits.
+
+    ``centres`` (4, 3) [m] world ball-foot centres; ``body`` (n, 3) [m] and ``rot`` (n, 3, 3)
+    the poses; ``hips`` (4, 3) [m], ``side`` (4,) [m], ``knee`` (4,) [-], ``lower``, ``upper``
+    (4, 3) [rad] the legs (:func:`footfall.core.kinematics.legs_inverse_kinematics`);
+    ``lengths``: upper leg, lower leg, hip offset, max reach, lower-leg radius [m]."""
+    l1, l2, d, max_reach, radius = lengths[0], lengths[1], lengths[2], lengths[3], lengths[4]
+    ox, oy, res = grid[0], grid[1], grid[2]
+    n = body.shape[0]
+    joint = np.empty(n)
+    reach = np.empty(n)
+    clear = np.empty(n)
+    ok_all = np.empty(n, dtype=np.bool_)
+    local = np.empty(3)
+    pi, tau = np.pi, 2 * np.pi
+    for i in range(n):
+        joint[i] = np.inf
+        reach[i] = np.inf
+        clear[i] = np.inf
+        ok_all[i] = True
+        for k in range(4):
+            for j in range(3):  # the foot centre in the body frame: (centre - body) @ rot
+                local[j] = (centres[k, 0] - body[i, 0]) * rot[i, 0, j] \
+                    + (centres[k, 1] - body[i, 1]) * rot[i, 1, j] \
+                    + (centres[k, 2] - body[i, 2]) * rot[i, 2, j]
+            px, py, pz = local[0] - hips[k, 0], local[1] - hips[k, 1], local[2] - hips[k, 2]
+            reach[i] = min(reach[i], max_reach - math.sqrt(px * px + py * py + pz * pz))
+            rho2 = py * py + pz * pz - d * d
+            c3 = np.nan
+            zp = np.nan
+            if rho2 >= 0:
+                zp = -math.sqrt(rho2)
+                c3 = (px * px + zp * zp - l1 * l1 - l2 * l2) / (2 * l1 * l2)
+            if not abs(c3) <= 1.0:  # no solution: charged, and its shin collides with nothing
+                joint[i] = min(joint[i], _NO_SOLUTION_MARGIN)
+                ok_all[i] = False
+                continue
+            q1 = (math.atan2(pz, py) - math.atan2(zp, side[k]) + pi) % tau - pi
+            q3 = math.acos(c3) * knee[k]
+            q2 = (math.atan2(-px, -zp) - math.atan2(l2 * math.sin(q3), l1 + l2 * math.cos(q3))
+                  + pi) % tau - pi
+            margin = min(q1 - lower[k, 0], upper[k, 0] - q1, q2 - lower[k, 1], upper[k, 1] - q2,
+                         q3 - lower[k, 2], upper[k, 2] - q3)
+            joint[i] = min(joint[i], margin)
+            if margin < 0:
+                ok_all[i] = False
+            c, s = math.cos(q1), math.sin(q1)  # the knee, body frame
+            kx, ky0, kz0 = -l1 * math.sin(q2), side[k], -l1 * math.cos(q2)
+            knee_b = (kx + hips[k, 0], c * ky0 - s * kz0 + hips[k, 1], s * ky0 + c * kz0 + hips[k, 2])
+            for f in range(frac.shape[0]):
+                b0 = knee_b[0] + frac[f] * (local[0] - knee_b[0])
+                b1 = knee_b[1] + frac[f] * (local[1] - knee_b[1])
+                b2 = knee_b[2] + frac[f] * (local[2] - knee_b[2])
+                wx = b0 * rot[i, 0, 0] + b1 * rot[i, 0, 1] + b2 * rot[i, 0, 2] + body[i, 0]
+                wy = b0 * rot[i, 1, 0] + b1 * rot[i, 1, 1] + b2 * rot[i, 1, 2] + body[i, 1]
+                wz = b0 * rot[i, 2, 0] + b1 * rot[i, 2, 1] + b2 * rot[i, 2, 2] + body[i, 2]
+                gap = wz - _map_point(heights, ox, oy, res, wx, wy) - radius
+                if gap < clear[i]:  # (no data below: NaN, no collision)
+                    clear[i] = gap
+    return joint, reach, clear, ok_all
 
 
 def _trunk_clearance(problem: _Problem, poses: np.ndarray, body: np.ndarray, rot: np.ndarray,
@@ -259,29 +318,40 @@ def _trunk_clearance(problem: _Problem, poses: np.ndarray, body: np.ndarray, rot
     out[~todo] = bound[~todo]
     if not todo.any():
         return out
-    r, b = rot[todo], body[todo]
-    normal = r[:, :, 2]  # body z axis in the world
-    centre = b - lz * normal  # a point of the underside plane
-    gx, gy = -normal[:, 0] / normal[:, 2], -normal[:, 1] / normal[:, 2]
-    # Which cells are under the trunk depends on x, y and yaw only: one mask per distinct yaw
-    # (a search round has a handful). A cell counts if its centre lies within the footprint
-    # grown by half a cell diagonal; the tilt's few-mm shift of the footprint is neglected.
     pad = cfg.trunk_cell / np.sqrt(2.0)
-    yaws, group = np.unique(poses[todo, 3], return_inverse=True)
-    xy, h = problem.cells_xy, problem.cells_h
-    d = xy - problem.body_xy
-    u = np.cos(yaws)[:, None] * d[:, 0] + np.sin(yaws)[:, None] * d[:, 1]
-    v = -np.sin(yaws)[:, None] * d[:, 0] + np.cos(yaws)[:, None] * d[:, 1]
-    under = (np.abs(u) <= lx + pad) & (np.abs(v) <= ly + pad)
-    cells = under.any(axis=0)  # under the trunk at one of these yaws: the only cells that count
-    if not cells.any():
-        return out  # no cell with data under the trunk: nothing to clear
-    xy, h, under = xy[cells], h[cells], under[:, cells]
-    # Underside height above each cell centre: (m, 3) @ (3, p), one matrix product.
-    coef = np.column_stack([centre[:, 2] - gx * centre[:, 0] - gy * centre[:, 1], gx, gy])
-    plane = coef @ np.vstack([np.ones(h.size), xy.T])
-    offset = np.where(under, -h, np.inf)  # (distinct yaws, p)
-    out[todo] = (plane + offset[group]).min(axis=1)
+    out[todo] = _underside_clearance(
+        body[todo], rot[todo], np.ascontiguousarray(poses[todo, 3]), problem.cells_xy,
+        problem.cells_h, np.asarray(problem.body_xy, dtype=np.float64),
+        np.array([lx + pad, ly + pad, lz]))
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _underside_clearance(body, rot, yaw, cells_xy, cells_h, body_xy, box
+                         ):  # pragma: no cover - compiled
+    """Least height [m] (m,) of each pose's trunk underside plane above the pooled cells
+    (``cells_xy`` (p, 2) [m], highest heights ``cells_h`` (p,) [m]) under its footprint; inf
+    where none is under it.
+
+    The underside is the plane through ``body`` (m, 3) [m] less the half height
+    ``box[2]`` [m] along the body's z axis (``rot`` (m, 3, 3)). Which cells lie under the
+    trunk depends on x, y and ``yaw`` (m,) [rad] only: a cell counts if its centre lies
+    within the footprint (half sizes ``box[:2]`` [m], grown by half a cell diagonal) around
+    ``body_xy`` (2,) [m]; the tilt's few-mm shift of the footprint is neglected."""
+    m = body.shape[0]
+    out = np.full(m, np.inf)
+    for i in range(m):
+        nx, ny, nz = rot[i, 0, 2], rot[i, 1, 2], rot[i, 2, 2]  # the body's z axis, world
+        cx, cy, cz = body[i, 0] - box[2] * nx, body[i, 1] - box[2] * ny, body[i, 2] - box[2] * nz
+        gx, gy = -nx / nz, -ny / nz
+        c0 = cz - gx * cx - gy * cy
+        c, s = np.cos(yaw[i]), np.sin(yaw[i])
+        for k in range(cells_h.shape[0]):
+            dx, dy = cells_xy[k, 0] - body_xy[0], cells_xy[k, 1] - body_xy[1]
+            if abs(c * dx + s * dy) <= box[0] and abs(-s * dx + c * dy) <= box[1]:
+                gap = c0 + gx * cells_xy[k, 0] + gy * cells_xy[k, 1] - cells_h[k]
+                if gap < out[i]:
+                    out[i] = gap
     return out
 
 

@@ -133,6 +133,54 @@ def _ik_kernel(p, side, knee, l1, l2, d):  # pragma: no cover - compiled
     return q, reached
 
 
+def reaches_points(leg: Leg, points: np.ndarray, body_position: np.ndarray,
+                   body_rpy: np.ndarray, robot: RobotDescription) -> np.ndarray:
+    """Whether ``leg`` reaches the world foot centres ``points`` (n, 3) [m] within its joint
+    limits, the body at ``body_position`` (3,) [m] and ``body_rpy`` (3,) [rad]: (n,) bool.
+
+    :func:`inverse_kinematics` of :func:`world_to_body`'s points, in one compiled pass
+    (:func:`_reach_kernel`; the footstep planner asks it of thousands of points a step)."""
+    lo, hi = _limit_arrays(leg.limits)
+    return _reach_kernel(np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3),
+                         np.asarray(body_position, dtype=np.float64),
+                         np.asarray(body_rpy, dtype=np.float64),
+                         np.asarray(leg.hip, dtype=np.float64), leg.side * robot.hip_offset,
+                         1.0 if leg.knee_forward else -1.0, robot.upper_leg, robot.lower_leg,
+                         robot.hip_offset, lo, hi)
+
+
+@numba.njit(cache=True, nogil=True)
+def _reach_kernel(points, body, rpy, hip, side, knee, l1, l2, d, lo, hi
+                  ):  # pragma: no cover - compiled
+    """:func:`reaches_points`: the rotation of :func:`rotation_matrix`, the closed form of
+    :func:`_ik_angles`, the limits of :func:`within_limits`, point by point."""
+    cr, cp, cy = math.cos(rpy[0]), math.cos(rpy[1]), math.cos(rpy[2])
+    sr, sp, sy = math.sin(rpy[0]), math.sin(rpy[1]), math.sin(rpy[2])
+    rot = np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                    [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                    [-sp, cp * sr, cp * cr]])
+    out = np.zeros(points.shape[0], dtype=np.bool_)
+    pi, tau = np.pi, 2 * np.pi
+    for i in range(points.shape[0]):
+        v0, v1, v2 = points[i, 0] - body[0], points[i, 1] - body[1], points[i, 2] - body[2]
+        px = v0 * rot[0, 0] + v1 * rot[1, 0] + v2 * rot[2, 0] - hip[0]
+        py = v0 * rot[0, 1] + v1 * rot[1, 1] + v2 * rot[2, 1] - hip[1]
+        pz = v0 * rot[0, 2] + v1 * rot[1, 2] + v2 * rot[2, 2] - hip[2]
+        rho2 = py * py + pz * pz - d * d
+        if not rho2 >= 0:
+            continue
+        zp = -math.sqrt(rho2)
+        c3 = (px * px + zp * zp - l1 * l1 - l2 * l2) / (2 * l1 * l2)
+        if not abs(c3) <= 1.0:
+            continue
+        q1 = (math.atan2(pz, py) - math.atan2(zp, side) + pi) % tau - pi
+        q3 = math.acos(c3) * knee
+        q2 = (math.atan2(-px, -zp) - math.atan2(l2 * math.sin(q3), l1 + l2 * math.cos(q3))
+              + pi) % tau - pi
+        out[i] = (lo[0] <= q1 <= hi[0]) and (lo[1] <= q2 <= hi[1]) and (lo[2] <= q3 <= hi[2])
+    return out
+
+
 @lru_cache(maxsize=64)
 def _limit_arrays(limits: tuple[tuple[float, float], ...]) -> tuple[np.ndarray, np.ndarray]:
     """Lower and upper joint limits (3,) [rad] of a leg's limits, made once per distinct leg."""

@@ -16,6 +16,7 @@ from footfall.core.kinematics import (
     body_to_world,
     inverse_kinematics,
     joint_limit_margin,
+    reaches_points,
     world_to_body,
 )
 from footfall.core.robot import LITTLEDOG, RobotDescription
@@ -43,11 +44,9 @@ def reaches(state: RobotState, footholds: np.ndarray, robot: RobotDescription = 
     """Whether the swing leg of ``state`` reaches each contact point (n, 3) [m] -> (n,) bool:
     inverse kinematics of the ball-foot centre (``foot_radius`` above the point) within the
     joint limits, at the state's body pose."""
-    leg = robot.leg(state.swing_leg)
     centre = np.asarray(footholds, dtype=np.float64) + (0.0, 0.0, robot.foot_radius)
-    _, ok = inverse_kinematics(leg, world_to_body(centre, state.body_position, state.body_rpy),
-                               robot)
-    return ok
+    return reaches_points(robot.leg(state.swing_leg), centre, state.body_position,
+                          state.body_rpy, robot).reshape(centre.shape[:-1])
 
 
 def joint_margins(state: RobotState, footholds: np.ndarray, robot: RobotDescription = LITTLEDOG

@@ -11,7 +11,10 @@ ground in the nominal stance, that pose is the nominal one).
 
 The search is vectorised: a coarse grid of (height, roll, pitch, yaw) around
 the preferred pose, then a few rounds of a 3^4 pattern search with halving
-steps, every round evaluating all its poses at once.
+steps, every round evaluating all its poses at once -- the legs' and the
+trunk's terms in compiled passes over the poses (Numba), the arithmetic of
+:mod:`footfall.core.kinematics` and :meth:`HeightMap.height_at
+<footfall.core.heightmap.HeightMap.height_at>` point by point.
 """
 
 from __future__ import annotations

@@ -345,3 +345,16 @@ def test_the_body_is_predicted_for_the_stance_after_the_step_so_a_front_foot_rea
                         np.array([0.0, feet_pitch(state.feet), 0.0]), "LF")
     assert not np.any(reachable_footholds(hmap, before)[:, 2] == 0.0)
     assert np.sum(reachable_footholds(hmap, plan.state)[:, 2] == 0.0) > 100
+
+
+def test_the_compiled_reach_test_is_the_inverse_kinematics_within_limits():
+    from footfall.core.kinematics import inverse_kinematics, reaches_points, world_to_body
+    from footfall.core.robot import LITTLEDOG
+
+    rng = np.random.default_rng(9)
+    for leg in LITTLEDOG.legs:
+        body, rpy = rng.normal(0.0, 0.05, 3) + [0.5, 0.0, 0.15], rng.normal(0.0, 0.2, 3)
+        points = body + rng.uniform(-0.25, 0.25, (2000, 3)) - [0.0, 0.0, 0.1]
+        _, expect = inverse_kinematics(leg, world_to_body(points, body, rpy), LITTLEDOG)
+        got = reaches_points(leg, points, body, rpy, LITTLEDOG)
+        assert (got == expect).all() and 0 < got.sum() < got.size

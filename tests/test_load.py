@@ -141,3 +141,36 @@ def test_load_control_spreads_the_weight_over_a_wobbling_stance():
     # with it the feet share the weight evenly (the centre of mass is near the middle)
     assert on.min() > 0.6 * on.mean()
     assert abs(on.sum() - off.sum()) < 0.05 * off.sum()  # the same weight, shared out
+
+
+def _shares_by_pseudo_inverse(feet_xy, com_xy, availability):
+    """The definition of load_shares written with NumPy's pseudo-inverse (its first version)."""
+    p = np.asarray(feet_xy, float) - np.asarray(com_xy, float)
+    a = np.clip(np.asarray(availability, float), 0.0, 1.0)
+    if not a.any():
+        return np.zeros(a.shape)
+    rows = np.vstack([np.ones(len(a)), p.T])
+
+    def balanced(a):
+        return a * (rows.T @ (np.linalg.pinv((rows * a) @ rows.T, rcond=1e-9) @ [1.0, 0.0, 0.0]))
+
+    s = balanced(a)
+    if s.min() < 0 and (a < 1).any():
+        s = balanced((a > 0).astype(float))
+    s = np.maximum(s, 0.0)
+    return s / s.sum() if s.sum() > 0 else a / a.sum()
+
+
+def test_the_compiled_shares_are_the_pseudo_inverse_ones_on_random_stances():
+    # the kernel takes the Gram matrix's adjugate while it is well conditioned and the
+    # pseudo-inverse otherwise: both branches, two to four feet, some on a line
+    rng = np.random.default_rng(4)
+    for i in range(3000):
+        k = int(rng.choice([2, 3, 4]))
+        feet = rng.normal(0.0, 0.1, (k, 2))
+        if i % 5 == 0 and k >= 3:
+            feet[2] = feet[0] + rng.uniform(-1, 2) * (feet[1] - feet[0])  # three on a line
+        com = rng.normal(0.0, 0.05, 2)
+        avail = rng.choice([0.0, 1.0, 0.5, rng.uniform()], k)
+        np.testing.assert_allclose(load_shares(feet, com, avail),
+                                   _shares_by_pseudo_inverse(feet, com, avail), rtol=0, atol=1e-9)

@@ -127,3 +127,52 @@ def test_bad_input_raises():
         PoseConfig(weight_yaw=-1.0)
     with pytest.raises(FootfallError, match="joint_margin"):
         PoseConfig(joint_margin=0.0)
+
+
+def test_the_compiled_leg_measures_are_the_kinematics_of_core():
+    # footfall.control.pose_finder._leg_measures against the vectorised NumPy definitions: joint
+    # margins (an unsolvable leg charged -pi), reach, the shins' clearance over the map, and
+    # whether every leg reaches within its limits
+    from footfall.control.pose_finder import _NO_SOLUTION_MARGIN, _leg_measures
+    from footfall.core.kinematics import (
+        _leg_arrays,
+        legs_inverse_kinematics,
+        legs_joint_limit_margin,
+        legs_knee_position,
+        rotation_matrix,
+    )
+    from footfall.terrain import make_board
+
+    board = make_board([("rocky", 0.8)], seed=2)
+    rng = np.random.default_rng(6)
+    robot, cfg = LITTLEDOG, PoseConfig()
+    centres = np.array([robot.nominal_foot(leg) for leg in LEG_NAMES]) + [0.9, 0.0, 0.0]
+    centres[:, 2] = board.height_at(centres[:, :2]) + robot.foot_radius
+    n = 400
+    poses = np.column_stack([centres[:, 2].mean() + rng.uniform(0.05, 0.25, n),
+                             rng.uniform(-0.5, 0.5, (n, 2)), rng.uniform(-0.3, 0.3, n)])
+    body = np.column_stack([np.full((n, 2), [0.9, 0.0]), poses[:, 0]])
+    rot = rotation_matrix(poses[:, 1:])
+    frac = np.linspace(0.0, cfg.shin_fraction, cfg.shin_samples)
+    joint, reach, clear, ok = _leg_measures(
+        centres, body, rot, *_leg_arrays(robot),
+        np.array([robot.upper_leg, robot.lower_leg, robot.hip_offset, robot.max_reach,
+                  robot.lower_leg_radius]), frac, board.heights,
+        np.array([*board.origin, board.resolution]))
+
+    local = (centres[None] - body[:, None]) @ rot
+    q, ok_legs = legs_inverse_kinematics(robot, local)
+    margin = legs_joint_limit_margin(robot, q)
+    hips = np.array([leg.hip for leg in robot.legs])
+    knee = legs_knee_position(robot, q)
+    points = knee[:, :, None] + frac[None, None, :, None] * (local - knee)[:, :, None]
+    world = (points.reshape(n, -1, 3) @ rot.transpose(0, 2, 1)).reshape(points.shape)
+    world += body[:, None, None]
+    gap = world[..., 2] - board.height_at(world[..., :2]) - robot.lower_leg_radius
+    np.testing.assert_allclose(
+        joint, np.where(np.isnan(margin), _NO_SOLUTION_MARGIN, margin).min(axis=1), atol=1e-12)
+    np.testing.assert_allclose(
+        reach, (robot.max_reach - np.linalg.norm(local - hips, axis=2)).min(axis=1), atol=1e-12)
+    np.testing.assert_allclose(clear, np.where(np.isnan(gap), np.inf, gap).min(axis=(1, 2)),
+                               atol=1e-12)
+    assert (ok == ok_legs.all(axis=1)).all() and 0 < ok.sum() < n  # both outcomes drawn

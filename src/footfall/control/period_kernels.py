@@ -13,7 +13,8 @@ the function that documents it:
 * :func:`rolled_few` -- :func:`footfall.control.lowlevel.rolled` for a few feet;
 * :func:`points` and :func:`jacobians` --
   :func:`footfall.control.estimate.body_points`, ``body_jacobians``;
-* :func:`solve_legs` -- :func:`footfall.control.lowlevel.joint_targets`' closed form.
+* :func:`solve_legs` -- :func:`footfall.control.lowlevel.joint_targets`' closed form
+  (:func:`footfall.core.kinematics.leg_angles`, the one copy of it).
 
 Angles in radians, lengths in metres, like their callers.
 """
@@ -24,6 +25,8 @@ import math
 
 import numba
 import numpy as np
+
+from footfall.core.kinematics import leg_angles
 
 
 @numba.njit(cache=True, nogil=True)
@@ -147,24 +150,14 @@ def solve_legs(local, legs, limits, lengths, knee, previous):  # pragma: no cove
     set-points (4, 3) [rad] -- unflipped, clipped to each leg's limits, a leg without a
     solution keeping ``previous`` -- and ``ok`` (4,): solved within the stacked limits.
     """
-    l1, l2, d = lengths[0], lengths[1], lengths[2]
     out = previous.copy()
     ok = np.zeros(4, dtype=np.bool_)
-    pi, tau = math.pi, 2 * math.pi
     for k in range(4):
-        hx, hy, hz, side_d = legs[k, 0], legs[k, 1], legs[k, 2], legs[k, 3]
-        px, py, pz = local[k, 0] - hx, local[k, 1] - hy, local[k, 2] - hz
-        rho2 = py * py + pz * pz - d * d
-        if not rho2 >= 0:  # out of the roll plane's reach (or NaN): keep the previous set-points
+        q1, q2, q3, solved = leg_angles(local[k, 0] - legs[k, 0], local[k, 1] - legs[k, 1],
+                                        local[k, 2] - legs[k, 2], legs[k, 3], knee,
+                                        lengths[0], lengths[1], lengths[2])
+        if not solved:  # out of the leg's reach (or NaN): keep the previous set-points
             continue
-        zp = -math.sqrt(rho2)
-        q1 = (math.atan2(pz, py) - math.atan2(zp, side_d) + pi) % tau - pi
-        c3 = (px * px + zp * zp - l1 * l1 - l2 * l2) / (2 * l1 * l2)
-        if not abs(c3) <= 1.0:  # out of the leg's length
-            continue
-        q3 = math.acos(c3) * knee
-        q2 = (math.atan2(-px, -zp) - math.atan2(l2 * math.sin(q3), l1 + l2 * math.cos(q3))
-              + pi) % tau - pi
         ok[k] = (limits[0, 0] <= q1 <= limits[1, 0]) and (limits[0, 1] <= q2 <= limits[1, 1]) \
             and (limits[0, 2] <= q3 <= limits[1, 2])
         for j, angle in enumerate((q1, q2, q3)):

@@ -28,7 +28,7 @@ import numpy as np
 from footfall.core.bilinear import _map_point
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.core.kinematics import _leg_arrays, rotation_matrix
+from footfall.core.kinematics import _leg_arrays, leg_angles, rotation_matrix
 from footfall.core.params import Params, above, at_least, param, within
 from footfall.core.robot import LITTLEDOG, RobotDescription
 
@@ -256,7 +256,6 @@ def _leg_measures(centres, body, rot, hips, side, knee, lower, upper, lengths, f
     clear = np.empty(n)
     ok_all = np.empty(n, dtype=np.bool_)
     local = np.empty(3)
-    pi, tau = np.pi, 2 * np.pi
     for i in range(n):
         joint[i] = np.inf
         reach[i] = np.inf
@@ -269,20 +268,11 @@ def _leg_measures(centres, body, rot, hips, side, knee, lower, upper, lengths, f
                     + (centres[k, 2] - body[i, 2]) * rot[i, 2, j]
             px, py, pz = local[0] - hips[k, 0], local[1] - hips[k, 1], local[2] - hips[k, 2]
             reach[i] = min(reach[i], max_reach - math.sqrt(px * px + py * py + pz * pz))
-            rho2 = py * py + pz * pz - d * d
-            c3 = np.nan
-            zp = np.nan
-            if rho2 >= 0:
-                zp = -math.sqrt(rho2)
-                c3 = (px * px + zp * zp - l1 * l1 - l2 * l2) / (2 * l1 * l2)
-            if not abs(c3) <= 1.0:  # no solution: charged, and its shin collides with nothing
+            q1, q2, q3, solved = leg_angles(px, py, pz, side[k], knee[k], l1, l2, d)
+            if not solved:  # no solution: charged, and its shin collides with nothing
                 joint[i] = min(joint[i], _NO_SOLUTION_MARGIN)
                 ok_all[i] = False
                 continue
-            q1 = (math.atan2(pz, py) - math.atan2(zp, side[k]) + pi) % tau - pi
-            q3 = math.acos(c3) * knee[k]
-            q2 = (math.atan2(-px, -zp) - math.atan2(l2 * math.sin(q3), l1 + l2 * math.cos(q3))
-                  + pi) % tau - pi
             margin = min(q1 - lower[k, 0], upper[k, 0] - q1, q2 - lower[k, 1], upper[k, 1] - q2,
                          q3 - lower[k, 2], upper[k, 2] - q3)
             joint[i] = min(joint[i], margin)

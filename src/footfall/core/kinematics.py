@@ -110,26 +110,37 @@ def _ik_angles(p: np.ndarray, side: float | np.ndarray, knee: float | np.ndarray
     return q.reshape(p.shape), reached.reshape(lead)
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def leg_angles(px, py, pz, side, knee, l1, l2, d):  # pragma: no cover - compiled
+    """The closed-form inverse kinematics of one foot centre (px, py, pz) [m] relative to the
+    hip, compiled: the one copy every kernel calls (:func:`_ik_angles` documents it).
+
+    ``side`` [m] is ``leg.side * hip_offset``, ``knee`` +1 forward / -1 back, ``l1``, ``l2``
+    [m] the upper and lower leg, ``d`` [m] the hip offset. Returns (q1, q2, q3) [rad] and
+    whether the point is within reach; q1 is NaN out of the roll plane's reach, q2 and q3
+    NaN out of the leg's length."""
+    pi, tau = np.pi, 2 * np.pi
+    rho2 = py * py + pz * pz - d * d
+    in_plane = rho2 >= 0
+    zp = -math.sqrt(rho2) if in_plane else np.nan
+    q1 = (math.atan2(pz, py) - math.atan2(zp, side) + pi) % tau - pi
+    c3 = (px * px + zp * zp - l1 * l1 - l2 * l2) / (2 * l1 * l2)
+    reach = abs(c3) <= 1.0
+    q3 = (math.acos(c3) if reach else np.nan) * knee
+    q2 = (math.atan2(-px, -zp) - math.atan2(l2 * math.sin(q3), l1 + l2 * math.cos(q3))
+          + pi) % tau - pi
+    return q1, q2, q3, in_plane and reach
+
+
 @numba.njit(cache=True, nogil=True)
 def _ik_kernel(p, side, knee, l1, l2, d):  # pragma: no cover - compiled
     """:func:`_ik_angles` of points ``p`` (n, 3) [m] with ``side`` (n,) [m], ``knee`` (n,)."""
     n = p.shape[0]
     q = np.empty((n, 3))
     reached = np.empty(n, dtype=np.bool_)
-    pi, tau = np.pi, 2 * np.pi
     for i in range(n):
-        px, py, pz = p[i, 0], p[i, 1], p[i, 2]
-        rho2 = py * py + pz * pz - d * d
-        in_plane = rho2 >= 0
-        zp = -math.sqrt(rho2) if in_plane else np.nan
-        q[i, 0] = (math.atan2(pz, py) - math.atan2(zp, side[i]) + pi) % tau - pi
-        c3 = (px * px + zp * zp - l1 * l1 - l2 * l2) / (2 * l1 * l2)
-        reach = abs(c3) <= 1.0
-        q3 = (math.acos(c3) if reach else np.nan) * knee[i]
-        q[i, 2] = q3
-        q[i, 1] = (math.atan2(-px, -zp) - math.atan2(l2 * math.sin(q3), l1 + l2 * math.cos(q3))
-                   + pi) % tau - pi
-        reached[i] = in_plane and reach
+        q[i, 0], q[i, 1], q[i, 2], reached[i] = leg_angles(p[i, 0], p[i, 1], p[i, 2], side[i],
+                                                           knee[i], l1, l2, d)
     return q, reached
 
 
@@ -160,23 +171,14 @@ def _reach_kernel(points, body, rpy, hip, side, knee, l1, l2, d, lo, hi
                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
                     [-sp, cp * sr, cp * cr]])
     out = np.zeros(points.shape[0], dtype=np.bool_)
-    pi, tau = np.pi, 2 * np.pi
     for i in range(points.shape[0]):
         v0, v1, v2 = points[i, 0] - body[0], points[i, 1] - body[1], points[i, 2] - body[2]
         px = v0 * rot[0, 0] + v1 * rot[1, 0] + v2 * rot[2, 0] - hip[0]
         py = v0 * rot[0, 1] + v1 * rot[1, 1] + v2 * rot[2, 1] - hip[1]
         pz = v0 * rot[0, 2] + v1 * rot[1, 2] + v2 * rot[2, 2] - hip[2]
-        rho2 = py * py + pz * pz - d * d
-        if not rho2 >= 0:
+        q1, q2, q3, ok = leg_angles(px, py, pz, side, knee, l1, l2, d)
+        if not ok:
             continue
-        zp = -math.sqrt(rho2)
-        c3 = (px * px + zp * zp - l1 * l1 - l2 * l2) / (2 * l1 * l2)
-        if not abs(c3) <= 1.0:
-            continue
-        q1 = (math.atan2(pz, py) - math.atan2(zp, side) + pi) % tau - pi
-        q3 = math.acos(c3) * knee
-        q2 = (math.atan2(-px, -zp) - math.atan2(l2 * math.sin(q3), l1 + l2 * math.cos(q3))
-              + pi) % tau - pi
         out[i] = (lo[0] <= q1 <= hi[0]) and (lo[1] <= q2 <= hi[1]) and (lo[2] <= q3 <= hi[2])
     return out
 

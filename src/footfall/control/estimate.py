@@ -19,29 +19,17 @@ overhead on a few dozen numbers would cost more than the physics.
 
 from __future__ import annotations
 
-from functools import lru_cache
-
 import numpy as np
 
 from footfall.control import period_kernels as kernels
 from footfall.control.lowlevel import body_rotation, shin_rotations
 from footfall.control.measurements import Measurements
 from footfall.core.mass import leg_masses, shin_length
-from footfall.core.robot import RobotDescription
-
-_LAST_LEGS: list = [None, None]  # (robot, its _leg_table): the one robot of a run, found by
-# identity at 100 Hz (lru_cache would hash the whole frozen description at every call)
+from footfall.core.robot import RobotDescription, per_robot
 
 
+@per_robot
 def _legs(robot: RobotDescription) -> tuple:
-    """:func:`_leg_table` of ``robot``, the last robot's remembered."""
-    if _LAST_LEGS[0] is not robot:
-        _LAST_LEGS[:] = [robot, _leg_table(robot)]
-    return _LAST_LEGS[1]
-
-
-@lru_cache(maxsize=8)
-def _leg_table(robot: RobotDescription) -> tuple:
     """What :mod:`~footfall.control.period_kernels` reads of ``robot``: per leg (4, 4) hip x, y,
     z [m] and side * hip_offset [m]; per part (p, 4) its distance down the upper leg [m], then
     down the lower [m], lateral share of side * hip_offset [-] and mass [kg], the foot last; the

@@ -54,14 +54,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from functools import lru_cache
 
 import numpy as np
 
 from footfall.control import period_kernels as kernels
 from footfall.core.errors import FootfallError
 from footfall.core.params import Params, param, within
-from footfall.core.robot import Leg, RobotDescription
+from footfall.core.robot import Leg, RobotDescription, per_robot
 
 Pose = tuple[np.ndarray, np.ndarray]  # (position (3,) [m], rotation matrix (3, 3)): body -> world
 
@@ -323,18 +322,7 @@ class _LegStack:
     knee: float  # +1: the stacked leg's knee points forward, -1 back
 
 
-_LAST_STACK: list = [None, None]  # (robot, its _LegStack): the one robot of a run, found by
-# identity at 100 Hz (lru_cache would hash the whole frozen description at every call)
-
-
-def _leg_stack(robot: RobotDescription) -> _LegStack:
-    """:func:`_stacked_legs` of ``robot``, the last robot's remembered."""
-    if _LAST_STACK[0] is not robot:
-        _LAST_STACK[:] = [robot, _stacked_legs(robot)]
-    return _LAST_STACK[1]
-
-
-@lru_cache(maxsize=8)
+@per_robot
 def _stacked_legs(robot: RobotDescription) -> _LegStack:
     """The four legs as one leg of the first leg's knee direction, hip (4, 3) and side (4,) stacked.
 
@@ -414,7 +402,7 @@ def joint_targets(robot: RobotDescription, feet_world: np.ndarray, commanded: Po
     in_commanded = (feet - commanded[0]) @ commanded[1]
     in_measured = (feet - measured[0]) @ measured[1]
     w = np.asarray(stance, dtype=np.float64)[:, None]
-    legs = _leg_stack(robot)
+    legs = _stacked_legs(robot)
     local = (in_measured + w * (in_commanded - in_measured)) * legs.flip_point
     # the closed form of :func:`footfall.core.kinematics.inverse_kinematics` for the four
     # stacked legs, compiled (NumPy's per-call overhead would be the whole cost at 100 Hz)

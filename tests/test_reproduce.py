@@ -1,15 +1,20 @@
 """The reproduction resumes after an interruption without repeating or losing anything."""
 
 import json
+import shutil
 
+import numpy as np
 import pytest
 
 from footfall.core.errors import FootfallError
 from footfall.data.store import DemoStore
 from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
-from footfall.experiments.workspace import planned_seeds
+from footfall.experiments.reproduce_learning import learn_functions
+from footfall.experiments.workspace import open_workspace, planned_seeds
 from footfall.expert.scorer import judge_name
 from footfall.expert.synthetic import ExpertConfig
+from footfall.features.family import PAPER_FEATURE_SETS
+from footfall.learning.model import FootholdModel
 from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig
 
 TINY = ReproduceConfig(
@@ -217,3 +222,45 @@ def test_the_learner_and_folds_options_reach_the_reproductions_settings(tmp_path
         assert_user_error(code, err, "lasso")
     with pytest.raises(FootfallError, match="learner must be a registered learner"):
         ReproduceConfig(learner="lasso")
+
+
+def _without_seconds(value):
+    """JSON settings less every "seconds" field (a learning time: this computer's speed)."""
+    if isinstance(value, dict):
+        return {k: _without_seconds(v) for k, v in value.items() if k != "seconds"}
+    if isinstance(value, list):
+        return [_without_seconds(v) for v in value]
+    return value
+
+
+def _model_contents(path):
+    """A saved model's arrays, and its settings less its learning time."""
+    with np.load(path, allow_pickle=False) as f:
+        arrays = {k: f[k] for k in f.files}
+    meta = _without_seconds(json.loads(str(arrays.pop("meta"))))
+    return arrays, meta
+
+
+def test_the_three_functions_learned_in_worker_processes_are_the_same_bits(uninterrupted,
+                                                                          tmp_path):
+    out = tmp_path / "copy"
+    shutil.copytree(uninterrupted, out)
+    for fs in PAPER_FEATURE_SETS:
+        (out / "models" / f"{fs}.npz").unlink()
+    ws = open_workspace(out, TINY)
+    sources = FootholdModel.load(uninterrupted / "models" / "both.npz").info["sources"]
+    with DemoStore(out / "reproduce.sqlite", read_only=True) as store:
+        by_source = {d.source: d for d in store.demonstrations()}
+    lines = []
+    learn_functions(ws, [by_source[s] for s in sources], lines.append, processes=2,
+                    store_path=out / "reproduce.sqlite")
+    assert [line for line in lines if line.startswith("learning ")] == [
+        f"learning {fs} (learner {TINY.learner}, {TINY.selection} on its path, folds by "
+        f"{TINY.folds})" for fs in PAPER_FEATURE_SETS]  # the workers' logs in the sets' order
+    for fs in PAPER_FEATURE_SETS:
+        learned, saved = (_model_contents(folder / "models" / f"{fs}.npz")
+                          for folder in (out, uninterrupted))
+        assert learned[1] == saved[1]
+        assert learned[0].keys() == saved[0].keys()
+        for k in saved[0]:
+            np.testing.assert_array_equal(learned[0][k], saved[0][k])

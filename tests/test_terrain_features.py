@@ -7,9 +7,12 @@ from footfall.core.heightmap import HeightMap, PatchGrid
 from footfall.features.config import FeatureConfig
 from footfall.features.patches import foothold_patches
 from footfall.features.terrain_features import (
+    QUAD_COLUMNS,
     QUANTITIES,
     TERRAIN_FEATURE_NAMES,
     fit_kernels,
+    moment_basis,
+    quad_to_fits,
     raw_features,
     terrain_features_from_patches,
 )
@@ -105,6 +108,17 @@ def test_kernels_match_least_squares_and_ignore_offsets():
     quad = np.linalg.lstsq(np.stack([u * u, v * v, u * v, u, v, np.ones_like(u)], 1), z,
                            rcond=None)[0]
     np.testing.assert_allclose(z @ k, [plane[0], plane[1], 2 * quad[0], 2 * quad[1]], rtol=1e-9)
+
+
+@pytest.mark.parametrize("scale", range(3))
+def test_fits_follow_from_the_quadric_sums_of_a_full_patch(scale):
+    """The dense scorer's route: a full patch's sums against the quadric's monomials, mapped by
+    quad_to_fits, give the same slopes and curvatures as the fit kernels."""
+    grid = CONFIG.grids[scale]
+    z = np.random.default_rng(scale).normal(size=(50, grid.size)) * 0.01
+    sums = z @ moment_basis(grid)[:, QUAD_COLUMNS]
+    np.testing.assert_allclose(sums @ quad_to_fits(grid).T, z @ fit_kernels(grid), rtol=0,
+                               atol=1e-12)
 
 
 def test_holes_are_fitted_over_the_data_that_is_there():

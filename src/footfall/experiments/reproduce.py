@@ -47,8 +47,6 @@ runs them in order and writes the report (5).
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
 import time
 from dataclasses import dataclass, replace
@@ -65,6 +63,7 @@ from footfall.data.store import DemoStore
 from footfall.experiments.difficulty import calibration_held
 from footfall.experiments.executors import Executor, LocalPool
 from footfall.experiments.report import write_report
+from footfall.experiments.reproduce_learning import learn_functions, learn_saved
 from footfall.experiments.runs import RunJob, Runner
 from footfall.experiments.unseen import FLAT, calibrate, evaluate, sweep
 from footfall.experiments.workspace import (
@@ -83,9 +82,9 @@ from footfall.expert.teachers import TEACHERS
 from footfall.features.family import PAPER_FEATURE_SETS
 from footfall.learning.evaluation import expert_values, rank_scores
 from footfall.learning.learner import LEARNERS, get_learner
-from footfall.learning.model import LEG_GROUPS, FootholdModel
+from footfall.learning.model import LEG_GROUPS
 from footfall.learning.ranker import SELECTIONS
-from footfall.learning.train import FOLDS, TrainingDemo, check_budget, learn_model
+from footfall.learning.train import FOLDS, check_budget
 from footfall.sim.episode import WalkConfig
 from footfall.terrain import KINDS
 
@@ -230,54 +229,6 @@ def reproduction_walk() -> WalkConfig:
     return replace(base, footstep=replace(base.footstep, search_radius=REPRODUCTION_SEARCH_RADIUS))
 
 
-# ---------------------------------------------------------------- learning
-def _training_key(demos: list, feature_set: str, settings: dict) -> str:
-    h = hashlib.sha256()
-    h.update(json.dumps({"fs": feature_set, **settings}, sort_keys=True).encode())
-    for d in demos:
-        h.update(f"{d.source}:{d.chosen}:{d.terrain_hash}".encode())
-    return h.hexdigest()
-
-
-def _learn(ws: Workspace, name: str, demos: list, feature_set: str, rms: float | None,
-           log: Callable[[str], None]) -> FootholdModel:
-    """The model learned from ``demos`` (ordered by source), reused from its file if it matches."""
-    config, path = ws.config, ws.model_path(name)
-    seed = ws.streams.seed_for("learning")
-    settings = {"library_size": config.library_size, "selection": config.selection,
-                "cv": config.cv, "rms": rms, "seed": seed,
-                "training_candidates": config.training_candidates}
-    if (config.learner, config.folds) != ("l1", "demonstration"):  # keys of the paper's stay
-        settings.update(learner=config.learner, folds=config.folds)
-    if config.template_budget is not None:
-        settings.update(template_budget=config.template_budget)
-    key = _training_key(demos, feature_set, settings)
-    if path.exists():
-        try:
-            model = FootholdModel.load(path)
-            if model.info.get("training_key") == key:
-                return model
-        except FootfallError:
-            pass  # unreadable or stale: learn again
-    terrains = ws.by_hash
-    training = [TrainingDemo.of(d, terrains[d.terrain_hash])
-                for d in demos]
-    t0 = time.perf_counter()
-    model = learn_model(training, feature_set, config.learner,
-                        library_size=config.library_size,
-                        training_candidates=config.training_candidates,
-                        bandwidth_rms=None if rms is None else (rms,) * 3, cv=config.cv,
-                        seed=seed, selection=config.selection, folds=config.folds,
-                        template_budget=config.template_budget,
-                        log=lambda s: log("    " + s))
-    model = replace(model, info={**model.info, "training_key": key,
-                                 "sources": [d.source for d in demos]})
-    model.save(path)
-    log(f"  learned {feature_set} from {len(demos)} demonstrations in "
-        f"{time.perf_counter() - t0:.0f} s")
-    return model
-
-
 def _short_groups(demos: list, cv: int) -> list[str]:
     """The leg groups (front, hind) with fewer than ``cv`` demonstrations: they cannot be learned."""
     front = sum(LITTLEDOG.leg(d.state.swing_leg).front for d in demos)
@@ -340,7 +291,8 @@ def correction_rounds(ws: Workspace, runner: Runner) -> Corrections:
                 f"({config.cv}-fold CV); the next round walks with the same reward"
                 + (" (an extra round)" if r + 1 >= config.rounds else ""))
             continue
-        _learn(ws, f"round{r + 1}", demos, ROBOT_FEATURE_SET, config.round_bandwidth_rms, log)
+        learn_saved(ws, f"round{r + 1}", demos, ROBOT_FEATURE_SET, config.round_bandwidth_rms,
+                    log)
         model_path = str(ws.model_path(f"round{r + 1}"))
     if short:
         raise FootfallError(
@@ -351,37 +303,6 @@ def correction_rounds(ws: Workspace, runner: Runner) -> Corrections:
 
 
 # ---------------------------------------------------------------- stage 3
-@dataclass(frozen=True)
-class Functions:
-    """The paper's three ranking functions, learned from the same corrections (Table I)."""
-
-    models: dict[str, FootholdModel]  # feature set -> model
-
-    def table1(self) -> dict:
-        """Templates kept per scale and leg group, for the sets with templates."""
-        return {fs: m.templates_kept() for fs, m in self.models.items() if fs != "terrain"}
-
-    def summary(self) -> dict:
-        """Per set and leg group: lambda (a linear learner's) or trees (a boosted one's), CV
-        error, non-zero weights (columns a tree reads), template bandwidths."""
-        return {fs: {g: {"lambda": f.info.get("lambda"), "trees": f.info.get("trees"),
-                         "cv_error": f.info["cv_error"], "n_nonzero": f.info["n_nonzero"],
-                         "bandwidth_rms_m": f.info.get("bandwidth_rms_m")}
-                     for g, f in m.functions.items()} for fs, m in self.models.items()}
-
-
-def learn_functions(ws: Workspace, demos: list, log: Callable[[str], None]) -> Functions:
-    """Terrain features, templates, templates + features, by the configured learner and model
-    selection (:class:`ReproduceConfig`: learner, selection, folds)."""
-    c = ws.config
-    models = {}
-    for fs in PAPER_FEATURE_SETS:
-        log(f"learning {fs} (learner {c.learner}, {c.selection} on its path, folds by "
-            f"{c.folds})")
-        models[fs] = _learn(ws, fs, demos, fs, ws.config.final_bandwidth_rms, log)
-    return Functions(models)
-
-
 # ------------------------------------------------------------------ the job
 def run_reproduction(out: str | os.PathLike, config: ReproduceConfig | None = None,
                      processes: int | None = None, log: Callable[[str], None] = print,
@@ -406,7 +327,9 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig | None = No
         corrections = correction_rounds(ws, runner)
         results["rounds"] = corrections.rounds
         results["demonstrations"] = _demo_summary(corrections.demos, ws.by_hash)
-        functions = learn_functions(ws, corrections.demos, log)
+        functions = learn_functions(ws, corrections.demos, log,
+                                    getattr(runner.executor, "processes", None) or 1,
+                                    ws.out / STORE_NAME)
         results["table1"] = functions.table1()
         results["models"] = functions.summary()
         difficulty = calibrate(ws, runner)

@@ -5,15 +5,22 @@ pi, spacing and template resolution whole multiples of the map resolution:
 the usual case for boards) the patches are gathered from the map by long
 contiguous copies, and every feature family that is linear in the patch
 heights (:meth:`FeatureFamily.dense <footfall.features.family.FeatureFamily.dense>`)
-is scored by one matrix product per scale,
+is scored from one matrix product per scale, in blocks of lattice rows, on
+all cores. The map's heights are taken relative to one reference and 0
+where there is no data, so a window's products need no per-window copy:
 
-    [family columns ... | 1]^T @ [C]      (e.g. sum (t - c)^2 = t.t + c.c - 2 c.t),
+    sum over the samples with data of w (h - h0) = w . h - h0 sum w,
+    sum of (h - h0)^2 = sum h^2 - 2 h0 sum h + n h0^2,
 
-in blocks of lattice rows, on all cores. Windows with no-data samples (holes,
-or off the map at its border) are scored from their masked sums, collected
-over all blocks and finished once per scale; windows whose coverage is too
-low are not valid footholds. Families without a dense form, and headings or
-spacings that do not line up, are scored by the generic form
+with ``h0`` the lattice point's own height, ``sum w`` the column's sum (all
+of it for a complete window, a prefix-sum look-up where the map's border
+cuts the window, the data mask's product where a hole lies in it) and the
+window sums of h and h^2 from running sums of the map
+(:mod:`footfall.features.window_sums`). Windows with no-data samples are
+scored by the families' masked definitions, collected over all blocks and
+finished once per scale; windows whose coverage is too low are not valid
+footholds. Families without a dense form, and headings or spacings that do
+not line up, are scored by the generic form
 (:func:`footfall.features.dense.dense_values`'s interpolated patches). Both
 give the same numbers as the per-candidate definitions.
 """
@@ -40,6 +47,7 @@ from footfall.features.dense import (
     whole_ratio,
 )
 from footfall.features.family import Candidates, DenseTerms, FeatureFamily
+from footfall.features.window_sums import window_sums
 
 _BLOCK_BYTES = 8 << 20  # patches per block of the strided path: two blocks stay in L3
 
@@ -132,33 +140,19 @@ def _orient(w: np.ndarray, grid: PatchGrid, flip_u: bool, flip_v: bool) -> np.nd
     return w.reshape(grid.size, -1)
 
 
-def _window_sums(q: np.ndarray, x0: np.ndarray, y0: np.ndarray, nu: int, nv: int,
-                 tap: int) -> np.ndarray:
-    """Sums of q[x0[a] + tap * i, y0[b] + tap * j] over i < nu, j < nv, for all (a, b), int64.
-
-    An integral image per phase (x mod tap, y mod tap) of q: four look-ups a window.
-    """
-    px, py = -(-q.shape[0] // tap) * tap, -(-q.shape[1] // tap) * tap
-    qq = np.zeros((px, py), dtype=np.int32)
-    qq[:q.shape[0], :q.shape[1]] = q
-    integral = np.zeros((px // tap + 1, tap, py // tap + 1, tap), dtype=np.int64)
-    integral[1:, :, 1:, :] = qq.reshape(px // tap, tap, py // tap, tap).cumsum(0).cumsum(2)
-    ix, fx = np.divmod(x0, tap)
-    iy, fy = np.divmod(y0, tap)
-
-    def at(i: np.ndarray, j: np.ndarray) -> np.ndarray:
-        return integral[i[:, None], fx[:, None], j[None, :], fy[None, :]]
-
-    return at(ix + nu, iy + nv) - at(ix, iy + nv) - at(ix + nu, iy) + at(ix, iy)
-
-
 @dataclass(frozen=True, eq=False)
 class _Board:
-    """The map padded and laid out in polyphase order, with the lattice's geometry [cells]."""
+    """The map padded and laid out in polyphase order, with the lattice's geometry [cells].
+
+    Heights are relative to one reference height and 0 where there is no data,
+    so that a window's sums over its samples with data are plain sums.
+    """
 
     poly: np.ndarray  # (step, step, big_x, big_y): poly[rx, ry, m, n] = padded[step m + rx, step n + ry]
-    h0: np.ndarray  # (na, width) heights of the lattice points, relative to a reference; NaN: none
-    holes: np.ndarray | None  # (padded shape) bool: no-data cells of the map inside the padding
+    data: np.ndarray | None  # the same layout, 1 where the map has data; None: no holes
+    heights: np.ndarray  # (padded shape) float64 heights [m], 0 where no data
+    holes: np.ndarray | None  # (padded shape) float64: 1 at the map's no-data cells; None: none
+    h0: np.ndarray  # (na, width) heights of the lattice points; NaN: none
     shape: tuple[int, int]  # (nx, ny) cells of the map
     margin: tuple[int, int]  # (mx, my) cells of padding on each side
     step: int  # lattice spacing [cells]
@@ -183,17 +177,27 @@ def _board(hmap: HeightMap, grids: tuple[PatchGrid, ...], step: int, tap: int,
     has_data = ~np.isnan(h0_map)
     ref = float(h0_map[has_data].mean()) if has_data.any() else 0.0
     big_x, big_y = -(-(nx + 2 * mx) // step) + 1, -(-(ny + 2 * my) // step)
-    padded = np.full((big_x * step, big_y * step), np.nan, dtype=dtype)
-    np.subtract(h, ref, out=padded[mx:mx + nx, my:my + ny])
-    poly = np.ascontiguousarray(padded.reshape(big_x, step, big_y, step).transpose(1, 3, 0, 2))
+    heights = np.zeros((big_x * step, big_y * step))
+    nodata = np.isnan(h)
+    np.subtract(h, ref, out=heights[mx:mx + nx, my:my + ny])
+    heights[mx:mx + nx, my:my + ny][nodata] = 0.0
+
+    def polyphase(a: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(a.astype(dtype, copy=False)
+                                    .reshape(big_x, step, big_y, step).transpose(1, 3, 0, 2))
+
     width = big_y
-    h0 = np.full((na, width), np.nan, dtype=dtype)
-    h0[:, :nb] = padded[mx:mx + nx:step, my:my + ny:step]
-    holes = None
-    if np.isnan(h).any():
-        holes = np.zeros(padded.shape, dtype=bool)
-        holes[mx:mx + nx, my:my + ny] = np.isnan(h)
-    return _Board(poly, h0, holes, (nx, ny), (mx, my), step, tap, na, nb, width, has_data)
+    h0 = np.full((na, width), np.nan)
+    h0[:, :nb] = np.where(has_data, h0_map - ref, np.nan)
+    holes = data = None
+    if nodata.any():
+        holes = np.zeros(heights.shape)
+        holes[mx:mx + nx, my:my + ny] = nodata
+        inside = np.zeros(heights.shape, dtype=bool)
+        inside[mx:mx + nx, my:my + ny] = ~nodata
+        data = polyphase(inside)
+    return _Board(polyphase(heights), data, heights, holes, h0, (nx, ny), (mx, my), step, tap,
+                  na, nb, width, has_data)
 
 
 @dataclass(frozen=True, eq=False)
@@ -201,13 +205,15 @@ class _Windows:
     """The patch windows of one scale at every lattice point: how much of each holds data."""
 
     count: np.ndarray  # (na, nb) samples with data
+    sums: tuple[np.ndarray, np.ndarray]  # (na, width) sums of the heights and their squares [m, m^2]
     span_u: tuple[np.ndarray, np.ndarray]  # (na,) first and last sample on the map along u
     span_v: tuple[np.ndarray, np.ndarray]  # (nb,) the same along v
     holed: np.ndarray | None  # (na * width,) bool: the window holds holes of the map
 
 
 def _windows(board: _Board, grid: PatchGrid) -> _Windows:
-    """Samples with data in each window of a scale: the part on the map less the holes in it."""
+    """Samples with data in each window of a scale (the part on the map less the holes in it),
+    and the sums of their heights and squared heights."""
     (nx, ny), (mx, my), tap = board.shape, board.margin, board.tap
     hu, hv = grid.half_counts
     nu, nv = grid.shape
@@ -219,12 +225,14 @@ def _windows(board: _Board, grid: PatchGrid) -> _Windows:
     count = on_x.sum(1)[:, None] * on_y.sum(1)[None, :]
     span_u = (on_x.argmax(1), nu - 1 - on_x[:, ::-1].argmax(1))
     span_v = (on_y.argmax(1), nv - 1 - on_y[:, ::-1].argmax(1))
+    pad = ((0, 0), (0, board.width - board.nb))
+    sums = tuple(np.pad(q, pad) for q in window_sums(board.heights, tap, x0, y0, nu, nv))
     holed = None
     if board.holes is not None:
-        in_holes = _window_sums(board.holes, x0, y0, nu, nv, tap)
+        in_holes = np.rint(window_sums(board.holes, tap, x0, y0, nu, nv)[0]).astype(np.int64)
         count = count - in_holes
-        holed = np.pad(in_holes > 0, ((0, 0), (0, board.width - board.nb))).ravel()
-    return _Windows(count, span_u, span_v, holed)
+        holed = np.pad(in_holes > 0, pad).ravel()
+    return _Windows(count, sums, span_u, span_v, holed)
 
 
 @dataclass(frozen=True, eq=False)
@@ -235,16 +243,18 @@ class _ScalePlan:
     grid: PatchGrid
     rows: int  # lattice rows per block
     groups: tuple  # per phase group: (first buffer row, view (nq, np, na * width) of its samples)
+    mask_groups: tuple | None  # the same views of the data mask; None: the map has no holes
     terms: tuple[DenseTerms, ...]  # the families' dense terms on this scale
-    kern_t: np.ndarray  # (sum a_k + 1, taps) [family columns | ones]^T, dtype
-    masked_z: np.ndarray  # (sum b_k, taps) the families' masked height columns^T, dtype
-    masked_m: np.ndarray  # (1 + sum e_k, taps) [ones | the families' mask columns]^T, dtype
-    full_rows: tuple[slice, ...]  # per family: its rows of kern_t
-    z_rows: tuple[slice, ...]  # per family: its rows of masked_z
-    m_rows: tuple[slice, ...]  # per family: its rows of masked_m
+    z_t: np.ndarray  # (sum b_k, taps) the families' height columns^T, buffer order, dtype
+    z_sum: np.ndarray  # (sum b_k,) their sums over all samples, dtype
+    all_t: np.ndarray  # (1 + sum e_k + sum b_k, taps) [ones | mask columns | height columns]^T
+    z_rows: tuple[slice, ...]  # per family: its rows of z_t
+    m_rows: tuple[slice, ...]  # per family: its rows of all_t
     dirty: np.ndarray  # (na * width,) bool: valid, but the window has no-data samples
     holed: np.ndarray | None  # (na * width,) bool: the window holds holes of the map
-    prefix: np.ndarray  # (nu + 1, nv + 1, 1 + sum e_k) 2-D prefix sums of masked_m, map order
+    prefix: np.ndarray  # (nu + 1, nv + 1, rows of all_t) 2-D prefix sums of all_t, map order
+    sums: tuple[np.ndarray, np.ndarray]  # (na * width,) sums of heights and squares [m, m^2]
+    count: np.ndarray  # (na * width,) samples with data
     span: tuple  # window samples on the map: u from, u to (na,); v from, v to (width,)
     pending: list = field(default_factory=list)  # masked sums of dirty windows, from every block
 
@@ -254,8 +264,8 @@ def _row_slices(widths: list[int], start: int = 0) -> tuple[slice, ...]:
     return tuple(slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:]))
 
 
-def _phase_groups(board: _Board, grid: PatchGrid) -> tuple[tuple, np.ndarray]:
-    """Strided views of the polyphase map, one per group of samples sharing a phase.
+def _phase_groups(board: _Board, grid: PatchGrid, poly: np.ndarray) -> tuple[tuple, np.ndarray]:
+    """Strided views of a polyphase map, one per group of samples sharing a phase.
 
     Sample (q, p) of a group for lattice point (a, b) is phase element
     (m0 + a + tq q) * width + n0 + b + tq p: a run over (a, b). Returns the
@@ -265,7 +275,7 @@ def _phase_groups(board: _Board, grid: PatchGrid) -> tuple[tuple, np.ndarray]:
     mx, my = board.margin
     hu, hv = grid.half_counts
     nu, nv = grid.shape
-    item = board.poly.itemsize
+    item = poly.itemsize
     tq = tap // np.gcd(step, tap)  # phase rows (columns) between neighbouring samples of a group
     period = step // np.gcd(step, tap)  # samples u, u + period, ... share a phase
     groups, perm, row = [], [], 0
@@ -273,7 +283,7 @@ def _phase_groups(board: _Board, grid: PatchGrid) -> tuple[tuple, np.ndarray]:
         for sv in range(min(period, nv)):
             us, vs = np.arange(su, nu, period), np.arange(sv, nv, period)
             ex, ey = mx - hu * tap + tap * su, my - hv * tap + tap * sv
-            phase = board.poly[ex % step, ey % step].reshape(-1)
+            phase = poly[ex % step, ey % step].reshape(-1)
             start = (ex // step) * width + ey // step
             shape = (us.size, vs.size, board.na * width)
             strides = (tq * width * item, tq * item, item)
@@ -292,99 +302,94 @@ def _scale_plan(board: _Board, s: int, grid: PatchGrid, windows: _Windows, valid
     """The columns of every family on scale s, oriented to the map and in buffer order."""
     nu, nv = grid.shape
     width, nb = board.width, board.nb
-    groups, perm = _phase_groups(board, grid)
-    ones = np.ones((grid.size, 1))
-    kern = _orient(np.concatenate([t.full_columns for t in terms] + [ones], axis=1),
-                   grid, flip_u, flip_v)
-    masked_z = _orient(np.concatenate([t.masked_z for t in terms] + [np.zeros((grid.size, 0))],
-                                      axis=1), grid, flip_u, flip_v)
-    masked_m = _orient(np.concatenate([ones] + [t.masked_m for t in terms], axis=1),
-                       grid, flip_u, flip_v)
+    groups, perm = _phase_groups(board, grid, board.poly)
+    mask_groups = None if board.data is None else _phase_groups(board, grid, board.data)[0]
+    z_cols = _orient(np.concatenate([t.z_columns for t in terms] + [np.zeros((grid.size, 0))],
+                                    axis=1), grid, flip_u, flip_v)
+    all_cols = np.concatenate([_orient(np.concatenate(
+        [np.ones((grid.size, 1))] + [t.m_columns for t in terms], axis=1), grid, flip_u, flip_v),
+        z_cols], axis=1)
     # Windows whose only no-data samples are off the map keep a rectangle
-    # of samples: their masked sums are four look-ups in a 2-D prefix sum.
-    prefix = np.zeros((nu + 1, nv + 1, masked_m.shape[1]))
-    prefix[1:, 1:] = masked_m.reshape(nu, nv, -1).cumsum(0).cumsum(1)
+    # of samples: their column sums are four look-ups in a 2-D prefix sum.
+    prefix = np.zeros((nu + 1, nv + 1, all_cols.shape[1]))
+    prefix[1:, 1:] = all_cols.reshape(nu, nv, -1).cumsum(0).cumsum(1)
     vlo = np.pad(windows.span_v[0], (0, width - nb))
     vhi = np.pad(windows.span_v[1], (0, width - nb))
     return _ScalePlan(
         s=s, grid=grid, rows=max(1, _BLOCK_BYTES // (dtype.itemsize * width * grid.size)),
-        groups=groups, terms=tuple(terms),
-        kern_t=np.ascontiguousarray(kern[perm].T, dtype=dtype),
-        masked_z=np.ascontiguousarray(masked_z[perm].T, dtype=dtype),
-        masked_m=np.ascontiguousarray(masked_m[perm].T, dtype=dtype),
-        full_rows=_row_slices([t.full_columns.shape[1] for t in terms]),
-        z_rows=_row_slices([t.masked_z.shape[1] for t in terms]),
-        m_rows=_row_slices([t.masked_m.shape[1] for t in terms], start=1),
+        groups=groups, mask_groups=mask_groups, terms=tuple(terms),
+        z_t=np.ascontiguousarray(z_cols[perm].T, dtype=dtype),
+        z_sum=z_cols.sum(axis=0).astype(dtype),
+        all_t=np.ascontiguousarray(all_cols[perm].T, dtype=dtype),
+        z_rows=_row_slices([t.z_columns.shape[1] for t in terms]),
+        m_rows=_row_slices([t.m_columns.shape[1] for t in terms], start=1),
         dirty=np.pad(valid & (windows.count < grid.size), ((0, 0), (0, width - nb))).ravel(),
         holed=windows.holed, prefix=prefix,
+        sums=tuple(q.ravel() for q in windows.sums),
+        count=np.pad(windows.count, ((0, 0), (0, width - nb))).ravel(),
         span=(windows.span_u[0], windows.span_u[1] + 1, vlo, vhi + 1))
 
 
-def _gather(plan: _ScalePlan, board: _Board, a0: int, k: int, buf: np.ndarray) -> np.ndarray:
-    """The relative heights (taps, k * width) of the windows of lattice rows a0 .. a0 + k."""
-    n = k * board.width
-    c = buf[:plan.grid.size * n].reshape(plan.grid.size, n)
-    h0b = board.h0[a0:a0 + k].reshape(-1)
-    for row, src in plan.groups:
-        part = src[:, :, a0 * board.width:a0 * board.width + n]
+def _gather(groups: tuple, size: int, width: int, a0: int, k: int, buf: np.ndarray) -> np.ndarray:
+    """The samples (taps, k * width) of the windows of lattice rows a0 .. a0 + k."""
+    n = k * width
+    c = buf[:size * n].reshape(size, n)
+    for row, src in groups:
+        part = src[:, :, a0 * width:a0 * width + n]
         taps = part.shape[0] * part.shape[1]
-        np.subtract(part, h0b, out=c[row:row + taps].reshape(part.shape))
+        np.copyto(c[row:row + taps].reshape(part.shape), part)
     return c
 
 
-def _masked_sums(plan: _ScalePlan, c: np.ndarray, idx: np.ndarray, whole: bool, a0: int,
-                 width: int, here: slice) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Masked sums (zt, mt, zz) of the windows ``idx`` of a block whose samples lack data.
+def _column_sums(plan: _ScalePlan, board: _Board, c_rows: tuple[int, int], idx: np.ndarray,
+                 buf: np.ndarray) -> np.ndarray:
+    """Sums (rows of all_t, nd) of the columns over the samples with data of windows ``idx``
+    (flat indices) of the block of lattice rows ``c_rows``.
 
-    Their mask sums are prefix-sum look-ups where only the map's edge cuts
-    them (a rectangle of samples is left), mask products where a hole of the
-    map lies in them.
+    Four look-ups in a prefix sum where only the map's edge cuts a window (a
+    rectangle of samples is left); the data mask times the columns where a
+    hole of the map lies in one.
     """
-    z = c if whole else np.take(c, idx, axis=1)
-    nodata = np.isnan(z)
-    rect = plan.holed is None or not plan.holed[here][idx].any()
-    if not rect:
-        mt = plan.masked_m @ np.subtract(1, nodata, dtype=z.dtype)  # (1 + sum e_k, nd)
-    np.putmask(z, nodata, 0)
-    zt = plan.masked_z @ z  # (sum b_k, nd)
-    zz = np.einsum("ij,ij->j", z, z)
-    if whole:
-        zt, zz = zt[:, idx], zz[idx]
-        if not rect:
-            mt = mt[:, idx]
-    if rect:
+    a0, k = c_rows
+    width = board.width
+    if plan.holed is None or not plan.holed[a0 * width + idx].any():
         u0, u1, v0, v1 = plan.span
         ia, jb = np.divmod(idx, width)
         ia += a0
         u0, u1, v0, v1 = u0[ia], u1[ia], v0[jb], v1[jb]
         pre = plan.prefix
-        mt = (pre[u1, v1] - pre[u0, v1] - pre[u1, v0] + pre[u0, v0]).T  # (1 + sum e_k, nd)
-    return zt, mt, zz
+        return (pre[u1, v1] - pre[u0, v1] - pre[u1, v0] + pre[u0, v0]).T
+    m = _gather(plan.mask_groups, plan.grid.size, width, a0, k, buf)
+    return (plan.all_t @ np.take(m, idx, axis=1)).astype(np.float64)
 
 
-def _score_block(plan: _ScalePlan, a0: int, board: _Board, valid_w: np.ndarray, out: np.ndarray,
-                 buf: np.ndarray) -> None:
-    """Score the complete windows of lattice rows a0 ..; keep the masked sums of the others."""
+def _score_block(plan: _ScalePlan, a0: int, board: _Board, out: np.ndarray, buf: np.ndarray
+                 ) -> None:
+    """Score the complete windows of lattice rows a0 ..; keep the sums of the others."""
     width = board.width
     k = min(plan.rows, board.na - a0)
-    c = _gather(plan, board, a0, k, buf)
     here = slice(a0 * width, (a0 + k) * width)  # the block's points in flat lattice order
+    c = _gather(plan.groups, plan.grid.size, width, a0, k, buf)
+    g = plan.z_t @ c  # (sum b_k, n): the columns times the heights, relative to the reference
+    h0 = board.h0[a0:a0 + k].reshape(-1)
+    s1, s2 = (q[here] for q in plan.sums)
     idx = np.flatnonzero(plan.dirty[here])
+    # Complete windows: every sample holds data, so each column sums to its full sum.
+    zt = g - np.outer(plan.z_sum, h0.astype(g.dtype))
+    size = plan.grid.size
+    zz = s2 - 2.0 * h0 * s1 + size * h0 * h0
     r = np.zeros(k * width)
-    # Mostly windows with no-data samples (the map's border): all the block's valid windows
-    # go through the masked definitions, in place.
-    whole = 2 * idx.size > np.count_nonzero(valid_w[here])
-    if whole:
-        idx = np.flatnonzero(valid_w[here])
-    else:
-        g = plan.kern_t @ c  # (sum a_k + 1, n)
-        cc = np.einsum("ij,ij->j", c, c)
-        for terms, rows in zip(plan.terms, plan.full_rows):
-            terms.add_full(g[rows], cc, g[-1], r)
-        r[idx] = 0.0  # the masked definitions add theirs at the end
+    for terms, rows in zip(plan.terms, plan.z_rows):
+        terms.add_full(zt[rows], zz, s1 - size * h0, r)
+    r[idx] = 0.0  # the masked definitions add theirs at the end
     if idx.size:
-        zt, mt, zz = _masked_sums(plan, c, idx, whole, a0, width, here)
-        plan.pending.append((a0 * width + idx, zt, mt, zz))  # list.append: thread-safe
+        sums = _column_sums(plan, board, (a0, k), idx, buf)
+        n_m = plan.all_t.shape[0] - plan.z_t.shape[0]
+        h0d = h0[idx]
+        zt_d = g[:, idx].astype(np.float64) - h0d * sums[n_m:]
+        count = sums[0]
+        zz_d = s2[idx] - 2.0 * h0d * s1[idx] + count * h0d * h0d
+        plan.pending.append((a0 * width + idx, zt_d, sums[:n_m], zz_d))  # list.append: thread-safe
     out[plan.s, a0:a0 + k] = r.reshape(k, width)  # each block owns its rows: no race
 
 
@@ -419,14 +424,13 @@ def _dense_aligned(hmap: HeightMap, config: FeatureConfig, terms: list[list[Dens
     plans = [_scale_plan(board, s, grid, windows[s], valid, terms[s], flip_u, flip_v, dtype)
              for s, grid in enumerate(grids)]
     out = np.zeros((len(grids), board.na, board.width))
-    valid_w = np.pad(valid, ((0, 0), (0, board.width - board.nb))).ravel()
     local = threading.local()
     size = max(p.rows * board.width * p.grid.size for p in plans)
 
     def block(task: tuple[_ScalePlan, int]) -> None:
         if getattr(local, "buf", None) is None:  # one buffer per thread, reused by every block
             local.buf = np.empty(size, dtype=dtype)
-        _score_block(task[0], task[1], board, valid_w, out, local.buf)
+        _score_block(task[0], task[1], board, out, local.buf)
 
     tasks = [(p, a0) for p in reversed(plans) for a0 in range(0, board.na, p.rows)]
     # NumPy and BLAS release the GIL: blocks run on all cores, BLAS itself on one.

@@ -87,25 +87,24 @@ class Candidates:
 class DenseTerms:
     """What the dense scorer needs of a family that is linear in the patch heights, on one scale.
 
-    The scorer gathers the relative heights ``c`` (taps, n) of every lattice
-    window of the scale and hands the family products of ``c`` with the
-    columns it declares here, in the scale's patch sample order:
+    The family declares columns over the scale's patch samples (in its patch
+    sample order); the scorer hands it their products with every lattice
+    window's relative heights ``c`` (heights less the foothold's own, 0 where
+    a sample has no data), and the window's sums:
 
-    * complete windows: ``g = full_columns.T @ c`` (a, n), the sum of squares
-      ``cc`` (n,) and the sum ``total`` (n,) of the heights; :attr:`add_full`
-      adds the family's weighted reward to a running sum;
-    * windows with no-data samples (holes, the map's border), ``z`` the heights
-      with 0 where there is no data and ``m`` the data mask:
-      ``zt = masked_z.T @ z`` (b, nd), ``mt = masked_m.T @ m`` (e, nd),
-      ``zz`` (nd,) and the sample count ``count`` (nd,); :attr:`masked`
-      returns the family's weighted reward of those windows.
+    * ``zt = z_columns.T @ c`` (b, n), ``zz`` (n,) the sum of ``c^2`` [m^2],
+      ``total`` (n,) the sum of ``c`` [m], over the samples with data;
+    * complete windows: :attr:`add_full` adds the family's weighted reward to
+      a running sum;
+    * windows with no-data samples (holes, the map's border), also
+      ``mt = m_columns.T @ m`` (e, nd) with ``m`` the data mask and the sample
+      count: :attr:`masked` returns the family's weighted reward of them.
     """
 
-    full_columns: np.ndarray  # (taps, a) columns applied to complete windows
-    masked_z: np.ndarray  # (taps, b) columns applied to the zero-filled heights of a gappy window
-    masked_m: np.ndarray  # (taps, e) columns applied to the data mask of a gappy window
+    z_columns: np.ndarray  # (taps, b) columns applied to the relative heights of every window
+    m_columns: np.ndarray  # (taps, e) columns applied to the data mask of a gappy window
     add_full: Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], None]
-    # (g (a, n) in the scorer's dtype, cc (n,), total (n,), r (n,) float64 to add to) -> None
+    # (zt (b, n) in the scorer's dtype, zz (n,), total (n,), r (n,) float64 to add to) -> None
     masked: Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
     # (zt (b, nd), mt (e, nd), zz (nd,), count (nd,)) -> reward (nd,) float64; NaN: no fit
 

@@ -136,12 +136,14 @@ class TemplateFeatures(FeatureFamily):
         hs = self.bandwidths[scale]
         hs_tt = (hs * (t ** 2).sum(axis=1)).astype(dtype)
         ttw_d = ttw.astype(dtype)
+        dtype = np.dtype(dtype)
 
-        def add_full(g: np.ndarray, cc: np.ndarray, total: np.ndarray, r: np.ndarray) -> None:
+        def add_full(zt: np.ndarray, zz: np.ndarray, total: np.ndarray, r: np.ndarray) -> None:
             if ttw.size:
                 # Eq. 4: -h sum (t - c)^2 = 2h c.t - h t.t - h c.c, never above 0.
-                arg = g - hs_tt[:, None]
-                arg -= (hs * cc).astype(dtype, copy=False)
+                arg = zt * dtype.type(2.0 * hs)
+                arg -= hs_tt[:, None]
+                arg -= (hs * zz).astype(dtype, copy=False)
                 np.minimum(arg, 0.0, out=arg)
                 np.exp(arg, out=arg)
                 r += ttw_d @ arg
@@ -153,8 +155,7 @@ class TemplateFeatures(FeatureFamily):
             d = np.maximum(d, 0.0) * (grid.size / count.astype(np.float64))
             return ttw @ np.exp(-hs * d)
 
-        return DenseTerms(full_columns=t.T * (2.0 * hs), masked_z=t.T, masked_m=(t ** 2).T,
-                          add_full=add_full, masked=masked)
+        return DenseTerms(z_columns=t.T, m_columns=(t ** 2).T, add_full=add_full, masked=masked)
 
     # ------------------------------------------------------------------- files
     def params(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:

@@ -121,6 +121,25 @@ _INDEX = {m: k for k, m in enumerate(_MONOMIALS)}
 QUAD_COLUMNS = tuple(_INDEX[t] for t in _QUAD_TERMS)  # basis columns of u^2, v^2, uv, u, v, 1
 
 
+@lru_cache(maxsize=32)
+def _quad_to_fits_cached(length_x: float, length_y: float, resolution: float) -> np.ndarray:
+    grid = PatchGrid(length_x, length_y, resolution)
+    quad = moment_basis(grid)[:, QUAD_COLUMNS]
+    kernels = fit_kernels(grid)
+    # The fit kernels are rows of the designs' pseudo-inverses, so they lie in the span of the
+    # quadric's monomials: kernels = quad @ m exactly (to rounding).
+    m = np.linalg.lstsq(quad, kernels, rcond=None)[0]
+    m = np.ascontiguousarray(m.T)
+    m.setflags(write=False)
+    return m
+
+
+def quad_to_fits(grid: PatchGrid) -> np.ndarray:
+    """The matrix (4, 6) taking a full patch's sums ``z @ moment_basis(grid)[:, QUAD_COLUMNS]``
+    to its slope_x, slope_y, curv_x, curv_y (those of :func:`fit_kernels`)."""
+    return _quad_to_fits_cached(grid.length_x, grid.length_y, grid.resolution)
+
+
 def _solve_spd(normal: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     """Solve symmetric positive definite systems (n, p, p) x = (n, p) by Cholesky.
 
@@ -292,12 +311,14 @@ class TerrainFeatures(FeatureFamily):
         k = len(QUANTITIES)
         tw = np.asarray(weights, dtype=np.float64)[k * scale:k * (scale + 1)]
         basis = moment_basis(grid)
+        quad = basis[:, QUAD_COLUMNS]
+        from_quad = quad_to_fits(grid)
 
-        def add_full(g: np.ndarray, cc: np.ndarray, total: np.ndarray, r: np.ndarray) -> None:
-            fits = g.astype(np.float64)  # slope_x, slope_y, curv_x, curv_y of every window
+        def add_full(zt: np.ndarray, zz: np.ndarray, total: np.ndarray, r: np.ndarray) -> None:
+            fits = from_quad @ zt.astype(np.float64)  # slope_x, slope_y, curv_x, curv_y
             r += tw[_POS] @ np.maximum(fits, 0.0) - tw[_NEG] @ np.minimum(fits, 0.0)
-            mean = total.astype(np.float64) / grid.size
-            r += tw[_STD] * np.sqrt(np.maximum(cc / grid.size - mean * mean, 0.0))
+            mean = total / grid.size
+            r += tw[_STD] * np.sqrt(np.maximum(zz / grid.size - mean * mean, 0.0))
 
         def masked(zt: np.ndarray, mt: np.ndarray, zz: np.ndarray, count: np.ndarray) -> np.ndarray:
             moments = np.asarray(mt).T
@@ -305,5 +326,4 @@ class TerrainFeatures(FeatureFamily):
             raw[np.asarray(count) < 6] = np.nan  # a quadric needs 6 samples: no guess
             return split_signed(raw) @ tw
 
-        return DenseTerms(full_columns=fit_kernels(grid), masked_z=basis[:, QUAD_COLUMNS],
-                          masked_m=basis, add_full=add_full, masked=masked)
+        return DenseTerms(z_columns=quad, m_columns=basis, add_full=add_full, masked=masked)

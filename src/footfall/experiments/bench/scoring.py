@@ -108,7 +108,7 @@ def bench_scoring(repeats: int = 7, baseline_sample: int = 300, seed: int = 0) -
         "dense_seconds_first_call": first,
         "dense_float64_seconds_median": float(np.median(times64)),
         "float32_max_relative_difference": float32_error,
-        "target_seconds": 0.1,
+        "target_seconds": 0.04,
         "baseline_per_candidate_seconds": per_candidate,
         "baseline_sample": int(sample.size),
         "baseline_seconds_extrapolated": loop_total,

@@ -3,7 +3,11 @@
 import pytest
 
 from footfall.core.errors import FootfallError
-from footfall.experiments.difficulty import calibration_held, choose_difficulty
+from footfall.experiments.difficulty import (
+    calibration_held,
+    choose_difficulty,
+    deciding_levels,
+)
 
 
 def test_the_hardest_level_at_which_the_expert_still_crosses_90_percent():
@@ -93,3 +97,21 @@ def test_whether_the_calibration_held_on_the_test_boards():
     given = {**choice, "difficulty": 0.55}
     assert calibration_held(given, 45, 63) is None
     assert calibration_held(choice, 0, 0) is None
+
+
+def test_the_levels_the_choice_rests_on_are_walked_until_they_hold_enough_runs():
+    first = {0.5: (10, 10), 0.6: (10, 10), 0.7: (9, 10), 0.8: (6, 10), 0.9: (2, 10)}
+    assert choose_difficulty(first).difficulty == 0.7
+    assert deciding_levels(first, 0.9, 30) == [0.7, 0.8]  # the chosen level and the next harder
+    # 0.7 measured better fails the threshold: the choice moves down, and so does the question
+    second = {**first, 0.7: (24, 30), 0.8: (17, 30)}
+    assert choose_difficulty(second).difficulty == 0.6
+    assert deciding_levels(second, 0.9, 30) == [0.6]  # 0.7 holds its 30 already
+    third = {**second, 0.6: (28, 30)}
+    assert choose_difficulty(third).difficulty == 0.6
+    assert deciding_levels(third, 0.9, 30) == []  # decided on 30 runs at both levels
+
+
+def test_the_hardest_level_passing_needs_only_itself_and_no_level_passing_the_easiest_two():
+    assert deciding_levels({0.5: (10, 10), 0.9: (10, 10)}, 0.9, 30) == [0.9]
+    assert deciding_levels({0.5: (3, 10), 0.7: (2, 10), 0.9: (0, 10)}, 0.9, 30) == [0.5, 0.7]

@@ -19,7 +19,7 @@ from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig
 
 TINY = ReproduceConfig(
     train_boards=((("rocky", 0.5),),), test_kinds=("rocky",), difficulties=(0.6,),
-    calibration_boards=1, calibration_runs=1, test_boards=2, sweep_runs=1, rounds=2, target_demos=1000, corrections_per_run=None, margin=2.0, library_size=30,
+    calibration_boards=1, calibration_runs=1, calibration_level_runs=2, test_boards=2, sweep_runs=1, rounds=2, target_demos=1000, corrections_per_run=None, margin=2.0, library_size=30,
     training_candidates=20, cv=2, final_bandwidth_rms=0.004, eval_runs=1, offline_demos=4,
     walk=WalkConfig(max_steps=8),  # eight steps a run: small, but every stage runs
     expert=ExpertConfig(), teacher="expert")  # the expert who values progress corrects most of
@@ -114,8 +114,10 @@ def test_the_reproduction_has_every_table(uninterrupted):
 
 def test_the_unseen_terrain_stage_is_calibrated_pooled_paired_and_swept(uninterrupted):
     r = _results(uninterrupted)
-    cal = r["calibration"]  # one level, one board, one expert run: the rule's record
-    assert list(cal["levels"]) == ["0.6"] and cal["levels"]["0.6"]["runs"] == 1
+    cal = r["calibration"]  # one level, one expert run a board: the rule's record
+    # the rule rests on its one level: walked on a second board to calibration_level_runs (2)
+    assert list(cal["levels"]) == ["0.6"] and cal["levels"]["0.6"]["runs"] == 2
+    assert {b for b in r["boards"] if b.startswith("cal")} == {"cal0.6-0", "cal0.6-1"}
     assert r["test_difficulty"] == 0.6 and "90%" in cal["rule"]
     assert r["boards"]["test0"]["modules"] == [["rocky", 0.6]]
     assert set(r["table2_boards"]) == {"test0", "test1"}

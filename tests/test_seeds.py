@@ -9,7 +9,7 @@ from footfall.core.errors import FootfallError
 from footfall.core.seeds import PURPOSES, SeedStreams
 from footfall.experiments.offline import OfflineConfig
 from footfall.experiments.reproduce import ReproduceConfig
-from footfall.experiments.workspace import planned_seeds
+from footfall.experiments.workspace import most_calibration_boards, planned_seeds
 
 
 def test_a_stream_gives_the_same_seed_for_the_same_name_and_index():
@@ -48,11 +48,13 @@ def test_two_reproduction_seeds_share_no_board_seed_and_no_run_seed(make):
         every = [s for seeds in by_purpose.values() for s in seeds]
         assert len(every) == len(set(every)), f"seed {seed}: two purposes share a seed"
         c = make(seed=seed)  # training, flat, test, and per grid level sweep and calibration
+        cal = most_calibration_boards(c)  # every board a level may get, the rule's extra ones too
+        assert cal == max(c.calibration_boards, -(-c.calibration_level_runs // c.calibration_runs))
         assert len(by_purpose["boards"]) == len(c.train_boards) + 1 + c.test_boards + \
-            len(c.difficulties) * (1 + c.calibration_boards)
+            len(c.difficulties) * (1 + cal)
         # every calibration board has run seeds of its own (not the same few on every board)
         assert len(set(by_purpose["calibration runs"])) == \
-            len(c.difficulties) * c.calibration_boards * c.calibration_runs
+            len(c.difficulties) * cal * c.calibration_runs
     for (a, pa), (b, pb) in combinations(planned.items(), 2):
         for purpose in pa:
             assert not set(pa[purpose]) & set(pb[purpose]), \

@@ -32,6 +32,13 @@ calibration runs on many boards with few runs each (5 boards x 2 runs a
 level by default; the first default run used 2 x 5, and its test boards
 came out far harder for the expert than its calibration boards -- docs/reproduce-history.md
 has the numbers).
+
+Ten runs cannot place a 90 % threshold: 10 / 10 has a Wilson interval down
+to 72 %. So the rule decides only once the levels its choice rests on -- the
+chosen level and the next harder one, between which it places the threshold
+(:func:`deciding_levels`) -- hold at least ``calibration_level_runs`` runs
+(30 by default): first every level's runs, then more boards of those levels,
+and the rule again, until its deciding levels are measured that well.
 """
 
 from __future__ import annotations
@@ -121,3 +128,17 @@ def calibration_held(choice: dict, successes: int, runs: int) -> dict | None:
     p = float(fisher_exact([[k, n - k], [successes, runs - successes]]).pvalue)
     return {"calibration": [k, n], "calibration_ci": [lo, hi], "test": [successes, runs],
             "test_rate": rate, "inside": bool(lo <= rate <= hi), "fisher_p": p}
+
+
+def deciding_levels(outcomes: dict[float, tuple[int, int]], threshold: float, runs: int
+                    ) -> list[float]:
+    """The grid levels the rule's choice rests on that hold fewer than ``runs`` runs.
+
+    Those are the chosen level and the next harder one (if any), between
+    which the rule places the threshold; where no level passes, the easiest
+    and the next. ``outcomes`` and ``threshold`` as :func:`choose_difficulty`'s.
+    """
+    choice = choose_difficulty(outcomes, threshold)
+    grid = sorted(outcomes)
+    k = grid.index(choice.difficulty)
+    return [d for d in grid[k:k + 2] if outcomes[d][1] < runs]

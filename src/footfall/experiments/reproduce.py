@@ -71,6 +71,7 @@ from footfall.experiments.workspace import (
     Spec,
     Workspace,
     boards,
+    calibration_boards,
     correction_seeds,
     open_workspace,
     test_boards,
@@ -140,6 +141,11 @@ class ReproduceConfig(Params):
     calibration_runs: int = param(2, range=at_least(1),
                                   doc="the expert's runs on each calibration board (each board "
                                       "has run seeds of its own)")
+    calibration_level_runs: int = param(
+        30, range=at_least(1),
+        doc="the expert's runs the levels the difficulty rule's choice rests on (the chosen "
+            "level and the next harder one) must hold before it decides: more calibration "
+            "boards of those levels are walked until they do")
     calibration_success: float = param(
         0.9, unit="-", range=within(0.0, 1.0, low_open=True),
         doc="the expert's success rate the rule requires at the test difficulty")
@@ -213,7 +219,7 @@ class ReproduceConfig(Params):
         """A small version (a few minutes on two cores): fewer boards, runs and templates."""
         return cls(seed=seed, train_boards=((("rocky", 0.5),), (("steps", 0.5),)),
                    test_kinds=("rocky",), difficulties=(0.5, 0.9), calibration_boards=1,
-                   calibration_runs=2, test_boards=2, rounds=2, target_demos=24,
+                   calibration_runs=2, calibration_level_runs=4, test_boards=2, rounds=2, target_demos=24,
                    corrections_per_run=6, library_size=200, training_candidates=40, cv=3,
                    final_bandwidth_rms=0.004, eval_runs=3, sweep_runs=1, offline_demos=12)
 
@@ -303,6 +309,18 @@ def correction_rounds(ws: Workspace, runner: Runner) -> Corrections:
 
 
 # ---------------------------------------------------------------- stage 3
+def _calibration_boards_walked(config: ReproduceConfig, choice) -> dict:
+    """The calibration boards of every grid level the rule walked (more where it needed runs)."""
+    out = {}
+    for j, d in enumerate(config.difficulties):
+        level = choice.levels.get(f"{d:g}")
+        walked = config.calibration_boards if level is None else -(
+            -level["runs"] // config.calibration_runs)
+        out.update(calibration_boards(config, j, range(walked)))
+    return {name: {"modules": [list(m) for m in spec], "seed": seed}
+            for name, (spec, seed) in out.items()}
+
+
 # ------------------------------------------------------------------ the job
 def run_reproduction(out: str | os.PathLike, config: ReproduceConfig | None = None,
                      processes: int | None = None, log: Callable[[str], None] = print,
@@ -334,6 +352,7 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig | None = No
         results["models"] = functions.summary()
         difficulty = calibrate(ws, runner)
         results["calibration"] = difficulty.as_dict()
+        results["boards"].update(_calibration_boards_walked(config, difficulty))
         results["test_difficulty"] = difficulty.difficulty
         evaluation = evaluate(ws, runner, difficulty)
         results["boards"].update({name: {"modules": [list(m) for m in spec], "seed": seed}

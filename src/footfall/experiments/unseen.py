@@ -2,9 +2,11 @@
 
 1. **The test difficulty by a rule** (:func:`calibrate`): the synthetic expert
    choosing every foothold walks ``calibration_boards`` boards of the test
-   kinds at every difficulty of the grid, ``calibration_runs`` runs each; the
-   test difficulty is the hardest level up to which it still crosses 90 % of
-   its runs (:mod:`footfall.experiments.difficulty`).
+   kinds at every difficulty of the grid, ``calibration_runs`` runs each, and
+   more boards of the levels the rule's choice rests on until each holds
+   ``calibration_level_runs`` runs; the test difficulty is the hardest level
+   up to which it still crosses 90 % of its runs
+   (:mod:`footfall.experiments.difficulty`).
 2. **Table II on several unseen boards** (:func:`evaluate`): the three
    learned functions, the synthetic expert and the hand-tuned reward walk
    ``test_boards`` fresh boards at that difficulty with the same run seeds
@@ -28,14 +30,20 @@ from dataclasses import dataclass
 
 from footfall.data.store import DemoStore
 from footfall.experiments.batch import summarise
-from footfall.experiments.difficulty import DifficultyChoice, choose_difficulty
+from footfall.experiments.difficulty import (
+    DifficultyChoice,
+    choose_difficulty,
+    deciding_levels,
+)
 from footfall.experiments.paired import RunOutcome, compare_all, distance_summary
 from footfall.experiments.runs import RunJob, Runner
 from footfall.experiments.workspace import (
     ROBOT_FEATURE_SET,
     Workspace,
+    calibration_boards,
     calibration_seeds,
     evaluation_seeds,
+    most_calibration_boards,
     sweep_seeds,
     test_boards,
 )
@@ -63,19 +71,37 @@ def method_job(ws: Workspace, key: str, board: str, method: str, seed: int) -> R
 
 # ---------------------------------------------------------------- 1. the rule
 def calibrate(ws: Workspace, runner: Runner) -> DifficultyChoice:
-    """The test difficulty: ``config.test_difficulty`` if set, else by the rule."""
+    """The test difficulty: ``config.test_difficulty`` if set, else by the rule.
+
+    Every grid level first gets ``calibration_boards`` boards; then the levels
+    the rule's choice rests on get more boards (fresh board and run seeds)
+    until each holds ``calibration_level_runs`` runs, and the rule decides
+    again, until its deciding levels hold that many.
+    """
     config = ws.config
     if config.test_difficulty is not None:
         d = float(config.test_difficulty)
         return DifficultyChoice(d, True, config.calibration_success, {},
                                 "fixed by the setting test_difficulty (no calibration)")
-    jobs = {d: [method_job(ws, f"calibrate/{d:g}/{i}/s{s}", f"cal{d:g}-{i}", "expert", s)
-                for i in range(config.calibration_boards) for s in calibration_seeds(config, j, i)]
-            for j, d in enumerate(config.difficulties)}
-    runner.run([j for level in jobs.values() for j in level], "calibration runs (the teacher)")
-    stored = {r["key"]: r["result"] for r in runner.store.runs(key_prefix="calibrate/")}
-    outcomes = {d: (sum(bool(stored[j.key]["success"]) for j in level), len(level))
-                for d, level in jobs.items()}
+    per_level = {d: config.calibration_boards for d in config.difficulties}
+    while True:
+        jobs = {d: [method_job(ws, f"calibrate/{d:g}/{i}/s{s}", f"cal{d:g}-{i}", "expert", s)
+                    for i in range(per_level[d]) for s in calibration_seeds(config, j, i)]
+                for j, d in enumerate(config.difficulties)}
+        runner.run([j for level in jobs.values() for j in level], "calibration runs (the teacher)")
+        stored = {r["key"]: r["result"] for r in runner.store.runs(key_prefix="calibrate/")}
+        outcomes = {d: (sum(bool(stored[j.key]["success"]) for j in level), len(level))
+                    for d, level in jobs.items()}
+        more = deciding_levels(outcomes, config.calibration_success,
+                               config.calibration_level_runs)
+        if not more:
+            break
+        for d in more:  # enough boards of the level for the runs the rule needs
+            j = config.difficulties.index(d)
+            per_level[d] = most_calibration_boards(config)
+            ws.add_boards(calibration_boards(config, j, range(per_level[d])))
+        runner.log("calibration: " + ", ".join(f"{d:g}" for d in more) + " decide the rule; "
+                   f"walking them to {config.calibration_level_runs} runs")
     choice = choose_difficulty(outcomes, config.calibration_success)
     runner.log("test difficulty " + f"{choice.difficulty:g}" + (
         "" if choice.met else " (the teacher missed the threshold even at the easiest level)")

@@ -45,9 +45,23 @@ def boards(config: ReproduceConfig) -> dict[str, tuple[Spec, int]]:
     out["flat"] = ((("flat", 0.0),) * 3, streams.seed_for("boards", 2))
     for j, d in enumerate(config.difficulties):
         out[f"sweep{d:g}"] = (_kinds_at(config, d), streams.seed_for("boards", 3, j))
-        for i in range(config.calibration_boards):
-            out[f"cal{d:g}-{i}"] = (_kinds_at(config, d), streams.seed_for("boards", 4, j, i))
+        out.update(calibration_boards(config, j, range(config.calibration_boards)))
     return out
+
+
+def calibration_boards(config: ReproduceConfig, level: int, which: range
+                       ) -> dict[str, tuple[Spec, int]]:
+    """Calibration boards ``which`` of grid level ``level``: ``cal<d>-<i>`` -> (spec, seed)."""
+    d = config.difficulties[level]
+    streams = seed_streams(config)
+    return {f"cal{d:g}-{i}": (_kinds_at(config, d), streams.seed_for("boards", 4, level, i))
+            for i in which}
+
+
+def most_calibration_boards(config: ReproduceConfig) -> int:
+    """The most calibration boards a grid level may get: enough for ``calibration_level_runs``."""
+    return max(config.calibration_boards,
+               -(-config.calibration_level_runs // config.calibration_runs))
 
 
 def test_boards(config: ReproduceConfig, difficulty: float) -> dict[str, tuple[Spec, int]]:
@@ -93,12 +107,15 @@ def planned_seeds(config: ReproduceConfig) -> dict[str, list[int]]:
     """Every seed the reproduction may use, by purpose (what the stages draw, listed up front)."""
     streams = seed_streams(config)
     rounds = range(config.rounds + config.extra_rounds)
+    extra = range(config.calibration_boards, most_calibration_boards(config))
     return {"boards": [seed for _, seed in boards(config).values()]
+            + [seed for j in range(len(config.difficulties))
+               for _, seed in calibration_boards(config, j, extra).values()]
             + [seed for _, seed in test_boards(config, 0.0).values()],
             "correction runs": [a for r in rounds for a, _ in correction_seeds(config, r)],
             "inspection": [b for r in rounds for _, b in correction_seeds(config, r)],
             "calibration runs": [s for j in range(len(config.difficulties))
-                                 for i in range(config.calibration_boards)
+                                 for i in range(most_calibration_boards(config))
                                  for s in calibration_seeds(config, j, i)],
             "evaluation runs": evaluation_seeds(config), "sweep runs": sweep_seeds(config),
             "demonstrations": [streams.seed_for("demonstrations", 0)],

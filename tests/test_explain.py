@@ -67,17 +67,20 @@ def test_an_infinite_trace_window_keeps_the_whole_run():
     np.testing.assert_allclose(trace.series().time, 0.01 * np.arange(2500))
 
 
-def _trace(slide: float = 0.0, com_x: float = 0.0, tilt_end: float = 0.7):
+def _trace(slide: float = 0.0, com_x: float = 0.0, tilt_end: float = 0.7,
+           airborne: float = 0.0):
     """Two seconds of a robot standing on a 0.2 x 0.16 m rectangle; the LF foot slides by
-    ``slide`` [m] over the first second, the COM sits at ``com_x``; the trunk then rolls."""
+    ``slide`` [m] over the first second, the COM sits at ``com_x``; the trunk then rolls.
+    The LF foot's force is 0 (in the air) in the first ``airborne`` [s]."""
     trace = RunTrace(window=2.0, period=0.01)
     feet0 = np.array([[0.1, 0.08, 0.01], [0.1, -0.08, 0.01], [-0.1, 0.08, 0.01],
                       [-0.1, -0.08, 0.01]])
-    force = np.tile([0.0, 0.0, 6.0], (4, 1))
     for i in range(200):
         t = 0.01 * i
         feet = feet0.copy()
         feet[0, 0] += slide * min(1.0, t)
+        force = np.tile([0.0, 0.0, 6.0], (4, 1))
+        force[0, 2] = 0.0 if t < airborne else 6.0
         roll = tilt_end * max(0.0, t - 1.0)
         trace.record(trace_row(t, np.array([com_x, 0.0, 0.15]), np.array([roll, 0.0, 0.0]),
                                np.array([com_x, 0.0, 0.15]), feet, force, np.ones(4, bool),
@@ -92,6 +95,22 @@ def test_a_stance_foot_that_slid_before_the_tilt_is_the_cause():
     assert e["slip"]["moved_mm"] > 1e3 * SLIP_MOVED
     assert e["tilt_began_s_before_end"] == pytest.approx(0.77, abs=0.02)
     assert e["cause"] in CAUSES and len(explanation_lines(e)) == 6
+
+
+def test_a_foot_that_moved_in_the_air_is_a_touch_down_that_did_not_take():
+    slid = explain_run(_trace(slide=0.04), {"success": False, "reason": "fall: trunk tilted"},
+                       LITTLEDOG)
+    assert slid["slip"]["on_ground_share"] == 1.0  # pressed 6 N all along: a slide
+    fell = {"success": False, "reason": "fall: trunk tilted"}
+    # LF reads no force for the first 0.4 s; it passes SLIP_MOVED (15 mm) at 0.38 s: in the air
+    e = explain_run(_trace(slide=0.04, airborne=0.4), fell, LITTLEDOG)
+    assert e["slip"]["leg"] == "LF" and e["slip"]["on_ground_share"] == 0.0
+    assert e["cause"] == "touch-down did not take" and e["cause"] in CAUSES
+    assert "on the ground 0 % of its stance" in explanation_lines(e)[1]
+    # on the ground most of the way (in the air its first 0.1 s): a slide after all
+    e = explain_run(_trace(slide=0.04, airborne=0.1), fell, LITTLEDOG)
+    assert e["slip"]["on_ground_share"] == pytest.approx(29 / 39)  # rows 0.10 .. 0.38 s of 0 .. 0.38
+    assert e["cause"] == "stance foot slipped"
 
 
 def test_a_centre_of_mass_outside_the_feet_is_the_cause_without_a_slip():

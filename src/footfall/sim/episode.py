@@ -111,7 +111,7 @@ class WalkConfig(Params):
                                   doc="forward progress in stuck_time that counts as moving")
     time_limit: float = param(240.0, unit="s", range=_POSITIVE_OR_INF,
                               doc="longest run, in simulated time")
-    trace_window: float = param(5.0, unit="s", range=_POSITIVE_OR_INF,
+    trace_window: float = param(10.0, unit="s", range=_POSITIVE_OR_INF,
                                 doc="the flight recorder keeps this much of the run's end, at "
                                     "the control rate (footfall walk --explain); inf: the "
                                     "whole run")

@@ -3,8 +3,10 @@
 :func:`explain_run` reads the flight recorder of a run (:mod:`footfall.sim.trace`,
 the last seconds at the control rate) and its outcome and says:
 
-* which stance foot moved, how far from where it was put down, and how long
-  before the end it started to move;
+* which stance foot moved, how far from where it was put down, how long
+  before the end it started to move, and how much of its stance until then it
+  was on the ground at all (a foot whose touch-down did not take is carried
+  through the air by its stiff leg: it "moves" without sliding);
 * the support margin of the measured centre of mass over the last seconds
   (its signed distance inside the convex hull of the stance feet);
 * the trunk's roll and pitch, and when the tilt began;
@@ -27,6 +29,10 @@ from footfall.sim.trace import TraceSeries
 
 # What a failed run is put down to, in the order the rules are tried.
 CAUSES = {
+    "touch-down did not take": "a stance foot moved more than SLIP_MOVED from where it was put "
+                               "down before the trunk tilted, but was on the ground (its force "
+                               "above UNLOADED) less than UNTAKEN of the time from its touch-down "
+                               "until then: a foot in the air carried by its leg, not a slide",
     "stance foot slipped": "a stance foot moved more than SLIP_MOVED from where it was put down "
                            "before the trunk tilted",
     "centre of mass left the support": "the centre of mass was outside the stance feet's "
@@ -44,6 +50,7 @@ SATURATION_TIME = 0.2  # [s] of the last second
 TORQUE_SATURATED = 0.98  # share of the torque limit that counts as saturated
 POSITION_SATURATED = 0.02  # [rad] this close to a joint limit counts as at the limit
 UNLOADED = 1.0  # [N] a stance foot pressing less than this carries nothing
+UNTAKEN = 0.5  # [-] share of its stance on the ground below which a touch-down did not take
 JOINTS = ("hip roll", "hip pitch", "knee")
 
 
@@ -113,15 +120,35 @@ def saturated_joints(trace: TraceSeries, robot: RobotDescription) -> np.ndarray:
     return torque | position
 
 
-def _slip_summary(trace: TraceSeries, end: int) -> dict:
-    """The stance foot that moved most by row ``end``, how far [m], and since when [s before]."""
-    slips = stance_slips(trace)[: end + 1]
-    moved = np.nan_to_num(slips, nan=0.0)
-    leg = int(np.argmax(moved.max(axis=0)))
-    worst = float(moved[:, leg].max())
-    over = np.flatnonzero(moved[:, leg] > SLIP_MOVED)
-    began = float(trace.time[-1] - trace.time[over[0]]) if over.size else None
-    return {"leg": LEG_NAMES[leg], "moved_mm": 1e3 * worst, "began_s_before_end": began}
+def contact_share(trace: TraceSeries, leg: int, row: int) -> float | None:
+    """Share [-] of the rows from ``leg``'s last touch-down up to ``row`` in which its vertical
+    contact force was above UNLOADED (None: not a stance foot at ``row``)."""
+    stance = trace.stance[: row + 1, leg]
+    if not stance[-1]:
+        return None
+    lifted = np.flatnonzero(~stance)
+    start = int(lifted[-1]) + 1 if lifted.size else 0
+    return float((trace.forces[start: row + 1, leg, 2] > UNLOADED).mean())
+
+
+def _slip_summary(trace: TraceSeries, first: int, end: int) -> dict:
+    """The stance foot that moved most between rows ``first`` and ``end`` of the trace, how far
+    [m], since when [s before the trace's end] -- the onset looked for in the whole trace, also
+    before row ``first`` -- and its share of that stance on the ground until then."""
+    moved = np.nan_to_num(stance_slips(trace), nan=0.0)
+    leg = int(np.argmax(moved[first: end + 1].max(axis=0)))
+    worst = float(moved[first: end + 1, leg].max())
+    over = moved[:, leg] > SLIP_MOVED
+    began = share = None
+    if over[first: end + 1].any():
+        row = first + int(np.argmax(over[first: end + 1]))
+        within = np.flatnonzero(~over[:row])  # the onset: back to the last row not past it
+        row = int(within[-1]) + 1 if within.size else 0
+        began = float(trace.time[-1] - trace.time[row])
+        if row > 0:  # at the recorder's first row the onset, and the stance before it, are unseen
+            share = contact_share(trace, leg, row)
+    return {"leg": LEG_NAMES[leg], "moved_mm": 1e3 * worst, "began_s_before_end": began,
+            "on_ground_share": share}
 
 
 def explain_run(trace: TraceSeries, result: dict, robot: RobotDescription,
@@ -143,7 +170,8 @@ def explain_run(trace: TraceSeries, result: dict, robot: RobotDescription,
     tilt = np.abs(sub.body_rpy[:, :2]).max(axis=1)
     tilted = np.flatnonzero(tilt > TILT_BEGUN)
     tilt_row = int(tilted[0]) if tilted.size else len(sub) - 1
-    slip = _slip_summary(sub, tilt_row)
+    first = int(np.flatnonzero(keep)[0])  # the window's first row in the whole trace
+    slip = _slip_summary(trace, first, first + tilt_row)
     margin = com_margin(sub)
     outside = np.nan_to_num(margin, nan=np.inf) < 0
     period = float(np.median(np.diff(t))) if t.size > 1 else 0.0
@@ -182,7 +210,9 @@ def _cause(result: dict, facts: dict) -> str:
     if not reason.startswith("fall"):
         return "no progress" if reason.startswith(("stuck", "time")) else "other"
     if facts["slip"]["moved_mm"] > 1e3 * SLIP_MOVED:
-        return "stance foot slipped"
+        share = facts["slip"].get("on_ground_share")
+        return ("touch-down did not take" if share is not None and share < UNTAKEN
+                else "stance foot slipped")
     if facts["com_outside_s"] > OUTSIDE_TIME:
         return "centre of mass left the support"
     if facts["joints_at_limit"]:
@@ -198,6 +228,8 @@ def explanation_lines(explanation: dict) -> list[str]:
     s = e["slip"]
     began = ("" if s["began_s_before_end"] is None
              else f", from {s['began_s_before_end']:.2f} s before the end")
+    if s.get("on_ground_share") is not None:
+        began += f", on the ground {100 * s['on_ground_share']:.0f} % of its stance until then"
     roll, pitch = e["roll_pitch_end_rad"]
     tilt = ("" if e["tilt_began_s_before_end"] is None
             else f"; tilt past {TILT_BEGUN} rad {e['tilt_began_s_before_end']:.2f} s before")

@@ -30,6 +30,7 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -417,33 +418,28 @@ def _dense_aligned(hmap: HeightMap, config: FeatureConfig, terms: list[list[Dens
     board = _board(hmap, grids, step, tap, dtype)
     # At heading pi the patch's u and v axes run against the map's x and y.
     flip_u, flip_v = half_turn, half_turn != mirror
-    windows = [_windows(board, grid) for grid in grids]
-    valid = board.has_data.copy()
-    for grid, w in zip(grids, windows):  # the coverage rule of foothold_patches, in its arithmetic
-        valid &= 1.0 - (grid.size - w.count) / grid.size >= config.min_coverage
-    plans = [_scale_plan(board, s, grid, windows[s], valid, terms[s], flip_u, flip_v, dtype)
-             for s, grid in enumerate(grids)]
-    out = np.zeros((len(grids), board.na, board.width))
     local = threading.local()
-    size = max(p.rows * board.width * p.grid.size for p in plans)
+    workers = usable_cores()
+    # NumPy, BLAS and the compiled window sums release the GIL: the scales' window sums, then
+    # the blocks, run on all cores, BLAS itself on one.
+    with _blas().limit(limits=1, user_api="blas"), (
+            ThreadPoolExecutor(max_workers=workers) if workers > 1 else nullcontext()) as pool:
+        each = map if pool is None else pool.map
+        windows = list(each(lambda grid: _windows(board, grid), grids))
+        valid = board.has_data.copy()
+        for grid, w in zip(grids, windows):  # the coverage rule of foothold_patches, in its arithmetic
+            valid &= 1.0 - (grid.size - w.count) / grid.size >= config.min_coverage
+        plans = [_scale_plan(board, s, grid, windows[s], valid, terms[s], flip_u, flip_v, dtype)
+                 for s, grid in enumerate(grids)]
+        out = np.zeros((len(grids), board.na, board.width))
+        size = max(p.rows * board.width * p.grid.size for p in plans)
 
-    def block(task: tuple[_ScalePlan, int]) -> None:
-        if getattr(local, "buf", None) is None:  # one buffer per thread, reused by every block
-            local.buf = np.empty(size, dtype=dtype)
-        _score_block(task[0], task[1], board, out, local.buf)
+        def block(task: tuple[_ScalePlan, int]) -> None:
+            if getattr(local, "buf", None) is None:  # one buffer per thread, reused by every block
+                local.buf = np.empty(size, dtype=dtype)
+            _score_block(task[0], task[1], board, out, local.buf)
 
-    tasks = [(p, a0) for p in reversed(plans) for a0 in range(0, board.na, p.rows)]
-    # NumPy and BLAS release the GIL: blocks run on all cores, BLAS itself on one.
-    with _blas().limit(limits=1, user_api="blas"):
-        workers = min(usable_cores(), len(tasks))
-        if workers > 1:
-            with ThreadPoolExecutor(max_workers=workers) as pool:
-                list(pool.map(block, tasks))
-                list(pool.map(lambda p: _finish_masked(p, out), reversed(plans)))
-        else:
-            for task in tasks:
-                block(task)
-            for plan in plans:
-                _finish_masked(plan, out)
+        list(each(block, [(p, a0) for p in reversed(plans) for a0 in range(0, board.na, p.rows)]))
+        list(each(lambda p: _finish_masked(p, out), reversed(plans)))
     reward_out = out[:, :, :board.nb].sum(axis=0)
     return np.where(valid, reward_out, -np.inf), valid

@@ -255,7 +255,6 @@ class _ScalePlan:
     holed: np.ndarray | None  # (na * width,) bool: the window holds holes of the map
     prefix: np.ndarray  # (nu + 1, nv + 1, rows of all_t) 2-D prefix sums of all_t, map order
     sums: tuple[np.ndarray, np.ndarray]  # (na * width,) sums of heights and squares [m, m^2]
-    count: np.ndarray  # (na * width,) samples with data
     span: tuple  # window samples on the map: u from, u to (na,); v from, v to (width,)
     pending: list = field(default_factory=list)  # masked sums of dirty windows, from every block
 
@@ -327,7 +326,6 @@ def _scale_plan(board: _Board, s: int, grid: PatchGrid, windows: _Windows, valid
         dirty=np.pad(valid & (windows.count < grid.size), ((0, 0), (0, width - nb))).ravel(),
         holed=windows.holed, prefix=prefix,
         sums=tuple(q.ravel() for q in windows.sums),
-        count=np.pad(windows.count, ((0, 0), (0, width - nb))).ravel(),
         span=(windows.span_u[0], windows.span_u[1] + 1, vlo, vhi + 1))
 
 

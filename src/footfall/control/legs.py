@@ -22,6 +22,7 @@ from footfall.control.lowlevel import (
     LowLevelConfig,
     body_rotation,
     handed_over,
+    handed_over_pose,
     joint_targets,
     reanchor,
     rolled,
@@ -70,6 +71,8 @@ class Legs:
     hold_yields : bool
         Whether the load hold (``load_hold``) yields: from the stance watch's alarm until the
         recovery ends, the load control moves the load whatever touched down.
+    commanded : tuple of ndarray (3,), ndarray (3,)
+        The commanded body pose of the last period: position [m], roll, pitch, yaw [rad].
     settled, forces : ndarray (4,) bool, ndarray (4,) or None
         Of the last period: the legs whose role change is complete, and the vertical force
         sensor readings [N] (None when nothing needed them), for the stance watch.
@@ -100,6 +103,7 @@ class Legs:
         self.hold_yields = False  # the load hold yields (the stance watch raised an alarm)
         self.unload = np.ones(4)
         self.settled, self.forces = np.ones(4, dtype=bool), None
+        self.commanded = est.pose[0].copy(), est.pose[1].copy()  # [m], [rad] (no period yet)
 
     def set_role(self, leg: int, stance: bool, time: float) -> None:
         """Leg ``leg`` starts passing its load on (stance) or off (swing) at ``time`` [s]."""
@@ -119,12 +123,23 @@ class Legs:
     def hand_over(self) -> None:
         """A foot is about to take a new anchor where it stands: with ``hand_over``, the
         horizontal body correction passes to the stance feet's anchors (their set-points stay),
-        so that the foot enters a commanded frame without it (:func:`handed_over`)."""
-        if not self.config.hand_over:
+        so that the foot enters a commanded frame without it (:func:`handed_over`); with
+        ``hand_over_height`` and ``hand_over_attitude`` its height and its roll and pitch too
+        (:func:`handed_over_pose`)."""
+        cfg = self.config
+        if not cfg.hand_over:
             return
-        taken = self.correction.take_horizontal()
-        self.anchor = handed_over(self.anchor, self.stance, taken)  # (the stance targets
-        # follow from the anchors at the next control period)
+        taken, turned = self.correction.take(cfg.hand_over_height, cfg.hand_over_attitude)
+        if not turned.any():  # a translation: the anchors move by it (the stance targets
+            self.anchor = handed_over(self.anchor, self.stance, taken)  # follow next period)
+            return
+        position, rpy = self.commanded
+        after = np.array(rpy, dtype=np.float64)
+        after[:2] -= turned
+        offsets = self.targets - self.anchor  # rolled and pressed (kept as they are)
+        moved = handed_over_pose(self.targets, self.stance, (position, body_rotation(rpy)),
+                                 (position - taken, body_rotation(after)))
+        self.anchor = np.where(self.stance[:, None], moved - offsets, self.anchor)
 
     def set_points(self, position: np.ndarray, rpy: np.ndarray, est: BodyEstimate
                    ) -> JointTargets:
@@ -133,6 +148,7 @@ class Legs:
         cfg = self.config
         mpos, mrpy = est.pose
         cpos, crpy = self.correction.update(position, rpy, mpos, mrpy)
+        self.commanded = cpos, crpy  # [m], [rad]: the commanded body pose of this period
         rot = body_rotation(crpy), est.rotation  # commanded, measured
         ramp = transfer_weight(est.time - self.since, cfg.transfer_time)
         weight = np.where(self.stance, ramp, 1.0 - ramp)

@@ -111,6 +111,15 @@ class LowLevelConfig(Params):
                                 "body correction is handed to the stance feet's anchors, their "
                                 "set-points unchanged, so the new foot enters a commanded frame "
                                 "without it and is not dragged by it (handed_over)")
+    hand_over_height: bool = param(False,
+                                   doc="with hand_over, the height part of the correction is "
+                                       "handed over too: a new foot, which carries nothing, is "
+                                       "not lifted by a correction that lowers the commanded "
+                                       "body against the stance feet's load offsets")
+    hand_over_attitude: bool = param(False,
+                                     doc="with hand_over, the roll and pitch correction is "
+                                         "handed over too (the stance targets turned with the "
+                                         "commanded body, handed_over_pose)")
     press_speed: float = param(0.1, unit="m/s", range=within(0, math.inf),
                                doc="with load control, for press_time after touch-down a foot "
                                    "is pressed down at this speed in every period it reads less "
@@ -173,10 +182,17 @@ class BodyCorrection:
     def take_horizontal(self) -> np.ndarray:
         """Zero the x, y position correction; returns what it was (3,) [m], z 0 (its height
         part, the servo's sag under load, stays)."""
+        return self.take(height=False, attitude=False)[0]
+
+    def take(self, height: bool, attitude: bool) -> tuple[np.ndarray, np.ndarray]:
+        """Zero the x, y position correction, and its height and its roll and pitch if asked;
+        returns what was taken: position (3,) [m], roll and pitch (2,) [rad]."""
         taken = np.zeros(3)
-        taken[:2] = self.position[:2]
+        taken[:3 if height else 2] = self.position[:3 if height else 2]
         self.position = self.position - taken
-        return taken
+        turned = self.attitude.copy() if attitude else np.zeros(2)
+        self.attitude = self.attitude - turned
+        return taken, turned
 
     def rebase(self, desired_rpy: np.ndarray, new_desired_rpy: np.ndarray) -> None:
         """The desired roll and pitch change from ``desired_rpy`` to ``new_desired_rpy`` (3,)
@@ -291,6 +307,30 @@ def handed_over(anchors: np.ndarray, stance: np.ndarray, taken: np.ndarray) -> n
     """
     out = np.array(anchors, dtype=np.float64)
     out[np.asarray(stance, dtype=bool)] -= np.asarray(taken, dtype=np.float64)
+    return out
+
+
+def handed_over_pose(targets: np.ndarray, stance: np.ndarray, before: Pose, after: Pose
+                     ) -> np.ndarray:
+    """Stance targets (4, 3) [m] that keep their legs' set-points when the commanded body pose
+    changes from ``before`` to ``after`` (position (3,) [m], rotation (3, 3)).
+
+    A stance leg is solved for ``R^T (target - p)`` in the commanded frame, so
+    the target carried rigidly with the commanded body, ``p' + R' R^T (target
+    - p)``, keeps it. :func:`handed_over` is the case of a translation alone;
+    this one serves when the correction also gives up its roll and pitch.
+
+    Parameters
+    ----------
+    targets : array of shape (4, 3)
+        Foot-centre targets [m], world frame; only the stance rows move.
+    stance : array of shape (4,), bool
+        The stance legs (the foot being set down is not yet one).
+    """
+    (p0, r0), (p1, r1) = before, after
+    out = np.array(targets, dtype=np.float64)
+    rows = np.asarray(stance, dtype=bool)
+    out[rows] = p1 + (out[rows] - p0) @ r0 @ r1.T
     return out
 
 

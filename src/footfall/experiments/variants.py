@@ -99,4 +99,14 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
     register_variant("with-slow-shift", "with the body's shift between swings taking 0.3 s "
                      "instead of 0.15 s (off by default)",
                      lambda w: replace(w, cog=replace(w.cog, shift_duration=0.3))),
+    register_variant("with-height-hand-over", "with the height of the body correction handed "
+                     "to the stance anchors at each touch-down too (off by default)",
+                     lambda w: _lowlevel(w, hand_over_height=True)),
+    register_variant("with-pose-hand-over", "with the height, roll and pitch of the body "
+                     "correction handed to the stance anchors at each touch-down too (off by "
+                     "default)", lambda w: _lowlevel(w, hand_over_height=True,
+                                                     hand_over_attitude=True)),
+    register_variant("with-deep-press", "with a new foot pressed down to 15 mm below where it "
+                     "touched down instead of 4 mm (off by default)",
+                     lambda w: _lowlevel(w, press_depth=0.015)),
 ))  # the controller's own variants, in table order: an ablation walks them all by default

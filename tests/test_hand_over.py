@@ -1,5 +1,6 @@
 """The body correction handed over to the stance anchors at a touch-down
-(footfall.control.lowlevel.handed_over, LowLevelConfig.hand_over): on paper and on the robot."""
+(footfall.control.lowlevel.handed_over and handed_over_pose, LowLevelConfig.hand_over,
+hand_over_height, hand_over_attitude): on paper and on the robot."""
 
 import numpy as np
 import pytest
@@ -10,6 +11,7 @@ from footfall.control.lowlevel import (
     LowLevelConfig,
     body_rotation,
     handed_over,
+    handed_over_pose,
     joint_targets,
 )
 from footfall.core.kinematics import body_to_world, forward_kinematics
@@ -43,6 +45,49 @@ def test_the_correction_gives_up_its_horizontal_part_and_keeps_its_height():
     taken = correction.take_horizontal()
     np.testing.assert_allclose(taken, [0.012, -0.02, 0.0])
     np.testing.assert_allclose(correction.position, [0.0, 0.0, 0.004])
+
+
+def test_the_correction_gives_up_its_height_and_attitude_only_when_asked():
+    correction = BodyCorrection(LowLevelConfig())
+    correction.position = np.array([0.012, -0.02, -0.008])
+    correction.attitude = np.array([0.05, -0.03])
+    taken, turned = correction.take(height=True, attitude=False)
+    np.testing.assert_allclose(taken, [0.012, -0.02, -0.008])
+    np.testing.assert_array_equal(turned, [0.0, 0.0])
+    np.testing.assert_allclose(correction.attitude, [0.05, -0.03])
+    taken, turned = correction.take(height=True, attitude=True)
+    np.testing.assert_array_equal(taken, [0.0, 0.0, 0.0])
+    np.testing.assert_allclose(turned, [0.05, -0.03])
+    np.testing.assert_array_equal(correction.attitude, [0.0, 0.0])
+
+
+def test_the_pose_hand_over_keeps_stance_set_points_and_a_new_foot_is_not_lifted():
+    # The correction lowers the commanded body by 10 mm and rolls it by 0.08 rad against the
+    # stance feet's offsets (the body stands where it is wanted). A new foot put down where it
+    # stands and solved in the commanded frame with that correction is lifted off its spot;
+    # after the pose hand-over it is asked to stay, and the stance set-points do not change.
+    position, attitude = np.array([0.004, -0.003, -0.010]), np.array([0.08, -0.02])  # [m], [rad]
+    stance = np.array([True, False, True, True])  # RF is being set down
+    rpy_c = RPY.copy()
+    rpy_c[:2] += attitude
+    before = (DESIRED + position, body_rotation(rpy_c))
+    after = (DESIRED, body_rotation(RPY))
+    targets = np.array([body_to_world(forward_kinematics(leg, Q0[k], R), before[0], rpy_c)
+                        for k, leg in enumerate(R.legs)])  # Q0 in the commanded frame
+    measured = (DESIRED, body_rotation(RPY))
+    q_before, _ = joint_targets(R, targets, before, measured, stance.astype(float), Q0)
+    moved = handed_over_pose(targets, stance, before, after)
+    q_after, _ = joint_targets(R, moved, after, measured, stance.astype(float), Q0)
+    np.testing.assert_allclose(q_after[stance], q_before[stance], atol=1e-12)
+    np.testing.assert_array_equal(moved[1], targets[1])  # the new foot's row is left alone
+    down = _feet(DESIRED)[1]  # where RF stands, the body as measured
+    for commanded, lifted in ((before, True), (after, False)):
+        target = moved.copy()
+        target[1] = down
+        q, _ = joint_targets(R, target, commanded, measured, np.ones(4), Q0)
+        reached = body_to_world(forward_kinematics(R.legs[1], q[1], R), DESIRED, RPY)
+        off = float(np.linalg.norm(reached - down))
+        assert (off > 0.005) if lifted else (off < 1e-9), off
 
 
 def test_stance_set_points_do_not_change_and_the_new_foot_enters_a_frame_without_correction():
@@ -112,3 +157,32 @@ def test_on_the_robot_the_hand_over_moves_nothing_and_leaves_the_correction_smal
     # the correction went on from zero, where the kept one went on from its centimetre
     assert abs(handed.after[1]) < 0.2 * abs(kept.after[1])
     assert handed.after[2] == pytest.approx(kept.after[2], abs=1e-4)  # its height part kept
+
+
+class Pressed(Stale):
+    """As :class:`Stale`, the front feet's anchors also 6 mm below where they stand (pressed),
+    so the correction also grows a height and a pitch; the hand-over gives up all three."""
+
+    def step_phases(self, k):
+        self.legs.anchor[:2, 2] -= 0.006
+        return (yield from super().step_phases(k))
+
+
+def _pressed(hand: bool) -> Pressed:
+    lowlevel = LowLevelConfig(hand_over=True, hand_over_height=True, hand_over_attitude=True)
+    return staged(type("PoseHanded" if hand else "PoseKept", (Pressed,), {"hand": hand}),
+                  lowlevel=lowlevel).controller
+
+
+def test_on_the_robot_the_pose_hand_over_moves_nothing():
+    kept, handed = _pressed(False), _pressed(True)
+    np.testing.assert_array_equal(kept.before, handed.before)
+    assert abs(kept.before[2]) > 0.001  # the pressed anchors' push, taken by the correction
+    np.testing.assert_allclose(handed.feet, kept.feet, atol=1e-5)
+    np.testing.assert_allclose(handed.body, kept.body, atol=1e-5)
+    # every part of the correction went on from zero
+    turned, kept_turned = handed.legs.correction.attitude, kept.legs.correction.attitude
+    assert np.abs(kept_turned).max() > 0.01
+    assert np.abs(turned).max() < 0.2 * np.abs(kept_turned).max()
+    assert abs(handed.after[2]) < 0.5 * abs(kept.after[2])
+    assert abs(handed.after[1]) < 0.2 * abs(kept.after[1])

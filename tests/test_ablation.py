@@ -193,3 +193,25 @@ def test_no_hard_walks_issue_18_s_boards_only(tmp_path, capsys, monkeypatch):
         assert seen[-1].hard_runs == hard_runs
     boards = seen[0].boards()
     assert not any(b.startswith("hard") for b in boards) and len(boards) == 7
+
+
+def test_a_seeds_round_moves_every_board_s_first_run_seed_and_nothing_else(tmp_path, capsys,
+                                                                          monkeypatch):
+    base = AblationConfig()
+    assert base.seeds_round(0) is base
+    fresh = base.seeds_round(2)
+    for name, (spec, board_seed, runs, first) in base.boards().items():
+        assert fresh.boards()[name] == (spec, board_seed, runs, first + 2000)
+    assert replace(fresh, test_seed=base.test_seed, calibration_seed=base.calibration_seed,
+                   hard_seed=base.hard_seed) == base
+    import footfall.cli.experiments as commands
+
+    seen = []
+    monkeypatch.setattr(commands, "run_ablation",
+                        lambda out, config, processes=None, log=print, executor=None:
+                        seen.append(config) or {})
+    monkeypatch.setattr(commands, "ablation_markdown", lambda config, summary: "")
+    code, _, _ = run(capsys, "ablation", "--seeds-round", "1", "--out", tmp_path / "a")
+    assert code == 0 and seen[-1] == base.seeds_round(1)
+    code, _, err = run(capsys, "ablation", "--seeds-round", "-1", "--out", tmp_path / "b")
+    assert code == 2 and len(err.strip().splitlines()) == 1

@@ -348,14 +348,19 @@ def _variant_names() -> list[str]:
               help="Walk the four hard boards too (rocky:0.85 steps:0.85, 64 runs per variant "
                    "and chooser); --no-hard walks the test and calibration boards only. A folder keeps its "
                    "choice.")
+@click.option("--seeds-round", "seeds_round", type=click.IntRange(0, 1000), default=0,
+              show_default=True,
+              help="Walk round K's run seeds: every board's first run seed moved by 1000 K, so "
+                   "that a new judgement's runs, the defaults' among them, were never used to "
+                   "judge before (docs/terrain-suite.md).")
 @click.option("--quick", is_flag=True, help="A small version (about a minute) for a smoke test.")
 @executor_options
 @json_option
-def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], hard: bool, quick: bool,
-             processes: int | None, executor_name: str, ray_address: str | None,
-             as_json: bool) -> None:
+def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], hard: bool,
+             seeds_round: int, quick: bool, processes: int | None, executor_name: str,
+             ray_address: str | None, as_json: bool) -> None:
     """The walking controller's ablation: each part switched off alone, paired runs."""
-    config = AblationConfig.quick() if quick else AblationConfig()
+    config = (AblationConfig.quick() if quick else AblationConfig()).seeds_round(seeds_round)
     if not hard:
         config = replace(config, hard_runs=0)
     if variants:

@@ -27,6 +27,13 @@ sign test's p-value on those discordant runs (McNemar's exact test). The
 failure taxonomy counts how the failed runs ended
 (:mod:`footfall.sim.explain`'s cause).
 
+A judgement of a change walks *fresh* run seeds (``footfall ablation
+--seeds-round K``, :meth:`AblationConfig.seeds_round`: every board's first
+run seed moved by 1 000 K), the defaults on them too: the defaults kept are
+those that did well on the seeds that judged them, so paired against the
+same seeds again a new change would inherit none of that luck and look
+worse than it is.
+
 Every run is stored under the key ``variant/who/board/sSEED`` in
 ``ablation.sqlite`` as it arrives (:class:`footfall.experiments.runs.Runner`),
 so an ablation stopped at any point resumes without walking a run twice,
@@ -40,7 +47,7 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
@@ -65,6 +72,7 @@ from footfall.expert.synthetic import walking_expert
 from footfall.sim.episode import WalkConfig
 
 STORE_NAME = "ablation.sqlite"
+SEEDS_ROUND = 1000  # each round of run seeds moves every board's first run seed by this
 WHO = ("expert", "hand")  # who chooses the footholds: the walking expert, the hand-tuned reward
 Spec = tuple[tuple[str, float], ...]  # a board: (kind, difficulty) of each module
 
@@ -132,6 +140,17 @@ class AblationConfig(Params):
         return cls(variants=("defaults", "no-tilt-reflex"), who=("hand",),
                    test_board=(("rocky", 0.5),), test_runs=2, calibration_difficulties=(0.4,),
                    calibration_board_seeds=(800,), calibration_runs=1, hard_runs=0)
+
+    def seeds_round(self, k: int) -> AblationConfig:
+        """This ablation on round ``k``'s run seeds: every board's first run seed moved by
+        :data:`SEEDS_ROUND` ``* k`` (round 0: these settings). A judgement walks a round no
+        judgement has used, so the defaults' runs it is paired with were not selected on it."""
+        if k == 0:
+            return self
+        step = SEEDS_ROUND * k
+        return replace(self, test_seed=self.test_seed + step,
+                       calibration_seed=self.calibration_seed + step,
+                       hard_seed=self.hard_seed + step)
 
     def variant_walk(self, variant: str) -> WalkConfig:
         """The walking settings of ``variant``: its change of :attr:`walk`."""

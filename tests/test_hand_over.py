@@ -144,7 +144,8 @@ class Stale(Controller):
 
 def _stand(hand: bool) -> Stale:
     return staged(type("Handed" if hand else "Kept", (Stale,), {"hand": hand}),
-                  lowlevel=LowLevelConfig(hand_over=True)).controller
+                  lowlevel=LowLevelConfig(hand_over=True, hand_over_height=False,
+                                          hand_over_attitude=False)).controller
 
 
 def test_on_the_robot_the_hand_over_moves_nothing_and_leaves_the_correction_small():

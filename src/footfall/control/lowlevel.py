@@ -111,12 +111,12 @@ class LowLevelConfig(Params):
                                 "body correction is handed to the stance feet's anchors, their "
                                 "set-points unchanged, so the new foot enters a commanded frame "
                                 "without it and is not dragged by it (handed_over)")
-    hand_over_height: bool = param(False,
+    hand_over_height: bool = param(True,
                                    doc="with hand_over, the height part of the correction is "
                                        "handed over too: a new foot, which carries nothing, is "
                                        "not lifted by a correction that lowers the commanded "
                                        "body against the stance feet's load offsets")
-    hand_over_attitude: bool = param(False,
+    hand_over_attitude: bool = param(True,
                                      doc="with hand_over, the roll and pitch correction is "
                                          "handed over too (the stance targets turned with the "
                                          "commanded body, handed_over_pose)")

@@ -73,6 +73,9 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
     register_variant("no-cog-reach", "without the COG plan within the legs' reach", _no_reach),
     register_variant("no-hand-over", "without the body correction handed to the stance anchors "
                      "at each touch-down", lambda w: _lowlevel(w, hand_over=False)),
+    register_variant("no-pose-hand-over", "with only the horizontal body correction handed to "
+                     "the stance anchors at each touch-down, not its height, roll and pitch",
+                     lambda w: _lowlevel(w, hand_over_height=False, hand_over_attitude=False)),
     register_variant("no-support-feedforward", "without the support torques fed forward",
                      lambda w: _lowlevel(w, support_feedforward=0.0)),
     register_variant("none", "no reflexes, no load control, no reach, no hand-over, no support "
@@ -99,13 +102,6 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
     register_variant("with-slow-shift", "with the body's shift between swings taking 0.3 s "
                      "instead of 0.15 s (off by default)",
                      lambda w: replace(w, cog=replace(w.cog, shift_duration=0.3))),
-    register_variant("with-height-hand-over", "with the height of the body correction handed "
-                     "to the stance anchors at each touch-down too (off by default)",
-                     lambda w: _lowlevel(w, hand_over_height=True)),
-    register_variant("with-pose-hand-over", "with the height, roll and pitch of the body "
-                     "correction handed to the stance anchors at each touch-down too (off by "
-                     "default)", lambda w: _lowlevel(w, hand_over_height=True,
-                                                     hand_over_attitude=True)),
     register_variant("with-deep-press", "with a new foot pressed down to 15 mm below where it "
                      "touched down instead of 4 mm (off by default)",
                      lambda w: _lowlevel(w, press_depth=0.015)),

@@ -130,12 +130,13 @@ class Legs:
         if not cfg.hand_over:
             return
         taken, turned = self.correction.take(cfg.hand_over_height, cfg.hand_over_attitude)
-        if not turned.any():  # a translation: the anchors move by it (the stance targets
-            self.anchor = handed_over(self.anchor, self.stance, taken)  # follow next period)
-            return
         position, rpy = self.commanded
         after = np.array(rpy, dtype=np.float64)
         after[:2] -= turned
+        self.commanded = position - taken, after  # (what the correction now commands)
+        if not turned.any():  # a translation: the anchors move by it (the stance targets
+            self.anchor = handed_over(self.anchor, self.stance, taken)  # follow next period)
+            return
         offsets = self.targets - self.anchor  # rolled and pressed (kept as they are)
         moved = handed_over_pose(self.targets, self.stance, (position, body_rotation(rpy)),
                                  (position - taken, body_rotation(after)))

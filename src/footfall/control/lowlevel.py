@@ -26,7 +26,11 @@ true body pose (motion capture on the real robot, the simulator here):
   :func:`handed_over`): their set-points do not change, and the new foot
   enters a commanded frame without a correction, so it stays where it was
   put down instead of being moved by the legs' pulls on slipped feet
-  (below);
+  (below); the correction's height, roll and pitch are handed over too
+  (``hand_over_height``, ``hand_over_attitude``, :func:`handed_over_pose`):
+  the stance feet's load offsets push the body up, so the correction
+  settles lowering and tilting the commanded body, and a new foot, which
+  carries nothing, entered with it would be lifted off the ground;
 * each stance leg's servos are given, as feed-forward torques, the torques
   that carry ``support_feedforward`` of its foot's share of the weight
   (:func:`footfall.control.load.support_torques`, the shares of

@@ -49,9 +49,9 @@ def test_each_variant_changes_only_its_part():
     assert horizontal == replace(base, lowlevel=replace(base.lowlevel, hand_over_height=False,
                                                         hand_over_attitude=False))
     assert base.lowlevel.hand_over_height and base.lowlevel.hand_over_attitude
-    deep = config.variant_walk("with-deep-press")
-    assert deep == replace(base, lowlevel=replace(base.lowlevel, press_depth=0.015))
-    assert base.lowlevel.press_depth == 0.004
+    shallow = config.variant_walk("no-deep-press")
+    assert shallow == replace(base, lowlevel=replace(base.lowlevel, press_depth=0.004))
+    assert base.lowlevel.press_depth == 0.015
     unsupported = config.variant_walk("no-support-feedforward")
     assert unsupported == replace(base, lowlevel=replace(base.lowlevel, support_feedforward=0.0))
     assert base.lowlevel.support_feedforward > 0

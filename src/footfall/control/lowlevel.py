@@ -135,9 +135,9 @@ class LowLevelConfig(Params):
                                    "share of its part of the weight with every stance leg loaded")
     press_time: float = param(0.2, unit="s", range=within(0, math.inf),
                               doc="how long after touch-down a foot counts as new")
-    press_depth: float = param(0.004, unit="m", range=within(0, math.inf),
+    press_depth: float = param(0.015, unit="m", range=within(0, math.inf),
                                doc="how far below its touch-down point a new foot is pressed "
-                                   "at most")
+                                   "at most (15 mm since the fresh-seeds judgement; 4 mm before)")
     unload_time: float = param(0.15, unit="s", range=within(0, math.inf),
                                doc="with load control, a leg is unloaded over this long before "
                                    "it lifts")

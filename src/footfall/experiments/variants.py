@@ -70,6 +70,8 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
                      "set down less than 0.2 s ago settles", lambda w: _lowlevel(w, load_hold=0.0)),
     register_variant("no-press-to-load", "without a foot just set down pressed down while it "
                      "reads under half its part of the weight", lambda w: _lowlevel(w, press_speed=0.0)),
+    register_variant("no-deep-press", "with a new foot pressed down to at most 4 mm below "
+                     "where it touched down instead of 15 mm", lambda w: _lowlevel(w, press_depth=0.004)),
     register_variant("no-cog-reach", "without the COG plan within the legs' reach", _no_reach),
     register_variant("no-hand-over", "without the body correction handed to the stance anchors "
                      "at each touch-down", lambda w: _lowlevel(w, hand_over=False)),
@@ -102,7 +104,4 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
     register_variant("with-slow-shift", "with the body's shift between swings taking 0.3 s "
                      "instead of 0.15 s (off by default)",
                      lambda w: replace(w, cog=replace(w.cog, shift_duration=0.3))),
-    register_variant("with-deep-press", "with a new foot pressed down to 15 mm below where it "
-                     "touched down instead of 4 mm (off by default)",
-                     lambda w: _lowlevel(w, press_depth=0.015)),
 ))  # the controller's own variants, in table order: an ablation walks them all by default

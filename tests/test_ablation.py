@@ -21,7 +21,7 @@ from footfall.sim.episode import WalkConfig
 
 TINY = AblationConfig(variants=("defaults", "no-tilt-reflex"), who=("hand",),
                       test_board=(("rocky", 0.3),), test_runs=2, calibration_difficulties=(),
-                      hard_runs=0,
+                      hard_runs=0, suite_runs=0,
                       walk=replace(AblationConfig().walk, max_steps=6))  # six steps a run
 
 
@@ -70,6 +70,9 @@ def test_each_variant_changes_only_its_part():
     slow = config.variant_walk("with-slow-shift")
     assert slow == replace(base, cog=replace(base.cog, shift_duration=0.3))
     assert base.cog.shift_duration == 0.15
+    clear = config.variant_walk("with-leg-clearance")
+    assert clear == replace(base, footstep=replace(base.footstep, leg_clearance=0.005))
+    assert base.footstep.leg_clearance is None
     unheld = config.variant_walk("no-load-hold")
     assert unheld == replace(base, lowlevel=replace(base.lowlevel, load_hold=0.0))
     assert base.lowlevel.load_hold == 0.2
@@ -90,6 +93,10 @@ def test_the_default_boards_are_the_issue_s():
     cal = {k: v for k, v in boards.items() if k.startswith("cal")}
     assert len(cal) == 6 and sum(v[2] for v in cal.values()) == 48
     assert cal["cal0.6-801"] == ((("rocky", 0.6), ("steps", 0.6)), 801, 8, 0)
+    suite = {k: v for k, v in boards.items() if k.startswith("suite")}
+    assert len(suite) == 20 and sum(v[2] for v in suite.values()) == 160
+    assert {v[0][0][0] for v in suite.values()} == {"steps", "barrier", "slope", "logs", "rocky"}
+    assert suite["suite-barrier-1102"] == ((("barrier", 0.7), ("barrier", 0.7)), 1102, 8, 0)
 
 
 def test_a_variant_name_is_new_and_has_no_slash():
@@ -109,7 +116,7 @@ def test_the_summary_pairs_runs_by_board_and_seed():
     config = AblationConfig(variants=("defaults", "no-tilt-reflex"), who=("expert",),
                             test_runs=3, calibration_difficulties=(0.5,),
                             calibration_board_seeds=(800,), calibration_runs=2,
-                            hard_board_seeds=(900,), hard_runs=3)
+                            hard_board_seeds=(900,), hard_runs=3, suite_runs=0)
     base = {"test": [True, True, False], "cal0.5-800": [True, False],
             "hard0.85-900": [False, False, True]}
     other = {"test": [False, True, True], "cal0.5-800": [False, False],
@@ -195,11 +202,13 @@ def test_no_hard_walks_issue_18_s_boards_only(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(commands, "run_ablation", fake)
     monkeypatch.setattr(commands, "ablation_markdown", lambda config, summary: "")
     for flag, hard_runs in (("--no-hard", 0), ("--hard", AblationConfig().hard_runs)):
-        code, _, _ = run(capsys, "ablation", flag, "--out", tmp_path / "a")
+        code, _, _ = run(capsys, "ablation", flag, "--no-training-suite", "--out", tmp_path / "a")
         assert code == 0
-        assert seen[-1].hard_runs == hard_runs
+        assert seen[-1].hard_runs == hard_runs and seen[-1].suite_runs == 0
     boards = seen[0].boards()
-    assert not any(b.startswith("hard") for b in boards) and len(boards) == 7
+    assert not any(b.startswith(("hard", "suite")) for b in boards) and len(boards) == 7
+    code, _, _ = run(capsys, "ablation", "--out", tmp_path / "a")
+    assert code == 0 and seen[-1].suite_runs == AblationConfig().suite_runs > 0
 
 
 def test_a_seeds_round_moves_every_board_s_first_run_seed_and_nothing_else(tmp_path, capsys,
@@ -210,7 +219,7 @@ def test_a_seeds_round_moves_every_board_s_first_run_seed_and_nothing_else(tmp_p
     for name, (spec, board_seed, runs, first) in base.boards().items():
         assert fresh.boards()[name] == (spec, board_seed, runs, first + 2000)
     assert replace(fresh, test_seed=base.test_seed, calibration_seed=base.calibration_seed,
-                   hard_seed=base.hard_seed) == base
+                   hard_seed=base.hard_seed, suite_seed=base.suite_seed) == base
     import footfall.cli.experiments as commands
 
     seen = []
@@ -222,3 +231,54 @@ def test_a_seeds_round_moves_every_board_s_first_run_seed_and_nothing_else(tmp_p
     assert code == 0 and seen[-1] == base.seeds_round(1)
     code, _, err = run(capsys, "ablation", "--seeds-round", "-1", "--out", tmp_path / "b")
     assert code == 2 and len(err.strip().splitlines()) == 1
+
+
+def _rows(hard, suite, cal=(0, 0)):
+    """Rows of both choosers with the given (won, lost) on the hard boards, the suite and the
+    test and calibration boards."""
+    row = {"hard": {"successes": 1, "runs": 1}, "suite": {"successes": 1, "runs": 1}}
+    for prefix, (won, lost) in (("hard_", hard), ("suite_", suite), ("", cal)):
+        row.update({prefix + "won": won, prefix + "lost": lost,
+                    prefix + "p_value": mcnemar_exact(won, lost)})
+    return row
+
+
+def test_the_training_suite_rule_counts_hard_and_suite_runs_and_guards_every_group():
+    from footfall.experiments.ablation import training_rule
+
+    even = _rows((3, 5), (6, 4))  # 9 won, 9 lost over both: adopted
+    assert training_rule({"expert": even, "hand": even}) is True
+    behind = _rows((3, 6), (6, 4))  # 9 won, 10 lost
+    assert training_rule({"expert": even, "hand": behind}) is False
+    # a large gain on the suite does not buy a significant loss on the hard boards
+    sunk = _rows((0, 8), (20, 2))
+    assert mcnemar_exact(0, 8) < 0.05
+    assert training_rule({"expert": sunk, "hand": even}) is False
+    # nor on the test and calibration boards
+    assert training_rule({"expert": _rows((4, 0), (4, 0), cal=(0, 7)), "hand": even}) is False
+    assert training_rule({"expert": _rows((4, 0), (4, 0), cal=(1, 5)), "hand": even}) is True
+    # a chooser or a group not walked: no verdict
+    assert training_rule({"expert": even}) is None
+    assert training_rule({"expert": even, "hand": {**even, "suite": None}}) is None
+
+
+def test_the_table_says_what_the_rule_decided():
+    config = AblationConfig(variants=("defaults", "no-tilt-reflex"), test_runs=1,
+                            calibration_difficulties=(), hard_board_seeds=(900,), hard_runs=2,
+                            suite_kinds=("barrier",), suite_board_seeds=(1100,), suite_runs=2)
+    results = {}
+    for who in ("expert", "hand"):
+        for v, oks in (("defaults", (True, False, False, True, False)),
+                       ("no-tilt-reflex", (True, True, False, True, True))):
+            keys = ["test/s5000", "hard0.85-900/s0", "hard0.85-900/s1", "suite-barrier-1100/s0",
+                    "suite-barrier-1100/s1"]
+            for key, ok in zip(keys, oks):
+                results[f"{v}/{who}/{key}"] = _result(ok)
+    summary = summarise_ablation(config, results)
+    assert summary["no-tilt-reflex"]["training_rule"] is True
+    assert summary["defaults"]["training_rule"] is None
+    row = summary["no-tilt-reflex"]["expert"]
+    assert row["suite"] == {"successes": 2, "runs": 2}
+    assert (row["suite_won"], row["suite_lost"], row["hard_won"]) == (1, 0, 1)
+    table = ablation_markdown(config, summary)
+    assert "training suite: won / lost (p)" in table and table.count("| adopted |") == 1

@@ -15,8 +15,8 @@ import pytest
 
 from cli_helpers import run
 from footfall.core.heightmap import HeightMap
+from footfall.core.sphere_surface import sphere_surface
 from footfall.experiments.bench.sampling import map_reference, surface_reference
-from footfall.expert.surface import sphere_surface
 from footfall.features.config import FeatureConfig
 
 

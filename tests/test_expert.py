@@ -9,8 +9,8 @@ from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import body_to_world, inverse_kinematics, knee_position, world_to_body
 from footfall.core.robot import LITTLEDOG
+from footfall.core.sphere_surface import sphere_surface
 from footfall.core.state import RobotState, nominal_state
-from footfall.expert.surface import sphere_surface
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
 from footfall.expert.terms import EXPERT_TERM_NAMES, EXPERT_TERMS
 from footfall.features.candidates import reachable_footholds

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from footfall.core.heightmap import HeightMap
+from footfall.core.sphere_surface import sample_surface, sphere_surface
 from footfall.experiments.bench.expert import ray_terms_reference
 from footfall.expert.rays import RaySamples, no_data_share, ray_terms
-from footfall.expert.surface import sample_surface, sphere_surface
 from footfall.expert.synthetic import ExpertConfig, walking_expert
 
 

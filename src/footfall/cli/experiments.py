@@ -348,6 +348,11 @@ def _variant_names() -> list[str]:
               help="Walk the four hard boards too (rocky:0.85 steps:0.85, 64 runs per variant "
                    "and chooser); --no-hard walks the test and calibration boards only. A folder keeps its "
                    "choice.")
+@click.option("--training-suite/--no-training-suite", "training_suite", default=True,
+              show_default=True,
+              help="Walk the training suite too (four boards KIND:0.7 KIND:0.7 of each of "
+                   "steps, barrier, slope, logs and rocky, 160 runs per variant and chooser; "
+                   "the training-suite rule judges on it). A folder keeps its choice.")
 @click.option("--seeds-round", "seeds_round", type=click.IntRange(0, 1000), default=0,
               show_default=True,
               help="Walk round K's run seeds: every board's first run seed moved by 1000 K, so "
@@ -357,12 +362,14 @@ def _variant_names() -> list[str]:
 @executor_options
 @json_option
 def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], hard: bool,
-             seeds_round: int, quick: bool, processes: int | None, executor_name: str,
-             ray_address: str | None, as_json: bool) -> None:
+             training_suite: bool, seeds_round: int, quick: bool, processes: int | None,
+             executor_name: str, ray_address: str | None, as_json: bool) -> None:
     """The walking controller's ablation: each part switched off alone, paired runs."""
     config = (AblationConfig.quick() if quick else AblationConfig()).seeds_round(seeds_round)
     if not hard:
         config = replace(config, hard_runs=0)
+    if not training_suite:
+        config = replace(config, suite_runs=0)
     if variants:
         config = replace(config, variants=variants)
     if who:

@@ -17,18 +17,19 @@ a ball foot would not hold (:class:`~footfall.features.footing.FrictionCheck`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from footfall.control.body_path import BodyPath
 from footfall.control.grids import grid_spacing, grid_values, terrain_grids
+from footfall.control.stance_checks import stance_checks, stride_on
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, above, at_least, param
 from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState, feet_pitch
-from footfall.features.candidates import joint_margins, lattice, reachable_footholds, reaches
+from footfall.features.candidates import lattice, reachable_footholds, reaches
 from footfall.features.dense import ScoreGrid
 from footfall.features.family import Candidates
 from footfall.features.footing import FrictionCheck
@@ -98,6 +99,18 @@ class FootstepConfig(Params):
                                            "with the body at the look-ahead's last step (a "
                                            "stride on: its next lift-off) is dropped from F "
                                            "(unless every one is); None: no check")
+    leg_clearance: float | None = param(None, unit="m",
+                                        doc="leg clearance over the stance: a foothold whose "
+                                            "swing leg's knee or shin would come nearer than "
+                                            "this to the terrain at touch-down or with the body a "
+                                            "stride on (its next lift-off) is dropped from F "
+                                            "(unless every one is); None: no check")
+    leg_samples: int = param(10, unit="-", range=at_least(2),
+                             doc="the leg clearance's spheres along the lower leg, from the knee")
+    leg_span: float | None = param(None, unit="-", range=above(0),
+                                   doc="the leg clearance checks the lower leg from the knee "
+                                       "down to this share of the way to the ball's centre; "
+                                       "None: down to the ball")
     footing_margin: float = param(0.005, unit="m", range=at_least(0),
                                   doc="the friction check's footholds hold within this of them "
                                       "(one lattice spacing: the tilt between lattice points)")
@@ -397,17 +410,15 @@ class FootstepPlanner:
                                    self.rewards_[leg0].config if exact else None)
         terrain = self._terrain(leg0, cand, yaw0)
         keep = self._holding(cand, np.isfinite(terrain))
-        if cfg.joint_margin is not None:  # at touch-down and at lift-off a stride on
-            later = replace(st0, body_position=st0.body_position + np.r_[
-                ahead.body_xy[-1] - ahead.body_xy[0], 0.0])
-            clear = np.fmin(joint_margins(st0, cand, self.robot),
-                            joint_margins(later, cand, self.robot)) >= cfg.joint_margin
-            keep = keep & clear if np.any(keep & clear) else keep
         if cfg.search_radius is not None:  # F: the footholds near the gait-nominal position, or,
             # where none near it is usable (a step edge, a gap), every reachable one
             near = np.sum((cand[:, :2] - target) ** 2, axis=1) <= cfg.search_radius ** 2
             if np.any(keep & near):
                 keep &= near
+        if cfg.joint_margin is not None or cfg.leg_clearance is not None:  # within F: a check
+            # that fails every foothold of F leaves F as it is, rather than stepping far off it
+            later = stride_on(st0, ahead.legs, ahead.body_xy, ahead.grounds)
+            keep = stance_checks(self.hmap, st0, later, cand, keep, cfg, self.robot)
         cand, terrain = cand[keep], terrain[keep]
         if cand.shape[0] == 0:
             raise NoFootholdError(f"leg {leg0} has no candidate foothold at body "

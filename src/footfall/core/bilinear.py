@@ -4,7 +4,7 @@ Two rules for cells without data: a height map's (:meth:`HeightMap.height_at
 <footfall.core.heightmap.HeightMap.height_at>`: NaN off the map and where the
 nearest cell has no data, elsewhere the corners with data renormalised, the
 border cells held for half a cell) and a sphere surface's
-(:class:`footfall.expert.surface.SphereSurface`: NaN outside its window). Each
+(:class:`footfall.core.sphere_surface.SphereSurface`: NaN outside its window). Each
 function does the arithmetic of a vectorised NumPy evaluation in the same
 order, so both give the same bits (``tests/test_bilinear.py``). Positions in
 metres, heights in metres.

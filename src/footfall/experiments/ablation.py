@@ -16,7 +16,11 @@ choosing every foothold and with the hand-tuned reward, over
 * four hard boards ``rocky:0.85 steps:0.85``, board seeds 900-903, with run
   seeds 0-15: on the test and calibration boards the defaults fail about one run in
   fifteen, too few for 69 paired runs to tell a part's worth from the luck
-  of the seeds; on these about two in five, so their 64 paired runs can,
+  of the seeds; on these about two in five, so their 64 paired runs can, and
+* the training suite: four boards ``KIND:0.7 KIND:0.7`` of each of the paper's
+  kinds but flat (steps, barrier, slope, logs, rocky), board seeds
+  1100-1103, with run seeds 0-7 -- the terrain every parameter may be chosen
+  on, not only the two kinds of the other boards,
 
 with the candidate set F within 3 cm of the gait-nominal foothold, as the
 reproduction walks. The same board and seed give every variant the same
@@ -27,7 +31,10 @@ sign test's p-value on those discordant runs (McNemar's exact test). The
 failure taxonomy counts how the failed runs ended
 (:mod:`footfall.sim.explain`'s cause).
 
-A judgement of a change walks *fresh* run seeds (``footfall ablation
+:func:`training_rule` is the rule a change is judged by (docs/terrain-suite.md):
+over the hard boards and the training suite together it wins at least as many
+paired runs as it loses, for the expert and the hand-tuned reward alike, and
+no group of boards is significantly worse for either. A judgement of a change walks *fresh* run seeds (``footfall ablation
 --seeds-round K``, :meth:`AblationConfig.seeds_round`: every board's first
 run seed moved by 1 000 K), the defaults on them too: the defaults kept are
 those that did well on the seeds that judged them, so paired against the
@@ -70,11 +77,15 @@ from footfall.experiments.variants import (  # noqa: F401 (re-exported: the abla
 )
 from footfall.expert.synthetic import walking_expert
 from footfall.sim.episode import WalkConfig
+from footfall.terrain.kinds import KINDS, PAPER_KINDS
 
 STORE_NAME = "ablation.sqlite"
 SEEDS_ROUND = 1000  # each round of run seeds moves every board's first run seed by this
 WHO = ("expert", "hand")  # who chooses the footholds: the walking expert, the hand-tuned reward
 Spec = tuple[tuple[str, float], ...]  # a board: (kind, difficulty) of each module
+TRAINING_KINDS = tuple(k for k in PAPER_KINDS if k != "flat")  # the training suite's kinds
+GROUPS = ("", "hard_", "suite_")  # run groups paired apart: test and calibration, hard, suite
+WORSE = 0.05  # [-] a group is worse when it loses more than it wins at this exact McNemar p
 
 
 # ------------------------------------------------------------------ settings
@@ -125,6 +136,19 @@ class AblationConfig(Params):
         doc="board seeds of the hard boards (paired runs that separate the variants)")
     hard_runs: int = param(16, range=at_least(0), doc="runs on each hard board")
     hard_seed: int = param(0, range=at_least(0), doc="first run seed on each hard board")
+    suite_kinds: tuple[str, ...] = param(
+        TRAINING_KINDS, check=lambda v: isinstance(v, tuple) and len(set(v)) == len(v)
+        and all(k in KINDS for k in v), must="a tuple of distinct terrain kinds",
+        doc="the training suite's kinds, each a set of boards KIND:D KIND:D")
+    suite_difficulty: float = param(0.7, unit="-", range=within(0, 1),
+                                    doc="difficulty D of the training suite's boards")
+    suite_board_seeds: tuple[int, ...] = param(
+        (1100, 1101, 1102, 1103), check=lambda v: isinstance(v, tuple) and all(
+            isinstance(s, int) and s >= 0 for s in v), must="a tuple of seeds >= 0",
+        doc="board seeds of the training suite's boards, the same for every kind")
+    suite_runs: int = param(8, range=at_least(0), doc="runs on each training suite board")
+    suite_seed: int = param(0, range=at_least(0),
+                            doc="first run seed on each training suite board")
     walk: WalkConfig = param(factory=lambda: reproduction_walk(),
                              doc="the walk every variant changes: the defaults with F within "
                                  "the reproduction's search radius")
@@ -139,7 +163,8 @@ class AblationConfig(Params):
         """A small version (about a minute on two cores) for a smoke test."""
         return cls(variants=("defaults", "no-tilt-reflex"), who=("hand",),
                    test_board=(("rocky", 0.5),), test_runs=2, calibration_difficulties=(0.4,),
-                   calibration_board_seeds=(800,), calibration_runs=1, hard_runs=0)
+                   calibration_board_seeds=(800,), calibration_runs=1, hard_runs=0,
+                   suite_runs=0)
 
     def seeds_round(self, k: int) -> AblationConfig:
         """This ablation on round ``k``'s run seeds: every board's first run seed moved by
@@ -150,7 +175,7 @@ class AblationConfig(Params):
         step = SEEDS_ROUND * k
         return replace(self, test_seed=self.test_seed + step,
                        calibration_seed=self.calibration_seed + step,
-                       hard_seed=self.hard_seed + step)
+                       hard_seed=self.hard_seed + step, suite_seed=self.suite_seed + step)
 
     def variant_walk(self, variant: str) -> WalkConfig:
         """The walking settings of ``variant``: its change of :attr:`walk`."""
@@ -167,6 +192,11 @@ class AblationConfig(Params):
         for s in self.hard_board_seeds:
             out[f"hard{d:g}-{s}"] = ((("rocky", d), ("steps", d)), s, self.hard_runs,
                                      self.hard_seed)
+        d = self.suite_difficulty
+        for kind in self.suite_kinds:
+            for s in self.suite_board_seeds:
+                out[f"suite-{kind}-{s}"] = (((kind, d), (kind, d)), s, self.suite_runs,
+                                            self.suite_seed)
         return {k: v for k, v in out.items() if v[2] > 0}
 
 
@@ -199,14 +229,22 @@ def _outcomes(store: DemoStore) -> dict[str, dict]:
     return {r["key"]: r["result"] for r in store.runs()}
 
 
+def _group(name: str) -> str:
+    """The paired group of a board: '' (test and calibration), 'hard_' or 'suite_'."""
+    return "hard_" if name.startswith("hard") else "suite_" if name.startswith("suite") else ""
+
+
 def _row(config: AblationConfig, results: dict[str, dict], v: str, who: str) -> dict:
     """One variant's runs by one chooser, against the defaults' on the same boards and seeds:
-    won / lost over the test and calibration boards, and apart over the hard ones."""
-    row: dict = {"boards": {}, "causes": {}, "won": 0, "lost": 0, "hard_won": 0, "hard_lost": 0}
+    won / lost over the test and calibration boards, and apart over the hard ones and over
+    the training suite's."""
+    row: dict = {"boards": {}, "causes": {}}
+    for prefix in GROUPS:
+        row[prefix + "won"] = row[prefix + "lost"] = 0
     speeds = []
     for name, (_, _, runs, seed) in config.boards().items():
         ok = 0
-        prefix = "hard_" if name.startswith("hard") else ""
+        prefix = _group(name)
         for s in range(seed, seed + runs):
             r = results[f"{v}/{who}/{name}/s{s}"]
             base = results[f"defaults/{who}/{name}/s{s}"]["success"]
@@ -220,23 +258,43 @@ def _row(config: AblationConfig, results: dict[str, dict], v: str, who: str) -> 
                 row["causes"][cause] = row["causes"].get(cause, 0) + 1
         row["boards"][name] = {"successes": ok, "runs": runs}
     row["test"] = row["boards"].get("test")
-    for group, prefix in (("calibration", "cal"), ("hard", "hard")):
+    for group, prefix in (("calibration", "cal"), ("hard", "hard"), ("suite", "suite")):
         boards = [b for n, b in row["boards"].items() if n.startswith(prefix)]
         row[group] = ({"successes": sum(b["successes"] for b in boards),
                        "runs": sum(b["runs"] for b in boards)} if boards else None)
     row["speed_cm_s"] = sum(speeds) / len(speeds) if speeds else None
-    row["p_value"] = mcnemar_exact(row["won"], row["lost"])
-    row["hard_p_value"] = mcnemar_exact(row["hard_won"], row["hard_lost"])
+    for prefix in GROUPS:
+        row[prefix + "p_value"] = mcnemar_exact(row[prefix + "won"], row[prefix + "lost"])
     return row
+
+
+def training_rule(rows: dict[str, dict]) -> bool | None:
+    """The training-suite rule (docs/terrain-suite.md), on one variant's rows by chooser: adopted
+    when, for the expert and the hand-tuned reward alike, it wins at least as many paired runs
+    as it loses over the hard boards and the training suite together, and on no group (test
+    and calibration, hard, suite) does it lose more than it wins with an exact McNemar p below
+    :data:`WORSE`. None when a chooser or the hard boards or the suite were not walked."""
+    if set(rows) != set(WHO) or any(rows[w]["hard"] is None or rows[w]["suite"] is None
+                                    for w in WHO):
+        return None
+    for r in rows.values():
+        if r["hard_won"] + r["suite_won"] < r["hard_lost"] + r["suite_lost"]:
+            return False
+        if any(r[p + "lost"] > r[p + "won"] and r[p + "p_value"] < WORSE for p in GROUPS):
+            return False
+    return True
 
 
 def summarise_ablation(config: AblationConfig, results: dict[str, dict]) -> dict:
     """Per variant and chooser: crossings on the test and calibration boards, the failure
     taxonomy, the mean speed [cm/s] of the crossings, and the paired comparison with the
     defaults. ``results``: run key -> stored result."""
-    return {v: {"description": VARIANTS.get(v).description,
-                **{who: _row(config, results, v, who) for who in config.who}}
-            for v in _variants(config)}
+    out = {}
+    for v in _variants(config):
+        rows = {who: _row(config, results, v, who) for who in config.who}
+        out[v] = {"description": VARIANTS.get(v).description, **rows,
+                  "training_rule": None if v == "defaults" else training_rule(rows)}
+    return out
 
 
 def _count(c: dict | None) -> str:
@@ -250,12 +308,18 @@ def _paired(row: dict, prefix: str, any_runs: bool) -> str:
 
 def ablation_markdown(config: AblationConfig, summary: dict) -> str:
     """The ablation table and the failure taxonomy, as Markdown."""
+    suite = config.suite_runs > 0 and bool(config.suite_kinds)
     head = ["variant"]
     for who in config.who:
         label = "expert" if who == "expert" else "hand-tuned"
         head += [f"{label}, test board", f"{label}, calibration boards",
                  f"{label}: won / lost vs defaults (p)", f"{label}, hard boards",
                  f"{label}, hard boards: won / lost (p)"]
+        if suite:
+            head += [f"{label}, training suite", f"{label}, training suite: won / lost (p)"]
+    ruled = any(row["training_rule"] is not None for row in summary.values())
+    if ruled:
+        head.append("by the training-suite rule")
     lines = ["| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
     for v, row in summary.items():
         cells = [row["description"] if v == "defaults" else f"{v}: {row['description']}"]
@@ -264,6 +328,12 @@ def ablation_markdown(config: AblationConfig, summary: dict) -> str:
             other = v != "defaults"
             cells += [_count(r["test"]), _count(r["calibration"]), _paired(r, "", other),
                       _count(r["hard"]), _paired(r, "hard_", other and r["hard"] is not None)]
+            if suite:
+                cells += [_count(r["suite"]),
+                          _paired(r, "suite_", other and r["suite"] is not None)]
+        if ruled:
+            verdict = row["training_rule"]
+            cells.append("-" if verdict is None else "adopted" if verdict else "not adopted")
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", "Failure taxonomy (all boards; footfall.sim.explain's cause of each failed "
               "run):", ""]

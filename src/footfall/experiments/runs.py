@@ -119,7 +119,7 @@ def _board(path: str) -> HeightMap:
     Runs of a batch on one board then share one map object, and with it what
     is computed once per map: the reward grids
     (:func:`footfall.control.body_path.terrain_grids`) and the expert's sphere
-    surface (:mod:`footfall.expert.surface`).
+    surface (:mod:`footfall.core.sphere_surface`).
     """
     st = os.stat(path)
     key = (os.path.realpath(path), st.st_size, st.st_mtime_ns)

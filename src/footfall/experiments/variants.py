@@ -104,4 +104,8 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
     register_variant("with-slow-shift", "with the body's shift between swings taking 0.3 s "
                      "instead of 0.15 s (off by default)",
                      lambda w: replace(w, cog=replace(w.cog, shift_duration=0.3))),
+    register_variant("with-leg-clearance", "with footholds dropped from F where the swing "
+                     "leg's knee or shin comes within 5 mm of the terrain at touch-down or a "
+                     "stride on (off by default)",
+                     lambda w: replace(w, footstep=replace(w.footstep, leg_clearance=0.005))),
 ))  # the controller's own variants, in table order: an ablation walks them all by default

@@ -4,7 +4,7 @@ A walk's look-ahead judges the footholds around each coming step from every
 step before it: on a rocky board an expert run computes the terrain terms of
 about 230 000 footholds, of which 43 000 are distinct. Where the values of a
 row are a function of that row alone (the terrain terms, sampled from the
-whole map's surface: :func:`footfall.expert.surface.board_sphere`), a memo
+whole map's surface: :func:`footfall.core.sphere_surface.board_sphere`), a memo
 returns what was computed before and computes only the rows it has not seen:
 the same bits as computing them all.
 """

@@ -21,7 +21,7 @@ import numba
 import numpy as np
 
 from footfall.core.bilinear import surface_point
-from footfall.expert.surface import SphereSurface
+from footfall.core.sphere_surface import SphereSurface
 
 if TYPE_CHECKING:  # the settings live with the expert
     from footfall.expert.synthetic import ExpertConfig

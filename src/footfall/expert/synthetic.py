@@ -21,7 +21,7 @@ contact) are both read from B along a few ray directions. Clearance of the
 lower leg and knee is judged the same way, with a chain of spheres of the
 shin's radius along the leg as the inverse kinematics places it.
 
-The surface is :mod:`footfall.expert.surface`, the terms and their units
+The surface is :mod:`footfall.core.sphere_surface`, the terms and their units
 :mod:`footfall.expert.terms`; this module holds the expert's settings
 (:class:`ExpertConfig`) and the judge itself (:class:`SyntheticExpert`). See
 docs/expert.md for the reasoning behind every term, unit and weight.

@@ -2,7 +2,7 @@
 
 :data:`EXPERT_TERMS` names every term of the judgement with its unit and
 meaning; the terrain terms are read from the ball-centre surface
-(:mod:`footfall.expert.surface`), the leg terms from the inverse kinematics,
+(:mod:`footfall.core.sphere_surface`), the leg terms from the inverse kinematics,
 the pose terms from the state; :func:`contributions` turns the terms into
 each one's share of the value [value units]. The weights and thresholds are an
 :class:`~footfall.expert.synthetic.ExpertConfig`; docs/expert.md explains
@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from footfall.core.clearance import leg_gaps
 from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import (
     body_to_world,
@@ -25,9 +26,9 @@ from footfall.core.kinematics import (
     world_to_body,
 )
 from footfall.core.robot import LEG_NAMES, RobotDescription
+from footfall.core.sphere_surface import board_sphere, sample_surface
 from footfall.core.state import RobotState, stance_target
 from footfall.expert.rays import RaySamples, no_data_share, ray_terms
-from footfall.expert.surface import board_sphere, sample_surface
 from footfall.features.pose_features import triangle_margins
 
 if TYPE_CHECKING:  # the settings live with the expert, which computes its terms here
@@ -138,15 +139,10 @@ def leg_terms(hmap: HeightMap, state: RobotState, f: np.ndarray, seat: np.ndarra
     q_leg = np.where(solved[:, None], q, q_nominal)
     knee = body_to_world(knee_position(leg, q_leg, robot), state.body_position, state.body_rpy)
     foot = np.where(solved[:, None], centre, nominal_world)
-    rho = robot.lower_leg_radius
-    end = 1.0 - (robot.foot_radius + rho) / robot.lower_leg  # stop where the shin meets the ball
-    t = np.linspace(0.0, end, int(cfg.leg_samples))
-    spheres = knee[:, None, :] + t[None, :, None] * (foot - knee)[:, None, :]  # (n, S, 3)
-    ok = np.isfinite(spheres).all(axis=(1, 2))
-    ground = sample_surface(board_sphere(hmap, rho), np.nan_to_num(spheres[..., :2]))
     # No data under a sphere: no obstacle (as in the pose features).
-    gap = np.where(np.isnan(ground), np.inf, spheres[..., 2] - ground).min(axis=1)
+    gap = leg_gaps(hmap, knee, foot, robot, cfg.leg_samples)
     # No posture at all (neither seated nor nominal solvable): counted as touching.
+    ok = np.isfinite(knee).all(axis=1) & np.isfinite(foot).all(axis=1)
     leg_clearance = np.where(ok, np.minimum(gap, cfg.leg_clearance_cap), 0.0)
     return {"leg_clearance": leg_clearance, "reach_margin": reach_margin,
             "joint_margin": joint_margin}

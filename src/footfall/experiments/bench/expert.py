@@ -19,11 +19,11 @@ import numpy as np
 
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LITTLEDOG
+from footfall.core.sphere_surface import SphereSurface, board_sphere, no_data, sample_surface
 from footfall.experiments.batch import chooser_expert, expert_judge, walk_config
 from footfall.experiments.runs import reward_source
 from footfall.expert import terms as expert_terms
 from footfall.expert.rays import RaySamples, no_data_share, ray_terms
-from footfall.expert.surface import SphereSurface, board_sphere, no_data, sample_surface
 from footfall.sim.episode import Walk
 from footfall.terrain import make_board
 

@@ -18,8 +18,8 @@ import numpy as np
 
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LEG_NAMES
+from footfall.core.sphere_surface import SphereSurface, sphere_surface
 from footfall.core.state import nominal_state
-from footfall.expert.surface import SphereSurface, sphere_surface
 from footfall.features.candidates import reachable_footholds
 from footfall.features.config import FeatureConfig
 from footfall.terrain import make_board

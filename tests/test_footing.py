@@ -1,13 +1,13 @@
 """The friction check: a ball foot's contact tilt on scripted maps, and the planner's use of it."""
 
 import math
-from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from footfall.control.body_path import BodyPath, terrain_grids
 from footfall.control.footstep import FootstepConfig, FootstepPlanner
+from footfall.control.stance_checks import stride_on
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import inverse_kinematics, world_to_body
@@ -148,8 +148,10 @@ def test_the_planner_keeps_the_swing_leg_s_joints_off_their_limits_now_and_a_str
     margin = 0.3  # [rad]
     kept = planner(hmap, joint_margin=margin).plan(state)
     touchdown = plain.state
-    stride = replace(touchdown, body_position=touchdown.body_position
-                     + np.r_[plain.body_xy[-1] - plain.body_xy[0], 0.0])
+    ahead = planner(hmap)._horizon(state)
+    stride = stride_on(touchdown, ahead.legs, ahead.body_xy, ahead.grounds)
+    assert stride.body_position[0] - touchdown.body_position[0] == pytest.approx(
+        plain.body_xy[-1, 0] - plain.body_xy[0, 0])
     now = joint_margins(touchdown, plain.candidates)
     later = joint_margins(stride, plain.candidates)
     assert np.all(now >= 0)  # every candidate is reachable at touch-down ...

@@ -100,3 +100,38 @@ def test_a_variant_walks_its_change_and_is_not_mixed_with_the_defaults(walked, t
         run_suite(out, variant, processes=1, log=lambda s: None)
     with pytest.raises(FootfallError, match="controller variant"):
         replace(TINY, variant="no-such-variant")
+
+
+def test_later_boards_are_the_same_boards_walked_alone():
+    full = SuiteConfig(boards=6).board_specs()
+    late = SuiteConfig(boards=6, first_board=4).board_specs()
+    assert sorted(late) == sorted(k for k in full if k.endswith(("-b4", "-b5")))
+    assert all(late[k] == full[k] for k in late)
+    with pytest.raises(FootfallError, match="first board"):
+        SuiteConfig(boards=2, first_board=2)
+
+
+def test_two_walks_are_paired_run_by_run():
+    from footfall.experiments.terrain_suite import compare_suites, comparison_markdown
+
+    these = {"expert/stones/b0/s1": True, "expert/stones/b0/s2": True,
+             "expert/scan/b0/s1": False, "hand/stones/b0/s1": True, "expert/scan/b0/s9": True}
+    those = {"expert/stones/b0/s1": False, "expert/stones/b0/s2": True,
+             "expert/scan/b0/s1": True, "hand/stones/b0/s1": True}  # s9 not walked there
+    c = compare_suites(these, those, ("stones", "scan"), ("expert", "hand"))
+    assert c["expert"]["stones"] == {"runs": 2, "these": 2, "those": 1, "won": 1, "lost": 0,
+                                     "p_value": 1.0}
+    assert (c["expert"]["all"]["runs"], c["expert"]["all"]["won"],
+            c["expert"]["all"]["lost"]) == (3, 1, 1)
+    assert c["hand"]["all"]["runs"] == 1 and c["hand"]["scan"]["runs"] == 0
+    table = comparison_markdown(c, "old")
+    assert "| stones | 2 / 1 of 2, +1 / -0 (1) | 1 / 1 of 1, +0 / -0 (1) |" in table
+
+
+def test_the_command_pairs_with_another_folder_and_refuses_one_that_is_not_a_suite(
+        walked, tmp_path, capsys):
+    out, _ = walked
+    code, _, err = run(capsys, "benchmark-terrain", "--kind", "stones", "--out", tmp_path / "x",
+                       "--against", tmp_path / "nothing")
+    assert_user_error(code, err, "not a terrain suite's folder")
+    assert not (tmp_path / "x").exists()  # refused before anything was walked

@@ -33,7 +33,15 @@ from footfall.experiments.learning_curve import CurveConfig, run_learning_curve
 from footfall.experiments.offline import OfflineConfig, run_offline
 from footfall.experiments.reproduce import ReproduceConfig, run_reproduction
 from footfall.experiments.study import run_study
-from footfall.experiments.terrain_suite import SUITES, SuiteConfig, run_suite, suite_markdown
+from footfall.experiments.terrain_suite import (
+    SUITES,
+    SuiteConfig,
+    compare_suites,
+    comparison_markdown,
+    run_suite,
+    suite_markdown,
+    suite_outcomes,
+)
 from footfall.learning.ranker import SELECTIONS
 from footfall.learning.train import FOLDS
 from footfall.plots.showcase import run_demo
@@ -392,31 +400,45 @@ def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], hard: bo
               help="Who chooses the footholds (repeatable) [default: both].")
 @click.option("--boards", type=click.IntRange(min=1), default=None,
               help="Boards per kind [default: 2].")
+@click.option("--first-board", "first_board", type=click.IntRange(min=0), default=None,
+              help="The first board walked, from 0 [default: 0]: --boards 6 --first-board 4 "
+                   "walks boards 5 and 6 only.")
 @click.option("--runs", type=click.IntRange(min=1), default=None,
               help="Runs on each board [default: 8].")
 @click.option("--variant", type=RegistryChoice(_variant_names), default="defaults",
               show_default=True, help="The controller variant walked (as the ablation's); "
               "walk each into its own --out.")
+@click.option("--against", "against", default=None, metavar="FOLDER",
+              help="Pair these runs with those of another suite folder (the same boards and "
+                   "run seeds, another variant or code): per kind, won / lost and p.")
 @click.option("--quick", is_flag=True, help="One board and two hand-tuned runs a kind.")
 @executor_options
 @json_option
 def benchmark_terrain(suite: str, out: str | None, kinds: tuple[str, ...], who: tuple[str, ...],
-                      boards: int | None, runs: int | None, variant: str, quick: bool,
-                      processes: int | None, executor_name: str, ray_address: str | None,
-                      as_json: bool) -> None:
+                      boards: int | None, first_board: int | None, runs: int | None,
+                      variant: str, against: str | None, quick: bool, processes: int | None,
+                      executor_name: str, ray_address: str | None, as_json: bool) -> None:
     """A terrain suite: the expert and the hand-tuned reward on every kind, success with
     Wilson intervals, slip and the failure taxonomy per kind."""
     config = SuiteConfig.quick(suite) if quick else SuiteConfig(suite=suite)
     changes: dict = {}
     for key, value in (("kinds", kinds or None), ("who", tuple(dict.fromkeys(who)) or None),
-                       ("boards", boards), ("runs", runs), ("variant", variant)):
+                       ("boards", boards), ("first_board", first_board), ("runs", runs),
+                       ("variant", variant)):
         if value is not None:
             changes[key] = value
     config = replace(config, **changes)  # checked: one line for a bad value
     folder = Path(out or f"out/suite-{suite}" + ("" if variant == "defaults" else f"-{variant}"))
+    those = None if against is None else suite_outcomes(against)  # a bad folder: before walking
     with opened_executor(executor_name, processes, ray_address) as executor:
         summary = run_suite(folder, config, log=progress_log(as_json), executor=executor)
-    emit(as_json, summary, suite_markdown(summary) + f"wrote {folder / 'suite.md'}")
+    text = suite_markdown(summary)
+    if those is not None:
+        comparison = compare_suites(suite_outcomes(folder), those, config.walked_kinds(),
+                                    config.who)
+        summary = {**summary, "against": {"folder": str(against), "paired": comparison}}
+        text += "\n" + comparison_markdown(comparison, str(against))
+    emit(as_json, summary, text + f"wrote {folder / 'suite.md'}")
 
 
 @click.command()

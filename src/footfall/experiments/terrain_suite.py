@@ -78,6 +78,11 @@ class SuiteConfig(Params):
     difficulty: float = param(0.7, unit="-", range=within(0, 1),
                               doc="difficulty D of every board KIND:D KIND:D")
     boards: int = param(2, range=at_least(1), doc="boards per kind")
+    first_board: int = param(0, range=at_least(0),
+                             doc="the first board walked (from 0): boards first_board .. "
+                                 "boards - 1, so that boards no run has touched can be walked "
+                                 "without the earlier ones (each board is the same whatever "
+                                 "else is walked)")
     runs: int = param(8, range=at_least(1), doc="runs on each board (the same seeds on each)")
     seed: int = param(0, range=at_least(0), doc="the suite's seed: boards and runs")
     walk: WalkConfig = param(factory=reproduction_walk,
@@ -93,6 +98,9 @@ class SuiteConfig(Params):
         if unknown:
             raise FootfallError(f"the {self.suite} suite has no kind {', '.join(unknown)}; its "
                                 f"kinds are {', '.join(SUITES[self.suite])}")
+        if self.first_board >= self.boards:
+            raise FootfallError(f"the first board ({self.first_board}, from 0) must be below "
+                                f"the number of boards ({self.boards})")
 
     @classmethod
     def quick(cls, suite: str = "held-out") -> SuiteConfig:
@@ -111,7 +119,7 @@ class SuiteConfig(Params):
         return {f"{kind}-b{b}": (((kind, d), (kind, d)),
                                  streams.seed_for("boards", SUITES[self.suite].index(kind), b),
                                  True)
-                for kind in self.walked_kinds() for b in range(self.boards)}
+                for kind in self.walked_kinds() for b in range(self.first_board, self.boards)}
 
     def walked(self) -> WalkConfig:
         """The walk of every run: ``walk`` with the variant's change."""
@@ -197,6 +205,60 @@ def _causes(s: dict) -> str:
     text = ", ".join(f"{n} {c}" for c, n in named)
     other = failed - sum(s["causes"].values())
     return (text + (f", {other} unexplained" if other else "")) or "-"
+
+
+def paired_runs(these: dict[str, bool], those: dict[str, bool], who: str,
+                kinds: tuple[str, ...]) -> dict:
+    """Two walks of the same suite runs paired (run key -> crossed, keys ``WHO/KIND/bB/sSEED``):
+    on the runs of ``who`` over ``kinds`` that both walked, the crossings of each, the runs only
+    these crossed and only those, and the exact McNemar p."""
+    keys = sorted(k for k in these.keys() & those.keys()
+                  if k.split("/")[0] == who and k.split("/")[1] in kinds)
+    won = sum(these[k] and not those[k] for k in keys)
+    lost = sum(those[k] and not these[k] for k in keys)
+    return {"runs": len(keys), "these": sum(these[k] for k in keys),
+            "those": sum(those[k] for k in keys), "won": won, "lost": lost,
+            "p_value": mcnemar_exact(won, lost)}
+
+
+def compare_suites(these: dict[str, bool], those: dict[str, bool], kinds: tuple[str, ...],
+                   who: tuple[str, ...]) -> dict:
+    """:func:`paired_runs` per kind and pooled, for every chooser."""
+    return {w: {**{k: paired_runs(these, those, w, (k,)) for k in kinds},
+                "all": paired_runs(these, those, w, kinds)} for w in who}
+
+
+def suite_outcomes(folder: str | Path) -> dict[str, bool]:
+    """Run key -> crossed, of every run in a suite folder's store.
+
+    Raises
+    ------
+    FootfallError
+        If the folder holds no suite store.
+    """
+    path = Path(folder) / STORE_NAME
+    if not path.is_file():
+        raise FootfallError(f"{folder}: not a terrain suite's folder (no {STORE_NAME})")
+    with DemoStore(path) as store:
+        return {r["key"]: bool(r["result"]["success"]) for r in store.runs()}
+
+
+def comparison_markdown(comparison: dict, label: str) -> str:
+    """The paired comparison as a table: per kind and chooser, crossings of each walk, won / lost
+    and p."""
+    names = {"expert": "expert", "hand": "hand-tuned"}
+    who = list(comparison)
+    head = ["kind"] + [f"{names[w]}: this / {label}, won / lost (p)" for w in who]
+    lines = [f"Paired with {label} (the same boards and run seeds; exact McNemar):", "",
+             "| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
+    for kind in comparison[who[0]]:
+        cells = [f"**{kind}**" if kind == "all" else kind]
+        for w in who:
+            c = comparison[w][kind]
+            cells.append(f"{c['these']} / {c['those']} of {c['runs']}, +{c['won']} / -{c['lost']}"
+                         f" ({c['p_value']:.2g})")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
 
 
 def suite_markdown(summary: dict) -> str:

@@ -70,9 +70,9 @@ def test_each_variant_changes_only_its_part():
     slow = config.variant_walk("with-slow-shift")
     assert slow == replace(base, cog=replace(base.cog, shift_duration=0.3))
     assert base.cog.shift_duration == 0.15
-    clear = config.variant_walk("with-leg-clearance")
-    assert clear == replace(base, footstep=replace(base.footstep, leg_clearance=0.005))
-    assert base.footstep.leg_clearance is None
+    unclear = config.variant_walk("no-leg-clearance")
+    assert unclear == replace(base, footstep=replace(base.footstep, leg_clearance=None))
+    assert base.footstep.leg_clearance == 0.005
     unheld = config.variant_walk("no-load-hold")
     assert unheld == replace(base, lowlevel=replace(base.lowlevel, load_hold=0.0))
     assert base.lowlevel.load_hold == 0.2

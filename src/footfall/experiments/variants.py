@@ -72,6 +72,10 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
                      "reads under half its part of the weight", lambda w: _lowlevel(w, press_speed=0.0)),
     register_variant("no-deep-press", "with a new foot pressed down to at most 4 mm below "
                      "where it touched down instead of 15 mm", lambda w: _lowlevel(w, press_depth=0.004)),
+    register_variant("no-leg-clearance", "without footholds dropped from F where the swing "
+                     "leg's knee or shin comes within 5 mm of the terrain at touch-down or a "
+                     "stride on", lambda w: replace(w, footstep=replace(w.footstep,
+                                                                        leg_clearance=None))),
     register_variant("no-cog-reach", "without the COG plan within the legs' reach", _no_reach),
     register_variant("no-hand-over", "without the body correction handed to the stance anchors "
                      "at each touch-down", lambda w: _lowlevel(w, hand_over=False)),
@@ -104,8 +108,4 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
     register_variant("with-slow-shift", "with the body's shift between swings taking 0.3 s "
                      "instead of 0.15 s (off by default)",
                      lambda w: replace(w, cog=replace(w.cog, shift_duration=0.3))),
-    register_variant("with-leg-clearance", "with footholds dropped from F where the swing "
-                     "leg's knee or shin comes within 5 mm of the terrain at touch-down or a "
-                     "stride on (off by default)",
-                     lambda w: replace(w, footstep=replace(w.footstep, leg_clearance=0.005))),
 ))  # the controller's own variants, in table order: an ablation walks them all by default

@@ -54,7 +54,7 @@ _NONNEGATIVE_OR_INF = within(0, math.inf)
 
 # A walk's own planner and COG settings (docs/configuration.md gives the runs behind them).
 def _walk_footstep() -> FootstepConfig:
-    return FootstepConfig(bias_weight=60.0, step_advance=0.025)
+    return FootstepConfig(bias_weight=60.0, step_advance=0.025, leg_clearance=0.005)
 
 
 def _walk_cog() -> CogConfig:

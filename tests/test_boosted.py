@@ -9,6 +9,7 @@ import pytest
 
 from footfall.core.compute import available_memory, jobs_that_fit
 from footfall.core.errors import FootfallError
+from footfall.features.templates import BANDWIDTH_RMS_GRID, ORDER_ONLY_RMS
 from footfall.learning.boosted import BoostedRanker, Forest
 from footfall.learning.model import FootholdModel
 from footfall.learning.ranker import pairwise_error
@@ -166,3 +167,43 @@ def test_folds_at_once_are_as_many_as_the_memory_holds():
     one = BoostedRanker(trees=(10, 30), cv=3, fold_jobs=1).fit(X, y, groups)
     for name, array in auto.forest_.arrays().items():
         np.testing.assert_array_equal(array, one.forest_.arrays()[name])
+
+
+def test_the_trees_read_only_each_column_s_order():
+    """Why no bandwidth is searched for the trees: RBF similarities exp(-h d) at any bandwidth h
+    are one decreasing re-map of the distances d, and the trees split on a column's order, so
+    every bandwidth grows the same trees and ranks the candidates it learned from the same (a
+    threshold is a midpoint between two values, so a new candidate between them may fall either
+    side of it at different bandwidths)."""
+    rng = np.random.default_rng(6)
+    d = rng.gamma(2.0, 1.0, size=(60 * 20, 6))  # squared distances to six templates
+    score = (-d[:, 0] + 0.5 * d[:, 1]).reshape(60, 20)
+    y = np.zeros(d.shape[0], dtype=int)
+    y[np.arange(60) * 20 + np.argmax(score, axis=1)] = 1
+    groups = np.repeat(np.arange(60), 20)
+    bandwidths = (0.25, 1.0, 4.0)
+    fits = [BoostedRanker(trees=(10, 40), cv=3).fit(np.exp(-h * d), y, groups)
+            for h in bandwidths]
+    first = fits[0].decision_function(np.exp(-bandwidths[0] * d))
+    for h, other in zip(bandwidths[1:], fits[1:]):
+        assert other.n_trees_ == fits[0].n_trees_ and other.cv_error_ == fits[0].cv_error_
+        for name in ("feature", "left", "right", "value", "roots"):  # thresholds in h's units
+            np.testing.assert_array_equal(other.forest_.arrays()[name],
+                                          fits[0].forest_.arrays()[name])
+        np.testing.assert_array_equal(other.decision_function(np.exp(-h * d)), first)
+
+
+def test_the_trees_bandwidths_are_set_not_searched():
+    """For lambdarank the template family's bandwidths come from ORDER_ONLY_RMS on every scale,
+    without cross-validating a grid; the L1 learner still searches its grid."""
+    demos = lowest_foothold_demos()
+    kw = dict(library_size=30, training_candidates=30, cv=3, Cs=4)
+    trees_log, l1_log = [], []
+    trees = learn_model(demos, "templates", "lambdarank", log=trees_log.append, **kw)
+    learn_model(demos, "templates", "l1", log=l1_log.append, **kw)
+    for group in ("front", "hind"):
+        family = trees.functions[group].family("templates")
+        assert family.rms == (ORDER_ONLY_RMS,) * 3 and family.search == ()
+    assert not any("cv error" in line and "bandwidth rms (" in line for line in trees_log)
+    assert sum("bandwidth rms" in line and "not searched" in line for line in trees_log) == 2
+    assert sum("bandwidth rms (" in line for line in l1_log) >= 2 * len(BANDWIDTH_RMS_GRID)

@@ -192,3 +192,26 @@ def test_a_new_family_is_learned_saved_and_scored_without_touching_the_others(tm
                                   model.reward_for("LF").terrain_values(c))
     grid = score_grid(board, back.reward_for("LF"), spacing=0.01, dtype=np.float64)
     assert np.isfinite(np.asarray(grid.reward)).sum() > 100
+
+
+def test_another_state_shares_the_patches_and_terrain_columns_not_the_pose_ones():
+    """A planner's rollouts value the same footholds from several states: with_state computes the
+    patches and the terrain families' columns once, and each state's pose features its own --
+    every column equal to the one a fresh candidate set of that state computes."""
+    board = rough_map(seed=4)
+    first = nominal_state(board, (0.0, 0.0), 0.0, "LF")
+    moved = nominal_state(board, (0.015, 0.004), 0.0, "LF")  # the body elsewhere, same heading
+    f = reachable_footholds(board, first)[::7]
+    terrain, pose = (family_class(n).create(CONFIG, LITTLEDOG) for n in ("terrain", "pose"))
+    a = Candidates.of_state(board, first, f, CONFIG)
+    b = a.with_state(moved)
+    fresh = Candidates.of_state(board, moved, f, CONFIG)
+    assert b.patches is a.patches and b.state is moved
+    assert b.columns(terrain) is a.columns(terrain)  # one matrix for both states
+    np.testing.assert_array_equal(b.columns(terrain), fresh.columns(terrain))
+    np.testing.assert_array_equal(b.columns(pose), fresh.columns(pose))
+    assert not np.array_equal(b.columns(pose), a.columns(pose), equal_nan=True)
+    for other in (nominal_state(board, (0.0, 0.0), 0.3, "LF"),  # another heading
+                  nominal_state(board, (0.0, 0.0), 0.0, "RF")):  # a mirrored leg
+        with pytest.raises(ValueError, match="with_state"):
+            a.with_state(other)

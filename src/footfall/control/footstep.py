@@ -261,6 +261,17 @@ class FootstepPlanner:
         return reward.state_values(Candidates.of_state(self.hmap, state, footholds, reward.config,
                                                        self.robot))
 
+    def _pose_each(self, states: list[RobotState], footholds: np.ndarray) -> np.ndarray:
+        """:meth:`_pose` of the same footholds (n, 3) [m] in each of ``states`` (one heading and
+        swing leg): (len(states), n), the footholds' patches and terrain columns computed once."""
+        leg = states[0].swing_leg
+        if not self._posed[leg] or footholds.shape[0] == 0:
+            return np.zeros((len(states), footholds.shape[0]))
+        reward = self.rewards_[leg]
+        first = Candidates.of_state(self.hmap, states[0], footholds, reward.config, self.robot)
+        return np.stack([reward.state_values(first if k == 0 else first.with_state(s))
+                         for k, s in enumerate(states)])
+
     def _near(self, state: RobotState, target: np.ndarray) -> np.ndarray:
         """Candidates (m, 3) of the swing leg within lookahead_radius of target (2,) [m].
 
@@ -466,9 +477,9 @@ class FootstepPlanner:
             if self._posed[leg]:
                 top = np.argsort(-t, kind="stable")[:cfg.lookahead_candidates]
                 near, t = near[top], t[top]
-                scores = np.stack([t + self._pose(self._state(feet[r], xy, yaw, leg, state.goal,
-                                                              target, ground), near)
-                                   for r in range(n_roots)])  # beam_width rollouts
+                scores = t + self._pose_each([self._state(feet[r], xy, yaw, leg, state.goal,
+                                                          target, ground)
+                                              for r in range(n_roots)], near)  # beam_width rollouts
             else:
                 scores = np.broadcast_to(t, (n_roots, t.size))
             # A candidate out of reach at a rollout's own body height has NaN pose features.

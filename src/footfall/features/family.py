@@ -71,16 +71,30 @@ class Candidates:
 
     def columns(self, family: FeatureFamily) -> np.ndarray:
         """``family.compute(self)``, read-only; computed once per candidate set for a family with
-        a :meth:`FeatureFamily.memo_key` (every reward that reads it shares the matrix)."""
+        a :meth:`FeatureFamily.memo_key` (every reward that reads it shares the matrix), and a
+        terrain family's once for every state of :meth:`with_state`."""
         key = family.memo_key()
         if key is None:
             return family.compute(self)
-        memo = self.__dict__.setdefault("_columns", {})  # frozen: kept beside the cached patches
+        # frozen: the memos are kept beside the cached patches; a state family's is this set's own
+        memo = self.__dict__.setdefault("_state_columns" if family.needs_state else "_columns", {})
         if key not in memo:
             x = family.compute(self)
             x.setflags(write=False)
             memo[key] = x
         return memo[key]
+
+    def with_state(self, state: RobotState) -> Candidates:
+        """The same footholds seen from another state of the same heading and swing leg: its
+        patches and its terrain families' columns are this set's (one computation for the
+        rollouts of a planner), its state families' (the pose features) its own."""
+        mirror = self.robot.leg(state.swing_leg).mirrored
+        if not (np.array_equal(state.yaw, self.yaw) and np.array_equal(mirror, self.mirror)):
+            raise ValueError("with_state: another heading or a mirrored leg sees other patches")
+        other = Candidates(self.hmap, self.footholds, self.yaw, self.mirror, self.config, state,
+                           self.robot, self.patches)
+        other.__dict__["_columns"] = self.__dict__.setdefault("_columns", {})
+        return other
 
 
 @dataclass(frozen=True)
@@ -203,9 +217,16 @@ class FeatureFamily(ABC):
         return prepared
 
     def tune(self, error: Callable[[FeatureFamily], float],
-             log: Callable[[str], None] = lambda s: None) -> FeatureFamily:
+             log: Callable[[str], None] = lambda s: None, *,
+             order_only: bool = False) -> FeatureFamily:
         """The family with its hyperparameters chosen by ``error(variant)``, the cross-validation
-        error of the whole model with ``variant`` in its place (by default nothing to tune)."""
+        error of the whole model with ``variant`` in its place (by default nothing to tune).
+
+        ``order_only``: the learner reads only the order of each column's values
+        (:attr:`footfall.learning.learner.Learner.order_only`); a hyperparameter that
+        re-maps a column by a strictly monotone function is then set to a fixed value
+        instead of searched for.
+        """
         return self
 
     def select(self, nonzero: np.ndarray) -> tuple[FeatureFamily, np.ndarray]:

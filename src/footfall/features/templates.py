@@ -58,6 +58,11 @@ def check_bandwidths(values: Any, n_scales: int, what: str = "bandwidths") -> tu
 
 
 BANDWIDTH_RMS_GRID = (0.002, 0.004, 0.008, 0.016)  # [m] shared RMS differences the search tries first
+ORDER_ONLY_RMS = BANDWIDTH_RMS_GRID[-1]
+"""[m] the RMS difference every scale's bandwidth is set from for a learner that reads only each
+column's order (trees), where no bandwidth is searched: the grid's largest, at which no patch
+within 14 cm RMS of a template underflows to a similarity below 1e-35 (LightGBM's zero) and
+float32 scoring still tells similarities 10 um RMS apart."""
 
 
 @register_family
@@ -200,16 +205,25 @@ class TemplateFeatures(FeatureFamily):
         return np.concatenate([np.exp(-h * d) for h, d in zip(self.bandwidths, prepared)], axis=1)
 
     def tune(self, error: Callable[[FeatureFamily], float],
-             log: Callable[[str], None] = lambda s: None) -> TemplateFeatures:
+             log: Callable[[str], None] = lambda s: None, *,
+             order_only: bool = False) -> TemplateFeatures:
         """Bandwidths by cross-validation: one shared RMS difference first, then each scale alone.
 
         Tries :data:`BANDWIDTH_RMS_GRID` for all scales at once, then halves and
         doubles each scale's in turn, keeping a change that lowers the error.
-        A family whose bandwidths are set already is returned as it is.
+        A family whose bandwidths are set already is returned as it is. For a
+        learner that reads only each column's order (``order_only``: trees) a
+        bandwidth re-maps every column by a decreasing function, which changes
+        nothing but the differences it rounds away, so no search is made: the
+        bandwidths are set from :data:`ORDER_ONLY_RMS` on every scale.
         """
         if self.bandwidths:
             return self
         n_scales = len(self.config.scales)
+        if order_only:
+            log(f"  bandwidth rms {ORDER_ONLY_RMS * 1000:g} mm on every scale, not searched: "
+                "the learner reads only the order of each column's values")
+            return self.with_rms((ORDER_ONLY_RMS,) * n_scales)
         tried: dict[tuple, float] = {}
 
         def err(rms: tuple) -> float:

@@ -360,6 +360,7 @@ class BoostedLearner(Learner):
                         "demonstration): non-linear, keeps the columns its trees read")
     function_type: type = BoostedFunction
     ranks_columns: bool = True
+    order_only: bool = True  # a split reads a column's order: an RBF bandwidth re-maps nothing
     objective: str = "lambdarank"
 
     def fit(self, X, y, groups, *, Cs=10, cv: int = 5, selection: str = "1se",

@@ -32,13 +32,19 @@ class Learner(ABC):
     ``description`` (one line for --help and reports) and ``function_type``
     (the :class:`RankingFunction` class it makes, which reads its arrays back
     from a model file); ``ranks_columns``: whether :meth:`importance` says how
-    much a fit relies on each column (needed to keep to a template budget).
+    much a fit relies on each column (needed to keep to a template budget);
+    ``order_only``: whether a fit depends on each column only through the
+    order of its values (regression trees), so that a family's hyperparameter
+    which re-maps a column monotonically -- an RBF bandwidth -- changes nothing
+    it could learn and is not searched for it
+    (:meth:`FeatureFamily.tune <footfall.features.family.FeatureFamily.tune>`).
     """
 
     name: str
     description: str
     function_type: type[RankingFunction]
     ranks_columns: bool = False  # its importance() ranks the columns (a template budget works)
+    order_only: bool = False  # it reads each column's order only: monotone re-maps are not tuned
 
     @abstractmethod
     def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray, *, Cs: Any = 10,

@@ -104,13 +104,15 @@ def _fit(examples: list[Example], families: Sequence[FeatureFamily], learner: Le
 
 def _tune(examples: list[Example], families: tuple[FeatureFamily, ...], learner: Learner, Cs,
           cv: int, log: Callable[[str], None]) -> tuple[FeatureFamily, ...]:
-    """Each family's hyperparameters by the cross-validation error of the whole model."""
+    """Each family's hyperparameters by the cross-validation error of the whole model (those
+    that only re-map a column monotonically fixed instead, for a learner that reads only the
+    order of each column's values: :attr:`Learner.order_only`)."""
     tuned = list(families)
     for k, family in enumerate(families):
         def error(variant: FeatureFamily, k: int = k) -> float:
             trial = tuple(tuned[:k]) + (variant,) + tuple(tuned[k + 1:])
             return float(_fit(examples, trial, learner, Cs, cv).cv_error_)
-        tuned[k] = family.tune(error, log)
+        tuned[k] = family.tune(error, log, order_only=learner.order_only)
     return tuple(tuned)
 
 

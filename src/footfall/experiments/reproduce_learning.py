@@ -25,8 +25,6 @@ from footfall.core.errors import FootfallError
 from footfall.data.store import DemoStore
 from footfall.experiments.workspace import Workspace, open_workspace
 from footfall.features.family import PAPER_FEATURE_SETS
-from footfall.features.templates import ORDER_ONLY_RMS
-from footfall.learning.learner import get_learner
 from footfall.learning.model import FootholdModel
 from footfall.learning.train import TrainingDemo, learn_model
 
@@ -50,8 +48,6 @@ def _key(ws: Workspace, demos: list, feature_set: str, rms: float | None) -> tup
         settings.update(learner=config.learner, folds=config.folds)
     if config.template_budget is not None:
         settings.update(template_budget=config.template_budget)
-    if rms is None and get_learner(config.learner).order_only:  # bandwidths set, not searched
-        settings.update(order_only_rms=ORDER_ONLY_RMS)
     return _training_key(demos, feature_set, settings), seed
 
 

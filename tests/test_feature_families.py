@@ -204,6 +204,9 @@ def test_another_state_shares_the_patches_and_terrain_columns_not_the_pose_ones(
     f = reachable_footholds(board, first)[::7]
     terrain, pose = (family_class(n).create(CONFIG, LITTLEDOG) for n in ("terrain", "pose"))
     a = Candidates.of_state(board, first, f, CONFIG)
+    early = a.with_state(moved)  # before anything read the patches: none are made for it
+    assert "patches" not in a.__dict__ and "patches" not in early.__dict__
+    a.patches  # noqa: B018 - the first state's values read them
     b = a.with_state(moved)
     fresh = Candidates.of_state(board, moved, f, CONFIG)
     assert b.patches is a.patches and b.state is moved

@@ -86,13 +86,16 @@ class Candidates:
 
     def with_state(self, state: RobotState) -> Candidates:
         """The same footholds seen from another state of the same heading and swing leg: its
-        patches and its terrain families' columns are this set's (one computation for the
-        rollouts of a planner), its state families' (the pose features) its own."""
+        patches (if this set has computed them: a scorer that reads none, the expert, makes
+        none) and its terrain families' columns are this set's -- one computation for the
+        rollouts of a planner --, its state families' (the pose features) its own."""
         mirror = self.robot.leg(state.swing_leg).mirrored
         if not (np.array_equal(state.yaw, self.yaw) and np.array_equal(mirror, self.mirror)):
             raise ValueError("with_state: another heading or a mirrored leg sees other patches")
+        patches = self.given_patches if self.given_patches is not None else \
+            self.__dict__.get("patches")  # the cached property's value, once computed
         other = Candidates(self.hmap, self.footholds, self.yaw, self.mirror, self.config, state,
-                           self.robot, self.patches)
+                           self.robot, patches)
         other.__dict__["_columns"] = self.__dict__.setdefault("_columns", {})
         return other
 

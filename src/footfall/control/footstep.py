@@ -255,11 +255,7 @@ class FootstepPlanner:
 
     def _pose(self, state: RobotState, footholds: np.ndarray) -> np.ndarray:
         """State part of the swing leg's reward (n,) for the state (0 if it has no pose weights)."""
-        if not self._posed[state.swing_leg] or footholds.shape[0] == 0:
-            return np.zeros(footholds.shape[0])
-        reward = self.rewards_[state.swing_leg]
-        return reward.state_values(Candidates.of_state(self.hmap, state, footholds, reward.config,
-                                                       self.robot))
+        return self._pose_each([state], footholds)[0]
 
     def _pose_each(self, states: list[RobotState], footholds: np.ndarray) -> np.ndarray:
         """:meth:`_pose` of the same footholds (n, 3) [m] in each of ``states`` (one heading and

@@ -3,12 +3,14 @@ refused at load with one line naming the array (never handed to a parser that ca
 
 import gc
 import weakref
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from footfall.core.compute import available_memory, jobs_that_fit
 from footfall.core.errors import FootfallError
+from footfall.features.family import Candidates
 from footfall.features.templates import BANDWIDTH_RMS_GRID, ORDER_ONLY_RMS
 from footfall.learning.boosted import BoostedRanker, Forest
 from footfall.learning.model import FootholdModel
@@ -34,7 +36,7 @@ def test_the_forest_gives_lightgbm_s_own_predictions(objective):
     ranker = BoostedRanker(objective, trees=(5, 20, 40), cv=3).fit(X, y, groups)
     booster = ranker._train(ranker._dataset(X, y, np.bincount(groups)), ranker.n_trees_)
     rng = np.random.default_rng(1)
-    fresh = rng.normal(size=(5000, X.shape[1]))  # more than one block of candidates
+    fresh = rng.normal(size=(5000, X.shape[1]))
     np.testing.assert_array_equal(ranker.forest_.predict(fresh), booster.predict(fresh))
     assert ranker.forest_.roots.size == ranker.n_trees_
     assert ranker.n_trees_ in (5, 20, 40) and len(ranker.path_) == 3
@@ -87,6 +89,39 @@ def test_the_folds_trained_in_threads_give_the_same_path_and_trees():
         np.testing.assert_array_equal(array, together.forest_.arrays()[name])
     with pytest.raises(FootfallError, match="fold_jobs must be at least 1"):
         BoostedRanker(fold_jobs=0).fit(X, y, groups)
+
+
+def test_a_row_s_value_is_its_own():
+    """The compiled walk values each row alone: any split of the rows gives the same bits (a
+    planner values the rollouts' states in one call)."""
+    X, y, groups = _toy(seed=3)
+    forest = BoostedRanker("lambdarank", trees=(25,), cv=3).fit(X, y, groups).forest_
+    rows = np.random.default_rng(2).normal(size=(300, X.shape[1]))
+    whole = forest.predict(rows)
+    pieces = np.concatenate([forest.predict(rows[a:b]) for a, b in ((0, 1), (1, 8), (8, 300))])
+    np.testing.assert_array_equal(pieces, whole)
+    np.testing.assert_array_equal(forest.predict(rows[::-1]), whole[::-1])
+    assert forest.predict(rows[:0]).shape == (0,)
+
+
+def test_the_rollouts_states_valued_at_once_are_valued_as_one_at_a_time(saved):
+    """A boosted function with pose features values the same footholds from several states in
+    one call (:meth:`state_values_each`) with the numbers of one call per state."""
+    model = FootholdModel.load(saved)
+    scorer = model.reward_for("LF")
+    demo = lowest_foothold_demos()[0]
+    first = Candidates.of_state(demo.hmap, demo.state, demo.candidates, scorer.config)
+    states = [replace(demo.state, body_position=demo.state.body_position + (dx, 0.0, dz))
+              for dx, dz in ((0.0, 0.0), (0.012, 0.004), (-0.01, -0.006))]
+    sets = [first] + [first.with_state(s) for s in states[1:]]
+    together = scorer.state_values_each(sets)
+    alone = np.stack([scorer.state_values(Candidates.of_state(demo.hmap, s, demo.candidates,
+                                                              scorer.config)) for s in states])
+    np.testing.assert_array_equal(together, alone)
+    assert together.shape == (3, demo.candidates.shape[0]) and np.ptp(together, axis=0).any()
+    with pytest.raises(FootfallError, match="same size"):
+        scorer.state_values_each([first, Candidates.of_state(demo.hmap, demo.state,
+                                                             demo.candidates[:5], scorer.config)])
 
 
 def _stump() -> dict:

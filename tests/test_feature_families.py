@@ -204,12 +204,13 @@ def test_another_state_shares_the_patches_and_terrain_columns_not_the_pose_ones(
     f = reachable_footholds(board, first)[::7]
     terrain, pose = (family_class(n).create(CONFIG, LITTLEDOG) for n in ("terrain", "pose"))
     a = Candidates.of_state(board, first, f, CONFIG)
-    early = a.with_state(moved)  # before anything read the patches: none are made for it
+    early = a.with_state(moved)  # before anything read the patches: none are made yet
     assert "patches" not in a.__dict__ and "patches" not in early.__dict__
-    a.patches  # noqa: B018 - the first state's values read them
+    assert early.patches is a.patches  # made once, when the later set first reads them
     b = a.with_state(moved)
+    again = b.with_state(first)  # a set made from a made one shares the first's too
     fresh = Candidates.of_state(board, moved, f, CONFIG)
-    assert b.patches is a.patches and b.state is moved
+    assert b.patches is a.patches and again.patches is a.patches and b.state is moved
     assert b.columns(terrain) is a.columns(terrain)  # one matrix for both states
     np.testing.assert_array_equal(b.columns(terrain), fresh.columns(terrain))
     np.testing.assert_array_equal(b.columns(pose), fresh.columns(pose))

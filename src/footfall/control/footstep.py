@@ -265,8 +265,7 @@ class FootstepPlanner:
             return np.zeros((len(states), footholds.shape[0]))
         reward = self.rewards_[leg]
         first = Candidates.of_state(self.hmap, states[0], footholds, reward.config, self.robot)
-        return np.stack([reward.state_values(first if k == 0 else first.with_state(s))
-                         for k, s in enumerate(states)])
+        return reward.state_values_each([first] + [first.with_state(s) for s in states[1:]])
 
     def _near(self, state: RobotState, target: np.ndarray) -> np.ndarray:
         """Candidates (m, 3) of the swing leg within lookahead_radius of target (2,) [m].

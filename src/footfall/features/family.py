@@ -67,6 +67,9 @@ class Candidates:
         """Relative patches of every scale around the footholds (computed once)."""
         if self.given_patches is not None:
             return self.given_patches
+        source = self.__dict__.get("_patch_source")  # a set this one was made from (with_state)
+        if source is not None:
+            return source.patches
         return foothold_patches(self.hmap, self.footholds, self.yaw, self.mirror, self.config)
 
     def columns(self, family: FeatureFamily) -> np.ndarray:
@@ -86,16 +89,15 @@ class Candidates:
 
     def with_state(self, state: RobotState) -> Candidates:
         """The same footholds seen from another state of the same heading and swing leg: its
-        patches (if this set has computed them: a scorer that reads none, the expert, makes
-        none) and its terrain families' columns are this set's -- one computation for the
-        rollouts of a planner --, its state families' (the pose features) its own."""
+        patches and its terrain families' columns are this set's -- one computation for the
+        rollouts of a planner, made when either set first reads them (a scorer that reads
+        none, the expert, makes none) --, its state families' (the pose features) its own."""
         mirror = self.robot.leg(state.swing_leg).mirrored
         if not (np.array_equal(state.yaw, self.yaw) and np.array_equal(mirror, self.mirror)):
             raise ValueError("with_state: another heading or a mirrored leg sees other patches")
-        patches = self.given_patches if self.given_patches is not None else \
-            self.__dict__.get("patches")  # the cached property's value, once computed
         other = Candidates(self.hmap, self.footholds, self.yaw, self.mirror, self.config, state,
-                           self.robot, patches)
+                           self.robot, self.given_patches)
+        other.__dict__["_patch_source"] = self.__dict__.get("_patch_source", self)
         other.__dict__["_columns"] = self.__dict__.setdefault("_columns", {})
         return other
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import hashlib
 from abc import ABC, abstractmethod
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -74,6 +74,12 @@ class FootholdScorer(ABC):
     def state_values(self, c: Candidates) -> np.ndarray:
         """The state part (n,) of the candidates' values, for ``c.state``; 0 without one."""
         return np.zeros(c.n)
+
+    def state_values_each(self, sets: Sequence[Candidates]) -> np.ndarray:
+        """:meth:`state_values` of each of ``sets`` -- the same footholds seen from several
+        states, e.g. a planner's rollouts (:meth:`Candidates.with_state`) --, (len(sets), n).
+        A scorer that values them faster in one pass overrides it, with the same numbers."""
+        return np.stack([self.state_values(c) for c in sets])
 
     def values(self, c: Candidates) -> np.ndarray:
         """The candidates' values (n,): terrain part plus state part; -inf: not a foothold."""

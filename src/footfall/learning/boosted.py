@@ -23,6 +23,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
+import numba
 import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
@@ -46,7 +47,6 @@ TREE_PATH = (10, 25, 50, 100, 200, 400)  # numbers of trees cross-validated, sim
 MAX_TREES = 100_000  # most trees a model file may hold
 MAX_NODES = 10_000_000  # most tree nodes a model file may hold
 FOREST_ARRAYS = ("feature", "threshold", "left", "right", "value", "roots")  # a forest's arrays
-BLOCK = 4096  # candidates evaluated at a time (bounds the (trees, candidates) index arrays)
 
 
 # ------------------------------------------------------------------ the forest as arrays
@@ -71,19 +71,16 @@ class Forest:
     depth: int  # longest root-to-leaf path [splits]
 
     def predict(self, X: np.ndarray) -> np.ndarray:
-        """The sum over trees of each candidate's leaf value, (n, d) -> (n,)."""
-        X = np.asarray(X, dtype=np.float64)
-        out = np.empty(X.shape[0])
-        column = np.maximum(self.feature, 0)  # a leaf reads column 0 and stays where it is
-        for start in range(0, X.shape[0], BLOCK):  # blocks of candidates, all trees at once
-            XT = X[start:start + BLOCK].T
-            cols = np.arange(XT.shape[1])
-            node = np.repeat(self.roots[:, None], XT.shape[1], axis=1)
-            for _ in range(self.depth):
-                x = XT[column[node], cols]
-                node = np.where(x <= self.threshold[node], self.left[node], self.right[node])
-            out[start:start + BLOCK] = self.value[node].sum(axis=0)
-        return out
+        """The sum over trees of each candidate's leaf value, (n, d) -> (n,): the trees in
+        order, each candidate walked down each tree (compiled; the trees' sum as a sequential
+        NumPy sum over them would add it)."""
+        X = np.ascontiguousarray(X, dtype=np.float64)
+        if X.ndim != 2:
+            raise FootfallError(f"a forest predicts from a (n, d) matrix, got shape {X.shape}")
+        if self.roots.size == 0:
+            return np.zeros(X.shape[0])
+        return _leaf_sums(X, self.feature, self.threshold, self.left, self.right, self.value,
+                          self.roots, self.depth)
 
     def used_columns(self, d: int) -> np.ndarray:
         """(d,) bool: the columns some split reads."""
@@ -135,6 +132,28 @@ class Forest:
         depth = _depth(ints["left"], ints["right"], leaf)
         return cls(ints["feature"], got["threshold"], ints["left"], ints["right"],
                    np.where(leaf, got["value"], 0.0), ints["roots"], depth)
+
+
+@numba.njit(cache=True, nogil=True)
+def _leaf_sums(X, feature, threshold, left, right, value, roots, depth):  # pragma: no cover
+    """Each row of X (n, d)'s leaf values summed over the trees ``roots`` (T,) in their order,
+    (n,): at node k a row goes left if ``X[row, feature[k]] <= threshold[k]``, else right
+    (NaN: right), for at most ``depth`` splits; a leaf (feature -1) ends the walk. A tree at a
+    time, all rows down it: independent walks the processor overlaps."""
+    out = np.empty(X.shape[0])
+    for t in range(roots.shape[0]):
+        for i in range(X.shape[0]):
+            node = roots[t]
+            for _ in range(depth):
+                f = feature[node]
+                if f < 0:
+                    break
+                node = left[node] if X[i, f] <= threshold[node] else right[node]
+            if t == 0:
+                out[i] = value[node]
+            else:
+                out[i] += value[node]
+    return out
 
 
 def _depth(left: np.ndarray, right: np.ndarray, leaf: np.ndarray) -> int:

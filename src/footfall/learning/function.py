@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import hashlib
 from abc import ABC, abstractmethod
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
@@ -206,12 +207,24 @@ class ColumnScorer(FootholdScorer):
 
     def _predicted(self, c: Candidates) -> np.ndarray:
         """The function's value of every valid candidate, -inf for the others, (n,)."""
-        out = np.full(c.n, -np.inf)
-        valid = np.flatnonzero(c.patches.valid)
-        if valid.size:
-            X = np.hstack([c.columns(f) for f in self.function.families])[valid]
+        return self._predicted_each([c])[0]
+
+    def _predicted_each(self, sets: Sequence[Candidates]) -> np.ndarray:
+        """:meth:`_predicted` of each candidate set (of one size n), (len(sets), n): the valid
+        rows of them all valued in one call of the function (each row's value is its own)."""
+        n = sets[0].n if sets else 0
+        if any(c.n != n for c in sets):
+            raise FootfallError("candidate sets valued together must have the same size")
+        out = np.full((len(sets), n), -np.inf)
+        rows = [(k, np.flatnonzero(c.patches.valid)) for k, c in enumerate(sets)]
+        blocks = [np.hstack([c.columns(f) for f in self.function.families])[valid]
+                  for c, (_, valid) in zip(sets, rows) if valid.size]
+        if blocks:
+            X = np.vstack(blocks)
+            which = np.concatenate([np.full(valid.size, k) for k, valid in rows])
+            where = np.concatenate([valid for _, valid in rows])
             finite = np.isfinite(X).all(axis=1)
-            out[valid[finite]] = self.function.predict(X[finite])
+            out[which[finite], where[finite]] = self.function.predict(X[finite])
         return out
 
     def terrain_values(self, c: Candidates) -> np.ndarray:
@@ -222,9 +235,13 @@ class ColumnScorer(FootholdScorer):
 
     def state_values(self, c: Candidates) -> np.ndarray:
         """The whole value when a family reads the state (0 where the terrain part is -inf)."""
+        return self.state_values_each([c])[0]
+
+    def state_values_each(self, sets: Sequence[Candidates]) -> np.ndarray:
+        """:meth:`state_values` of each set, their rows valued in one call of the function."""
         if not self.has_state_part:
-            return np.zeros(c.n)
-        v = self._predicted(c)
+            return np.zeros((len(sets), sets[0].n if sets else 0))
+        v = self._predicted_each(sets)
         return np.where(np.isfinite(v), v, 0.0)
 
     @cached_property

@@ -1,5 +1,7 @@
 """The expert-guarded reward: the reward's choice, vetoed where the expert finds it severe."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -7,6 +9,8 @@ from footfall.core.errors import FootfallError
 from footfall.core.state import nominal_state
 from footfall.expert.corrections import SEVERE_SHORTFALL
 from footfall.expert.guarded import VETO_PENALTY, GuardedScorer, vetoed
+from footfall.expert.protocol import values_each
+from footfall.expert.scorer import ExpertScorer
 from footfall.expert.synthetic import SyntheticExpert
 from footfall.features.candidates import reachable_footholds
 from footfall.features.config import FeatureConfig
@@ -58,6 +62,28 @@ def test_the_reward_chooses_among_the_footholds_the_expert_does_not_veto():
     # a threshold nothing reaches leaves the reward as it was
     loose = GuardedScorer(reward, Sideways(), threshold=1e6)
     np.testing.assert_array_equal(loose.values(c), base)
+
+
+@pytest.mark.parametrize("expert", [SyntheticExpert(), Sideways()],
+                         ids=["synthetic (values_each)", "scripted (values per state)"])
+def test_the_rollouts_states_are_valued_at_once_as_one_at_a_time(expert):
+    """A planner's rollouts value the same footholds from several states in one call: the
+    expert's terrain analysis made once (the synthetic one's ``values_each``), a plain expert's
+    values state by state -- either way the numbers of one call per state, veto included."""
+    first = _candidates("RH")
+    states = [first.state] + [replace(first.state,
+                                      body_position=first.state.body_position + (dx, dy, 0.0))
+                              for dx, dy in ((0.01, 0.0), (-0.008, 0.006))]
+    sets = [first] + [first.with_state(s) for s in states[1:]]
+    alone = [Candidates.of_state(BOARD, s, first.footholds, FeatureConfig()) for s in states]
+    for scorer in (ExpertScorer(expert), GuardedScorer(default_reward(), expert, threshold=5.0)):
+        together = scorer.state_values_each(sets)
+        np.testing.assert_array_equal(together, np.stack([scorer.state_values(c) for c in alone]))
+        assert together.shape == (3, first.n)
+    assert np.ptp(ExpertScorer(expert).state_values_each(sets), axis=0).any()  # states differ
+    np.testing.assert_array_equal(values_each(expert, BOARD, states, first.footholds),
+                                  np.stack([expert.values(BOARD, s, first.footholds)
+                                            for s in states]))
 
 
 def test_the_guarded_reward_keeps_the_rewards_terrain_grids_and_path_bias():

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -28,7 +29,7 @@ from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState, stance_target
 from footfall.expert.corrections import SEVERE_SHORTFALL
-from footfall.expert.protocol import Expert, expert_settings
+from footfall.expert.protocol import Expert, expert_settings, values_each
 from footfall.features.config import FeatureConfig
 from footfall.features.dense import ScoreGrid
 from footfall.features.family import Candidates
@@ -103,6 +104,23 @@ class GuardedScorer(FootholdScorer):
         if expert.shape != (c.n,):
             raise FootfallError(f"the expert returned shape {expert.shape} for {c.n} footholds")
         short = vetoed(expert, self.threshold)
+        return base - np.where(short > 0, self.penalty + short, 0.0)
+
+    def state_values_each(self, sets: Sequence[Candidates]) -> np.ndarray:
+        """:meth:`state_values` of the same footholds in each set's state, the reward's and
+        the expert's values of them all at once (:func:`values_each`)."""
+        if any(c.state is None for c in sets):
+            raise FootfallError("the expert's veto needs a robot state; none was given")
+        if not sets:
+            return np.zeros((0, 0))
+        n = sets[0].n
+        base = self.reward.state_values_each(sets) if self.reward.has_state_part else \
+            np.zeros((len(sets), n))
+        if n == 0:
+            return base
+        expert = values_each(self.expert, sets[0].hmap, [c.state for c in sets],
+                             sets[0].footholds)
+        short = np.stack([vetoed(row, self.threshold) for row in expert])
         return base - np.where(short > 0, self.penalty + short, 0.0)
 
     def dense(self, hmap: HeightMap, *, spacing: float = 0.005, yaw: float = 0.0,

@@ -7,10 +7,12 @@ foothold; the kinematic walker and the corrections of run logs need nothing more
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any, Protocol
 
 import numpy as np
 
+from footfall.core.errors import FootfallError
 from footfall.core.files import plain_json
 from footfall.core.heightmap import HeightMap
 from footfall.core.state import RobotState
@@ -25,6 +27,23 @@ class Expert(Protocol):
 
     def values(self, hmap: HeightMap, state: RobotState, candidates: np.ndarray) -> np.ndarray:
         """Noiseless value of each candidate, shape (n,), higher is better."""
+
+
+def values_each(expert: Any, hmap: HeightMap, states: Sequence[RobotState],
+                candidates: np.ndarray) -> np.ndarray:
+    """An expert's values of the same candidates (n, 3) [m] in each of ``states`` (one heading
+    and swing leg: a planner's rollouts), (len(states), n): its own ``values_each`` if it has
+    one (the same numbers, its terrain analysis made once), else ``values`` per state."""
+    own = getattr(expert, "values_each", None)
+    if callable(own):
+        out = np.asarray(own(hmap, states, candidates), dtype=np.float64)
+    else:
+        out = np.stack([np.asarray(expert.values(hmap, s, candidates), dtype=np.float64)
+                        for s in states]) if states else np.zeros((0, len(candidates)))
+    if out.shape != (len(states), len(candidates)):
+        raise FootfallError(f"the expert returned shape {out.shape} for {len(states)} states "
+                            f"of {len(candidates)} footholds")
+    return out
 
 
 def expert_settings(expert: Any) -> dict:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -22,7 +23,7 @@ import numpy as np
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
-from footfall.expert.protocol import Expert, expert_settings
+from footfall.expert.protocol import Expert, expert_settings, values_each
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
 from footfall.features.config import FeatureConfig
 from footfall.features.dense import ScoreGrid
@@ -68,6 +69,15 @@ class ExpertScorer(FootholdScorer):
         if value.shape != (c.n,):
             raise FootfallError(f"the expert returned shape {value.shape} for {c.n} footholds")
         return value
+
+    def state_values_each(self, sets: Sequence[Candidates]) -> np.ndarray:
+        """The expert's values of the same footholds in each set's state (:func:`values_each`:
+        its terrain analysis made once for them all)."""
+        if any(c.state is None for c in sets):
+            raise FootfallError("the expert values footholds for a robot state; none was given")
+        if not sets:
+            return np.zeros((0, 0))
+        return values_each(self.expert, sets[0].hmap, [c.state for c in sets], sets[0].footholds)
 
     def dense(self, hmap: HeightMap, *, spacing: float = 0.005, yaw: float = 0.0,
               mirror: bool = False, dtype: type = np.float32, fast: bool = True) -> ScoreGrid:

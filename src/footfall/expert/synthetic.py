@@ -32,6 +32,7 @@ from __future__ import annotations
 import math
 import weakref
 from collections import OrderedDict
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -209,6 +210,11 @@ MEMO_HEADINGS = 4  # [-] headings per map whose footholds' terrain terms an expe
 # (and at most MEMO_ROWS footholds in all: beyond, only the memo in use is kept)
 
 
+def _summed(parts: dict[str, np.ndarray]) -> np.ndarray:
+    """The value (n,): the terms' shares summed in their order."""
+    return np.sum(np.stack(list(parts.values())), axis=0)
+
+
 class SyntheticExpert:
     """A hand-made foothold judge whose choices serve as expert demonstrations.
 
@@ -281,10 +287,16 @@ class SyntheticExpert:
             order.
         """
         f = self._check(candidates)
-        cfg, robot = self.config, self.robot
         if f.shape[0] == 0:
             return {name: np.zeros(0) for name in EXPERT_TERM_NAMES}
         terrain, seat = self._terrain(hmap, f, state.yaw)
+        return self._with_state(hmap, state, f, terrain, seat)
+
+    def _with_state(self, hmap: HeightMap, state: RobotState, f: np.ndarray,
+                    terrain: dict[str, np.ndarray], seat: np.ndarray) -> dict[str, np.ndarray]:
+        """The terms of candidates ``f`` (n, 3) [m] in ``state``, their terrain terms and the
+        ball's seat heights (n,) [m] given."""
+        cfg, robot = self.config, self.robot
         out = {**terrain, **leg_terms(hmap, state, f, seat, cfg, robot),
                **pose_terms(state, f, cfg, robot)}
         return {name: out[name] for name in EXPERT_TERM_NAMES}
@@ -316,8 +328,19 @@ class SyntheticExpert:
 
     def values(self, hmap: HeightMap, state: RobotState, candidates: np.ndarray) -> np.ndarray:
         """Noiseless value of each candidate, shape (n,), higher is better, always finite."""
-        parts = self.contributions(hmap, state, candidates)
-        return np.sum(np.stack(list(parts.values())), axis=0)
+        return _summed(self.contributions(hmap, state, candidates))
+
+    def values_each(self, hmap: HeightMap, states: Sequence[RobotState], candidates: np.ndarray
+                    ) -> np.ndarray:
+        """:meth:`values` of the same candidates in each of ``states`` (one heading: a
+        planner's rollouts), (len(states), n): the terrain terms looked up once."""
+        f = self._check(candidates)
+        if not states or f.shape[0] == 0 or any(s.yaw != states[0].yaw for s in states):
+            return np.stack([self.values(hmap, s, f) for s in states]) if states else \
+                np.zeros((0, f.shape[0]))
+        terrain, seat = self._terrain(hmap, f, states[0].yaw)
+        return np.stack([_summed(self.utilities(self._with_state(hmap, s, f, terrain, seat)))
+                         for s in states])
 
     def choose(self, hmap: HeightMap, state: RobotState, candidates: np.ndarray,
                rng: np.random.Generator) -> int:

@@ -79,6 +79,8 @@ class FootholdScorer(ABC):
         """:meth:`state_values` of each of ``sets`` -- the same footholds seen from several
         states, e.g. a planner's rollouts (:meth:`Candidates.with_state`) --, (len(sets), n).
         A scorer that values them faster in one pass overrides it, with the same numbers."""
+        if not sets:
+            return np.zeros((0, 0))
         return np.stack([self.state_values(c) for c in sets])
 
     def values(self, c: Candidates) -> np.ndarray:

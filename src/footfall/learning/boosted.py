@@ -71,9 +71,9 @@ class Forest:
     depth: int  # longest root-to-leaf path [splits]
 
     def predict(self, X: np.ndarray) -> np.ndarray:
-        """The sum over trees of each candidate's leaf value, (n, d) -> (n,): the trees in
-        order, each candidate walked down each tree (compiled; the trees' sum as a sequential
-        NumPy sum over them would add it)."""
+        """The sum over trees of each candidate's leaf value, (n, d) -> (n,): each candidate
+        walked down each tree, its leaf values added tree by tree in the trees' order
+        (compiled: :func:`_leaf_sums`); a candidate's value does not depend on the others."""
         X = np.ascontiguousarray(X, dtype=np.float64)
         if X.ndim != 2:
             raise FootfallError(f"a forest predicts from a (n, d) matrix, got shape {X.shape}")

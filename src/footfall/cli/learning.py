@@ -16,6 +16,7 @@ from footfall.core.files import writable_path
 from footfall.core.limits import check_count
 from footfall.experiments.rank_eval import rank_eval_many
 from footfall.expert.settings_file import load_expert
+from footfall.features.templates import ORDER_ONLY_RMS
 from footfall.learning.train import FOLDS, learn_from_store
 from footfall.learning.trials import DEFAULT_PAIRS
 
@@ -61,7 +62,8 @@ def model_output(path: str) -> Path:
               metavar="S M L",
               help="Fix the RBF bandwidths as RMS height differences [m] per scale, each from "
                    f"{RMS_RANGE[0]:g} to {RMS_RANGE[1]:g} (default: chosen by cross-validation; "
-                   "for lambdarank, whose trees read only each column's order, 16 mm).")
+                   f"for lambdarank, whose trees read only each column's order, "
+                   f"{ORDER_ONLY_RMS * 1e3:g} mm).")
 @click.option("--cv", type=click.IntRange(2, 50), default=5, show_default=True,
               help="Cross-validation folds.")
 @click.option("--folds", type=click.Choice(FOLDS), default="demonstration", show_default=True,

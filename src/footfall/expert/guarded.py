@@ -95,26 +95,15 @@ class GuardedScorer(FootholdScorer):
     def state_values(self, c: Candidates) -> np.ndarray:
         """The reward's state part (n,) less the veto of the candidates the expert judges
         severely short of its best of ``c`` (needs ``c.state``)."""
-        if c.state is None:
-            raise FootfallError("the expert's veto needs a robot state; none was given")
-        base = self.reward.state_values(c) if self.reward.has_state_part else np.zeros(c.n)
-        if c.n == 0:
-            return base
-        expert = np.asarray(self.expert.values(c.hmap, c.state, c.footholds), dtype=np.float64)
-        if expert.shape != (c.n,):
-            raise FootfallError(f"the expert returned shape {expert.shape} for {c.n} footholds")
-        short = vetoed(expert, self.threshold)
-        return base - np.where(short > 0, self.penalty + short, 0.0)
+        return self.state_values_each([c])[0]
 
     def state_values_each(self, sets: Sequence[Candidates]) -> np.ndarray:
         """:meth:`state_values` of the same footholds in each set's state, the reward's and
         the expert's values of them all at once (:func:`values_each`)."""
         if any(c.state is None for c in sets):
             raise FootfallError("the expert's veto needs a robot state; none was given")
-        if not sets:
-            return np.zeros((0, 0))
-        n = sets[0].n
-        base = self.reward.state_values_each(sets) if self.reward.has_state_part else \
+        n = sets[0].n if sets else 0
+        base = self.reward.state_values_each(sets) if self.reward.has_state_part and sets else \
             np.zeros((len(sets), n))
         if n == 0:
             return base

@@ -61,22 +61,15 @@ class ExpertScorer(FootholdScorer):
 
     def state_values(self, c: Candidates) -> np.ndarray:
         """The expert's value (n,) of each candidate for ``c.state``."""
-        if c.state is None:
-            raise FootfallError("the expert values footholds for a robot state; none was given")
-        if c.n == 0:
-            return np.zeros(0)
-        value = np.asarray(self.expert.values(c.hmap, c.state, c.footholds), dtype=np.float64)
-        if value.shape != (c.n,):
-            raise FootfallError(f"the expert returned shape {value.shape} for {c.n} footholds")
-        return value
+        return self.state_values_each([c])[0]
 
     def state_values_each(self, sets: Sequence[Candidates]) -> np.ndarray:
         """The expert's values of the same footholds in each set's state (:func:`values_each`:
-        its terrain analysis made once for them all)."""
+        its terrain analysis made once for them all), (len(sets), n)."""
         if any(c.state is None for c in sets):
             raise FootfallError("the expert values footholds for a robot state; none was given")
-        if not sets:
-            return np.zeros((0, 0))
+        if not sets or sets[0].n == 0:
+            return np.zeros((len(sets), 0))
         return values_each(self.expert, sets[0].hmap, [c.state for c in sets], sets[0].footholds)
 
     def dense(self, hmap: HeightMap, *, spacing: float = 0.005, yaw: float = 0.0,

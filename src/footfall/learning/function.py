@@ -216,13 +216,13 @@ class ColumnScorer(FootholdScorer):
         if any(c.n != n for c in sets):
             raise FootfallError("candidate sets valued together must have the same size")
         out = np.full((len(sets), n), -np.inf)
-        rows = [(k, np.flatnonzero(c.patches.valid)) for k, c in enumerate(sets)]
-        blocks = [np.hstack([c.columns(f) for f in self.function.families])[valid]
-                  for c, (_, valid) in zip(sets, rows) if valid.size]
+        valid = [np.flatnonzero(c.patches.valid) for c in sets]
+        blocks = [np.hstack([c.columns(f) for f in self.function.families])[v]
+                  for c, v in zip(sets, valid) if v.size]
         if blocks:
             X = np.vstack(blocks)
-            which = np.concatenate([np.full(valid.size, k) for k, valid in rows])
-            where = np.concatenate([valid for _, valid in rows])
+            which = np.repeat(np.arange(len(sets)), [v.size for v in valid])
+            where = np.concatenate(valid)
             finite = np.isfinite(X).all(axis=1)
             out[which[finite], where[finite]] = self.function.predict(X[finite])
         return out

@@ -24,6 +24,7 @@ from footfall.terrain import (
 )
 
 ALL_KINDS = sorted(KINDS)
+ADDED_KINDS = ("ridges", "pitted")  # footfall.terrain.added
 OBSTACLE_KINDS = [k for k in ALL_KINDS if k != "flat"]
 MAX_HEIGHT = 0.12  # [m] nothing a LittleDog (~18 cm legs) could not cross
 EDGE_TOLERANCE = 1e-9  # [m] module ends "at" the ground plane
@@ -36,12 +37,14 @@ def module(kind: str, difficulty: float, seed: int) -> HeightMap:
 
 
 # ------------------------------------------------------------------ registry
-def test_registry_holds_the_paper_kinds_and_the_held_out_ones():
-    from footfall.terrain.kinds import HELD_OUT_KINDS, PAPER_KINDS
+def test_registry_holds_the_paper_kinds_the_added_training_ones_and_the_held_out_ones():
+    from footfall.terrain.kinds import ADDED_KINDS, HELD_OUT_KINDS, PAPER_KINDS, TRAINING_KINDS
 
     assert PAPER_KINDS == ("flat", "steps", "barrier", "slope", "logs", "rocky")
+    assert ADDED_KINDS == ("ridges", "pitted")
+    assert TRAINING_KINDS == ("steps", "barrier", "slope", "logs", "rocky", "ridges", "pitted")
     assert HELD_OUT_KINDS == ("stones", "washboard", "scree", "logbarrier", "rolling", "scan")
-    assert set(KINDS) == set(PAPER_KINDS + HELD_OUT_KINDS)
+    assert set(KINDS) == set(PAPER_KINDS + ADDED_KINDS + HELD_OUT_KINDS)
     assert all(callable(g) for _, g in KINDS.items())
 
 
@@ -117,7 +120,9 @@ def test_max_obstacle_height_grows_with_difficulty(kind, seed):
     tops = [np.nanmax(module(kind, d, seed).heights) for d in (0.2, 0.6, 1.0)]
     assert tops[0] < tops[1] < tops[2]
     assert tops[0] < 0.05  # easy modules have small obstacles ...
-    assert tops[2] > 0.06  # ... hard ones real obstacles of several cm
+    # ... hard ones real obstacles of several cm (the added training kinds' character is their
+    # shape -- flanks, pits -- and their documented top is 5 cm at d = 1)
+    assert tops[2] > (0.035 if kind in ADDED_KINDS else 0.06)
 
 
 def test_steps_climb_to_a_platform_and_back_down():

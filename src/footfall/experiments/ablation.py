@@ -17,8 +17,9 @@ choosing every foothold and with the hand-tuned reward, over
   seeds 0-15: on the test and calibration boards the defaults fail about one run in
   fifteen, too few for 69 paired runs to tell a part's worth from the luck
   of the seeds; on these about two in five, so their 64 paired runs can, and
-* the training suite: four boards ``KIND:0.7 KIND:0.7`` of each of the paper's
-  kinds but flat (steps, barrier, slope, logs, rocky), board seeds
+* the training suite: four boards ``KIND:0.7 KIND:0.7`` of each training kind
+  (:data:`footfall.terrain.kinds.TRAINING_KINDS`: the paper's but flat -- steps,
+  barrier, slope, logs, rocky -- and ridges and pitted), board seeds
   1100-1103, with run seeds 0-7 -- the terrain every parameter may be chosen
   on, not only the two kinds of the other boards,
 
@@ -77,13 +78,12 @@ from footfall.experiments.variants import (  # noqa: F401 (re-exported: the abla
 )
 from footfall.expert.synthetic import walking_expert
 from footfall.sim.episode import WalkConfig
-from footfall.terrain.kinds import KINDS, PAPER_KINDS
+from footfall.terrain.kinds import KINDS, TRAINING_KINDS
 
 STORE_NAME = "ablation.sqlite"
 SEEDS_ROUND = 1000  # each round of run seeds moves every board's first run seed by this
 WHO = ("expert", "hand")  # who chooses the footholds: the walking expert, the hand-tuned reward
 Spec = tuple[tuple[str, float], ...]  # a board: (kind, difficulty) of each module
-TRAINING_KINDS = tuple(k for k in PAPER_KINDS if k != "flat")  # the training suite's kinds
 GROUPS = ("", "hard_", "suite_")  # run groups paired apart: test and calibration, hard, suite
 WORSE = 0.05  # [-] a group is worse when it loses more than it wins at this exact McNemar p
 

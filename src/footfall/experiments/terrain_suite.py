@@ -8,7 +8,8 @@ paired comparison of the two choosers (exact McNemar: the same boards and run
 seeds).
 
 **The rule.** footfall's parameters -- controller, rewards, expert -- are
-chosen on the *training* kinds only (:data:`footfall.terrain.kinds.PAPER_KINDS`,
+chosen on the *training* kinds only (:data:`footfall.terrain.kinds.TRAINING_KINDS`:
+the paper's but flat, and :mod:`footfall.terrain.added`;
 the ``training`` suite). The ``held-out`` suite
 (:data:`footfall.terrain.kinds.HELD_OUT_KINDS`, :mod:`footfall.terrain.heldout`)
 is measured after a change and never tuned on: no parameter is chosen by
@@ -52,9 +53,9 @@ from footfall.experiments.runs import RunJob, Runner, board_files, claim_folder
 from footfall.experiments.variants import VARIANTS
 from footfall.expert.synthetic import walking_expert
 from footfall.sim.episode import WalkConfig
-from footfall.terrain.kinds import HELD_OUT_KINDS, PAPER_KINDS
+from footfall.terrain.kinds import HELD_OUT_KINDS, TRAINING_KINDS
 
-SUITES = {"held-out": HELD_OUT_KINDS, "training": tuple(k for k in PAPER_KINDS if k != "flat")}
+SUITES = {"held-out": HELD_OUT_KINDS, "training": TRAINING_KINDS}
 """The suites by name: their kinds, in order (a kind's place fixes its board seeds)."""
 WHO = ("expert", "hand")  # the walking expert choosing every foothold; the hand-tuned reward
 STORE_NAME = "suite.sqlite"

@@ -1,4 +1,5 @@
-"""Terrain module kinds by name: the paper's six, six held out from all tuning, and any you register.
+"""Terrain module kinds by name: the paper's six, two more for training, six held out from all
+tuning, and any you register.
 
 A kind is a :data:`~footfall.terrain.geometry.Generator` ``(difficulty in [0, 1],
 rng) -> heights (610, 610) [m]``, registered under a name in :data:`KINDS` (a
@@ -10,6 +11,7 @@ line's choices find every kind here.
 from __future__ import annotations
 
 from footfall.core.registry import Registry
+from footfall.terrain.added import ADDED
 from footfall.terrain.file_modules import FILE_KIND
 from footfall.terrain.generators import barrier, flat, logs, slope, steps
 from footfall.terrain.geometry import Generator
@@ -20,12 +22,16 @@ KINDS: Registry[Generator] = Registry("terrain kind")
 """Terrain module kinds: name -> generator ``(difficulty, rng) -> heights (610, 610) [m]``."""
 _BUILTIN = (("flat", flat), ("steps", steps), ("barrier", barrier), ("slope", slope),
             ("logs", logs), ("rocky", rocky))  # the paper's module kinds (§IV-A), in this order
-for _name, _generator in _BUILTIN + HELD_OUT:
+for _name, _generator in _BUILTIN + ADDED + HELD_OUT:
     KINDS.register(_name, _generator)
 PAPER_KINDS = tuple(name for name, _ in _BUILTIN)  # the paper's kinds, which tuning used
+ADDED_KINDS = tuple(name for name, _ in ADDED)  # training kinds beyond the paper's
+# (footfall.terrain.added: characters none of the paper's kinds has)
+TRAINING_KINDS = tuple(k for k in PAPER_KINDS if k != "flat") + ADDED_KINDS
+# the kinds parameters may be chosen on: the training suite's and the ablation's
 HELD_OUT_KINDS = tuple(name for name, _ in HELD_OUT)  # kinds no tuning used
 # (footfall.terrain.heldout; measured by footfall benchmark-terrain, never tuned on)
-BUILTIN_KINDS = PAPER_KINDS + HELD_OUT_KINDS  # kinds unregister_kind keeps
+BUILTIN_KINDS = PAPER_KINDS + ADDED_KINDS + HELD_OUT_KINDS  # kinds unregister_kind keeps
 
 
 def register_kind(name: str, generator: Generator) -> Generator:

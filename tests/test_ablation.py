@@ -84,6 +84,25 @@ def test_each_variant_changes_only_its_part():
     assert not none.lowlevel.hand_over and none.lowlevel.support_feedforward == 0
 
 
+def test_an_expert_variant_changes_only_the_expert_of_the_expert_s_runs(tmp_path):
+    from footfall.expert.synthetic import walking_expert
+    from footfall.experiments.ablation import ablation_jobs
+    from footfall.experiments.variants import ROLL_BACK, VARIANTS
+
+    config = AblationConfig(variants=("with-roll-back",), test_runs=1, calibration_runs=0,
+                            hard_runs=0, suite_runs=0)
+    assert config.variant_walk("with-roll-back") == config.variant_walk("defaults")
+    rolled = VARIANTS.get("with-roll-back")
+    assert rolled.changes_expert and not VARIANTS.get("defaults").changes_expert
+    plain = walking_expert(config.walk.footstep.lead)
+    assert plain.roll_back is None
+    assert rolled.expert(plain) == replace(plain, roll_back=ROLL_BACK)
+    jobs = {j.key: j for j in ablation_jobs(config, {"test": tmp_path / "test.npz"})}
+    assert jobs["with-roll-back/expert/test/s5000"].expert == replace(plain, roll_back=ROLL_BACK)
+    assert jobs["defaults/expert/test/s5000"].expert == plain
+    assert jobs["with-roll-back/hand/test/s5000"].walk == jobs["defaults/hand/test/s5000"].walk
+
+
 def test_the_default_boards_are_the_issue_s():
     boards = AblationConfig().boards()
     assert boards["test"] == ((("rocky", 0.7), ("steps", 0.7)), 500, 21, 5000)

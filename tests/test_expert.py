@@ -298,6 +298,40 @@ def test_placement_error_is_along_the_heading():
         assert r_beside[name][0] == t_beside[name][0], name
 
 
+def test_roll_back_judges_a_trough_by_itself_and_a_crest_still_by_its_flank():
+    """A ball set on a trough's flank slides back into it; one set off a crest slides away."""
+    x, y = grid()
+    u = x - P[0]  # [m] along the heading (yaw 0 is +x), 0 at the foothold
+    bend = u * u / (2 * 0.015)  # [m] a round profile of 1.5 cm radius: the ball touches it once
+    trough = hmap(np.minimum(bend, 0.03))  # a trough across the heading, f at its bottom
+    crest = hmap(np.maximum(0.03 - bend, 0.0))  # a ridge, f on its top
+    cand = lambda m: np.array([[P[0], P[1], float(m.height_at(np.asarray(P)))]])  # noqa: E731
+    plain = SyntheticExpert(ExpertConfig(placement_error=0.007))
+    back = SyntheticExpert(ExpertConfig(placement_error=0.007, roll_back=0.001))
+    here = EXPERT.terms(trough, STATE, cand(trough))
+    worst, rolled = plain.terms(trough, STATE, cand(trough)), back.terms(trough, STATE, cand(trough))
+    assert worst["slip_margin"][0] < here["slip_margin"][0] - 0.2  # judged on the flank
+    for name in EXPERT_TERM_NAMES:  # judged where the ball ends: the trough itself
+        assert rolled[name][0] == here[name][0], name
+    on_top = EXPERT.terms(crest, STATE, cand(crest))
+    worst, rolled = plain.terms(crest, STATE, cand(crest)), back.terms(crest, STATE, cand(crest))
+    assert rolled["slip_margin"][0] == worst["slip_margin"][0] < on_top["slip_margin"][0] - 0.2
+    # So a trough now beats a crest for the rolled-back expert, and did not before.
+    assert back.values(trough, STATE, cand(trough))[0] > back.values(crest, STATE, cand(crest))[0]
+    assert plain.values(trough, STATE, cand(trough))[0] < plain.values(crest, STATE, cand(crest))[0]
+
+
+def test_roll_back_keeps_an_edge_ahead_and_changes_nothing_on_flat_ground():
+    x, y = grid()
+    back = SyntheticExpert(ExpertConfig(placement_error=0.007, roll_back=0.001))
+    plain = SyntheticExpert(ExpertConfig(placement_error=0.007))
+    for terrain in (hmap(np.where(x > P[0] + 0.005, -0.04, 0.0)), FLAT):  # a drop ahead; flat
+        cand = np.array([[P[0], P[1], float(terrain.height_at(np.asarray(P)))]])
+        a, b = plain.terms(terrain, STATE, cand), back.terms(terrain, STATE, cand)
+        for name in EXPERT_TERM_NAMES:
+            assert a[name][0] == b[name][0], name
+
+
 def test_on_rocky_terrain_the_terrain_changes_the_choice():
     board = make_board([("rocky", 0.7)], 3)  # flat, rocky (x in [0.61, 1.22] m), flat
     phi = math.atan(LITTLEDOG.foot_friction)

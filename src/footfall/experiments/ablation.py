@@ -215,7 +215,7 @@ def ablation_jobs(config: AblationConfig, paths: dict[str, Path]) -> list[RunJob
     for who in sorted(config.who, key=lambda w: w == "expert"):
         for v in _variants(config):
             walk = config.variant_walk(v)
-            expert = walking_expert(walk.footstep.lead)
+            expert = VARIANTS.get(v).expert(walking_expert(walk.footstep.lead))
             for name, (_, _, runs, seed) in config.boards().items():
                 jobs += [RunJob(f"{v}/{who}/{name}/s{s}", str(paths[name]), None, s, walk,
                                 expert=expert, judge=who == "expert")

@@ -54,6 +54,16 @@ def chooser_expert(config: WalkConfig, expert: bool,
     return expert_config or walking_expert(config.footstep.lead)
 
 
+def variant_expert(config: WalkConfig, expert: bool, expert_config: ExpertConfig | None,
+                   variant: str) -> ExpertConfig | None:
+    """``expert_config``, or where none is given and ``variant`` changes the walking expert
+    (:attr:`~footfall.experiments.variants.Variant.expert`), that expert of the walk's gait."""
+    changed = VARIANTS.get(variant)
+    if expert and expert_config is None and changed.changes_expert:
+        return changed.expert(walking_expert(config.footstep.lead))
+    return expert_config
+
+
 def expert_judge(settings: ExpertConfig) -> ExpertScorer:
     """The expert of ``settings`` as a foothold judge, named as its runs are logged."""
     return ExpertScorer(SyntheticExpert(settings), name=judge_name(settings))
@@ -351,6 +361,7 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
     """
     config = walk_config(model_path, expert, search_radius, friction_safety, path_bias,
                          variant)
+    expert_config = variant_expert(config, expert, expert_config, variant)
     judge = chooser_expert(config, expert, expert_config)
     hmap = load_board(terrain_path)
     reward_for = reward_source(model_path, hmap)
@@ -429,6 +440,7 @@ def walk_batch(terrain_path: str | os.PathLike, runs: int, seed: int, *,
     """
     config = walk_config(model_path, expert, search_radius, friction_safety, path_bias,
                          variant)
+    expert_config = variant_expert(config, expert, expert_config, variant)
     hmap = load_board(terrain_path)
     log = _checked_log(log_path, inputs=(terrain_path, model_path))
     jobs = batch_jobs(terrain_path, model_path, runs, seed, config, expert, hmap,

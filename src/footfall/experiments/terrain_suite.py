@@ -133,7 +133,7 @@ class SuiteConfig(Params):
 
 def suite_jobs(config: SuiteConfig, paths: dict[str, Path]) -> list[RunJob]:
     """Every run, keyed ``WHO/KIND/bB/sSEED``: the hand-tuned reward's first (cheaper)."""
-    expert = walking_expert(config.walk.footstep.lead)
+    expert = VARIANTS.get(config.variant).expert(walking_expert(config.walk.footstep.lead))
     jobs = []
     for who in sorted(config.who, key=lambda w: w == "expert"):
         for name, path in paths.items():

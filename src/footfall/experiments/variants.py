@@ -1,7 +1,9 @@
 """Controller variants: the default walk with one change, by name.
 
 A variant is the default :class:`~footfall.sim.episode.WalkConfig` with one
-part switched off, or a part that is off by default switched on. The
+part switched off, or a part that is off by default switched on -- or the
+walking expert (:func:`footfall.expert.synthetic.walking_expert`) that chooses
+the expert's runs with one change of its judgement. The
 ablation (:mod:`footfall.experiments.ablation`) walks them paired against
 the defaults on the training boards; a terrain suite
 (:mod:`footfall.experiments.terrain_suite`) walks one on its kinds.
@@ -16,16 +18,28 @@ from typing import Callable
 
 from footfall.core.errors import FootfallError
 from footfall.core.registry import Registry
+from footfall.expert.synthetic import ExpertConfig
 from footfall.sim.episode import WalkConfig
+
+
+def _same_expert(config: ExpertConfig) -> ExpertConfig:
+    return config
 
 
 @dataclass(frozen=True)
 class Variant:
-    """A controller variant: the default walk with one change."""
+    """A controller variant: the default walk with one change, or the walking expert with one."""
 
     name: str  # the key in VARIANTS and in run keys (no "/")
     description: str  # one line, for the table
     change: Callable[[WalkConfig], WalkConfig]  # the default walk -> this variant's walk
+    expert: Callable[[ExpertConfig], ExpertConfig] = _same_expert
+    # the walking expert of the walk -> the expert choosing this variant's expert runs
+
+    @property
+    def changes_expert(self) -> bool:
+        """Whether the variant changes the expert's judgement (not only the walk)."""
+        return self.expert is not _same_expert
 
 
 VARIANTS: Registry[Variant] = Registry("controller variant")
@@ -34,14 +48,22 @@ switched on."""
 
 
 def register_variant(name: str, description: str,
-                     change: Callable[[WalkConfig], WalkConfig]) -> Variant:
-    """Add a controller variant to :data:`VARIANTS` (a new part of the controller adds its own)."""
+                     change: Callable[[WalkConfig], WalkConfig],
+                     expert: Callable[[ExpertConfig], ExpertConfig] | None = None) -> Variant:
+    """Add a controller variant to :data:`VARIANTS` (a new part of the controller adds its own);
+    ``expert`` changes the walking expert that chooses the expert's runs [default: none]."""
     if not name or "/" in name:
         raise FootfallError(f"a variant needs a new name without '/', got {name!r}")
     try:
-        return VARIANTS.register(name, Variant(name, description, change))
+        return VARIANTS.register(name, Variant(name, description, change,
+                                               expert or _same_expert))
     except ValueError:  # the name is taken
         raise FootfallError(f"a variant needs a new name without '/', got {name!r}") from None
+
+
+ROLL_BACK = 0.001  # [m] with-roll-back: a placement error seated higher than this above the
+# aim slides back to it (texture on flat ground moves a seat by a few tenths of a mm; 1 mm over
+# the walking expert's 7 mm placement error is ground falling back at 8 deg on average)
 
 
 def _reflexes(walk: WalkConfig, **switches) -> WalkConfig:
@@ -108,4 +130,7 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
     register_variant("with-slow-shift", "with the body's shift between swings taking 0.3 s "
                      "instead of 0.15 s (off by default)",
                      lambda w: replace(w, cog=replace(w.cog, shift_duration=0.3))),
+    register_variant("with-roll-back", "with the expert counting no placement error that seats "
+                     "the ball more than 1 mm above its aim: the ball slides back (off by "
+                     "default)", lambda w: w, lambda e: replace(e, roll_back=ROLL_BACK)),
 ))  # the controller's own variants, in table order: an ablation walks them all by default

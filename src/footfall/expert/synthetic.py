@@ -105,6 +105,12 @@ class ExpertConfig(Params):
                                    doc="the terrain terms are read where the foot would fare "
                                        "worst: at the foothold or this far ahead of or behind it "
                                        "along the heading")
+    roll_back: float | None = param(None, unit="m", range=_NONNEGATIVE,
+                                    doc="a placement error that would seat the ball more than "
+                                        "this above the foothold's own seat is not counted: the "
+                                        "ground falls back toward the foothold, so a ball set "
+                                        "there slides back to it (a trough's flank, a hollow's "
+                                        "rim); None: every placement counts")
     # --- utilities of the terrain terms
     w_hold: float = param(20.0, unit="value/rad", range=_NONNEGATIVE,
                           doc="bonus per radian of slip margin above flat ground's")

@@ -215,6 +215,9 @@ def worst_placement(hmap: HeightMap, f: np.ndarray, yaw: float, cfg: ExpertConfi
     at f shifted ``placement_error`` [m] forward and backward along the heading
     ``yaw`` [rad]; for each candidate, all of them are taken from the placement
     whose terrain utilities sum lowest (ties: the foothold itself, then forward).
+    With ``roll_back`` [m] set, a shifted placement whose seat is more than that
+    above the foothold's own does not count: the ground between falls toward the
+    foothold, and a ball set there slides back to it.
     """
     n = f.shape[0]
     if cfg.placement_error == 0:
@@ -223,6 +226,9 @@ def worst_placement(hmap: HeightMap, f: np.ndarray, yaw: float, cfg: ExpertConfi
     # A shifted ball without data under it falls back to the candidate's own height.
     terms, seat = terrain_terms(hmap, np.concatenate([f, f + shift, f - shift]), cfg, robot, yaw)
     score = sum(terrain_utilities(terms, cfg, robot).values()).reshape(3, n)
+    if cfg.roll_back is not None:
+        seats = seat.reshape(3, n)
+        score[1:] = np.where(seats[1:] - seats[0] > cfg.roll_back, np.inf, score[1:])
     worst = np.argmin(score, axis=0)  # first minimum: the foothold itself on ties
     cols = np.arange(n)
     return {name: v.reshape(3, n)[worst, cols] for name, v in terms.items()}, seat[:n]

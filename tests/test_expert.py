@@ -321,6 +321,26 @@ def test_roll_back_judges_a_trough_by_itself_and_a_crest_still_by_its_flank():
     assert plain.values(trough, STATE, cand(trough))[0] < plain.values(crest, STATE, cand(crest))[0]
 
 
+def test_a_wall_is_not_a_flank_the_ball_slides_back_down():
+    """A foothold at a bar's foot: the placement on the bar counts again with roll_back_wall."""
+    x, y = grid()
+    bar = hmap(np.where(x > P[0] + 0.012, 0.04, 0.0))  # a 4 cm wall 12 mm ahead of the foothold
+    cand = np.array([[P[0], P[1], 0.0]])
+    plain = SyntheticExpert(ExpertConfig(placement_error=0.007))
+    back = SyntheticExpert(ExpertConfig(placement_error=0.007, roll_back=0.001))
+    wall = SyntheticExpert(ExpertConfig(placement_error=0.007, roll_back=0.001, roll_back_wall=1.0))
+    here = EXPERT.terms(bar, STATE, cand)
+    a, b, c = (e.terms(bar, STATE, cand) for e in (plain, back, wall))
+    assert a["slip_margin"][0] != here["slip_margin"][0]  # judged on the wall's edge
+    assert all(b[k][0] == here[k][0] for k in EXPERT_TERM_NAMES)  # rolled back: as if no wall
+    assert all(c[k][0] == a[k][0] for k in EXPERT_TERM_NAMES)  # a wall: judged on its edge again
+    x0 = P[0]  # and a gentle trough is still judged by itself with the wall rule
+    trough = hmap(np.minimum((x - x0) ** 2 / (2 * 0.015), 0.03))
+    cand = np.array([[P[0], P[1], 0.0]])
+    here, c = EXPERT.terms(trough, STATE, cand), wall.terms(trough, STATE, cand)
+    assert all(c[k][0] == here[k][0] for k in EXPERT_TERM_NAMES)
+
+
 def test_roll_back_keeps_an_edge_ahead_and_changes_nothing_on_flat_ground():
     x, y = grid()
     back = SyntheticExpert(ExpertConfig(placement_error=0.007, roll_back=0.001))

@@ -209,11 +209,15 @@ def ablation_jobs(config: AblationConfig, paths: dict[str, Path]) -> list[RunJob
     """Every run of the ablation, keyed ``variant/who/board/sSEED``.
 
     The hand-tuned reward's runs come first (each takes about a sixth of an expert's run,
-    whose judge weighs every candidate's terrain), then the expert's, a variant at a time.
+    whose judge weighs every candidate's terrain), then the expert's, a variant at a time. A
+    variant that changes only the walking expert walks no hand-tuned runs: they would be the
+    defaults' (:func:`walked_as`).
     """
     jobs = []
     for who in sorted(config.who, key=lambda w: w == "expert"):
         for v in _variants(config):
+            if walked_as(config, v, who) != v:
+                continue
             walk = config.variant_walk(v)
             expert = VARIANTS.get(v).expert(walking_expert(walk.footstep.lead))
             for name, (_, _, runs, seed) in config.boards().items():
@@ -221,6 +225,17 @@ def ablation_jobs(config: AblationConfig, paths: dict[str, Path]) -> list[RunJob
                                 expert=expert, judge=who == "expert")
                          for s in range(seed, seed + runs)]
     return jobs
+
+
+def walked_as(config: AblationConfig, variant: str, who: str) -> str:
+    """The variant whose runs stand for ``variant``'s by ``who``: the defaults' for the
+    hand-tuned reward where the variant changes only the walking expert (the hand-tuned
+    reward's runs never consult it, so they are the same runs), else the variant itself."""
+    changed = VARIANTS.get(variant)
+    if (who == "hand" and changed.changes_expert
+            and config.variant_walk(variant) == config.variant_walk("defaults")):
+        return "defaults"
+    return variant
 
 
 # ------------------------------------------------------------------ results
@@ -246,7 +261,7 @@ def _row(config: AblationConfig, results: dict[str, dict], v: str, who: str) -> 
         ok = 0
         prefix = _group(name)
         for s in range(seed, seed + runs):
-            r = results[f"{v}/{who}/{name}/s{s}"]
+            r = results[f"{walked_as(config, v, who)}/{who}/{name}/s{s}"]
             base = results[f"defaults/{who}/{name}/s{s}"]["success"]
             ok += bool(r["success"])
             row[prefix + "won"] += bool(r["success"]) and not base

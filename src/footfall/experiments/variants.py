@@ -66,6 +66,12 @@ ROLL_BACK = 0.001  # [m] with-roll-back: a placement error seated higher than th
 # the walking expert's 7 mm placement error is ground falling back at 8 deg on average)
 
 
+ROLL_BACK_WALL = 1.0  # [-] with-flank-roll-back: ground rising faster than 1 : 1 (45 deg on
+# average) from the aim to a placement is a wall (a riser, a bar, a rock's side): the ball lands
+# on its edge or top, it does not slide back (round 4: every choice the roll-back changed on the
+# steps and barrier boards stood at a wall's foot, 19-63 mm below the placement 7 mm ahead)
+
+
 def _reflexes(walk: WalkConfig, **switches) -> WalkConfig:
     return replace(walk, reflexes=replace(walk.reflexes, **switches))
 
@@ -133,4 +139,8 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
     register_variant("with-roll-back", "with the expert counting no placement error that seats "
                      "the ball more than 1 mm above its aim: the ball slides back (off by "
                      "default)", lambda w: w, lambda e: replace(e, roll_back=ROLL_BACK)),
+    register_variant("with-flank-roll-back", "with-roll-back, but a placement seated higher "
+                     "above the aim than the placement error itself (45 deg on average: a wall) "
+                     "counts (off by default)", lambda w: w,
+                     lambda e: replace(e, roll_back=ROLL_BACK, roll_back_wall=ROLL_BACK_WALL)),
 ))  # the controller's own variants, in table order: an ablation walks them all by default

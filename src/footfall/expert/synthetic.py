@@ -111,6 +111,12 @@ class ExpertConfig(Params):
                                         "ground falls back toward the foothold, so a ball set "
                                         "there slides back to it (a trough's flank, a hollow's "
                                         "rim); None: every placement counts")
+    roll_back_wall: float | None = param(None, unit="-", range=_NONNEGATIVE,
+                                         doc="with roll_back: a placement seated higher above "
+                                             "the foothold's seat than this times the placement "
+                                             "error counts all the same -- the ground between is a "
+                                             "wall, whose edge or top the ball lands on, not a "
+                                             "flank it slides down; None: no such wall")
     # --- utilities of the terrain terms
     w_hold: float = param(20.0, unit="value/rad", range=_NONNEGATIVE,
                           doc="bonus per radian of slip margin above flat ground's")

@@ -217,7 +217,9 @@ def worst_placement(hmap: HeightMap, f: np.ndarray, yaw: float, cfg: ExpertConfi
     whose terrain utilities sum lowest (ties: the foothold itself, then forward).
     With ``roll_back`` [m] set, a shifted placement whose seat is more than that
     above the foothold's own does not count: the ground between falls toward the
-    foothold, and a ball set there slides back to it.
+    foothold, and a ball set there slides back to it -- unless, with ``roll_back_wall``
+    [-], it rises more than that times the placement error: a wall, whose edge or top the
+    ball lands on.
     """
     n = f.shape[0]
     if cfg.placement_error == 0:
@@ -227,8 +229,11 @@ def worst_placement(hmap: HeightMap, f: np.ndarray, yaw: float, cfg: ExpertConfi
     terms, seat = terrain_terms(hmap, np.concatenate([f, f + shift, f - shift]), cfg, robot, yaw)
     score = sum(terrain_utilities(terms, cfg, robot).values()).reshape(3, n)
     if cfg.roll_back is not None:
-        seats = seat.reshape(3, n)
-        score[1:] = np.where(seats[1:] - seats[0] > cfg.roll_back, np.inf, score[1:])
+        rise = seat.reshape(3, n)[1:] - seat[:n]  # (2, n) [m] of the shifted seats over f's
+        back = rise > cfg.roll_back
+        if cfg.roll_back_wall is not None:
+            back &= rise <= cfg.roll_back_wall * cfg.placement_error
+        score[1:] = np.where(back, np.inf, score[1:])
     worst = np.argmin(score, axis=0)  # first minimum: the foothold itself on ties
     cols = np.arange(n)
     return {name: v.reshape(3, n)[worst, cols] for name, v in terms.items()}, seat[:n]

@@ -136,3 +136,27 @@ def test_the_command_pairs_with_another_folder_and_refuses_one_that_is_not_a_sui
                        "--against", tmp_path / "nothing")
     assert_user_error(code, err, "not a terrain suite's folder")
     assert not (tmp_path / "x").exists()  # refused before anything was walked
+
+
+def test_the_command_walks_boards_of_the_difficulty_asked_into_their_own_folder(
+        monkeypatch, tmp_path, capsys):
+    import footfall.cli.experiments as cli
+
+    seen = {}
+
+    def fake_run_suite(folder, config, **kwargs):
+        seen.update(folder=folder, config=config)
+        raise FootfallError("stopped before walking")
+
+    monkeypatch.setattr(cli, "run_suite", fake_run_suite)
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run(capsys, "benchmark-terrain", "--suite", "training", "--kind", "ridges",
+                       "--difficulty", "1")
+    assert_user_error(code, err, "stopped before walking")
+    assert str(seen["folder"]) == "out/suite-training-d1"
+    assert seen["config"].difficulty == 1.0
+    assert set(seen["config"].board_specs().values()) == {
+        ((("ridges", 1.0), ("ridges", 1.0)), s, True)
+        for _, s, _ in SuiteConfig(suite="training", kinds=("ridges",)).board_specs().values()}
+    code, _, err = run(capsys, "benchmark-terrain", "--difficulty", "1.5")
+    assert code == 2 and "1.5" in err and "Traceback" not in err

@@ -406,6 +406,9 @@ def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], hard: bo
                    "walks boards 5 and 6 only.")
 @click.option("--runs", type=click.IntRange(min=1), default=None,
               help="Runs on each board [default: 8].")
+@click.option("--difficulty", type=click.FloatRange(0, 1), default=None,
+              help="Difficulty D of every board KIND:D KIND:D, 0-1 [default: 0.7, the "
+                   "reproduction's test difficulty]; walk each into its own --out.")
 @click.option("--variant", type=RegistryChoice(_variant_names), default="defaults",
               show_default=True, help="The controller variant walked (as the ablation's); "
               "walk each into its own --out.")
@@ -417,19 +420,21 @@ def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], hard: bo
 @json_option
 def benchmark_terrain(suite: str, out: str | None, kinds: tuple[str, ...], who: tuple[str, ...],
                       boards: int | None, first_board: int | None, runs: int | None,
-                      variant: str, against: str | None, quick: bool, processes: int | None,
-                      executor_name: str, ray_address: str | None, as_json: bool) -> None:
+                      difficulty: float | None, variant: str, against: str | None,
+                      quick: bool, processes: int | None, executor_name: str,
+                      ray_address: str | None, as_json: bool) -> None:
     """A terrain suite: the expert and the hand-tuned reward on every kind, success with
     Wilson intervals, slip and the failure taxonomy per kind."""
     config = SuiteConfig.quick(suite) if quick else SuiteConfig(suite=suite)
     changes: dict = {}
     for key, value in (("kinds", kinds or None), ("who", tuple(dict.fromkeys(who)) or None),
                        ("boards", boards), ("first_board", first_board), ("runs", runs),
-                       ("variant", variant)):
+                       ("difficulty", difficulty), ("variant", variant)):
         if value is not None:
             changes[key] = value
     config = replace(config, **changes)  # checked: one line for a bad value
-    folder = Path(out or f"out/suite-{suite}" + ("" if variant == "defaults" else f"-{variant}"))
+    folder = Path(out or f"out/suite-{suite}" + ("" if variant == "defaults" else f"-{variant}")
+                  + ("" if difficulty is None else f"-d{difficulty:g}"))
     those = None if against is None else suite_outcomes(against)  # a bad folder: before walking
     with opened_executor(executor_name, processes, ray_address) as executor:
         summary = run_suite(folder, config, log=progress_log(as_json), executor=executor)

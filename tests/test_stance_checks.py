@@ -7,8 +7,9 @@ import pytest
 from footfall.control.body_path import BodyPath, terrain_grids
 from footfall.control.footstep import FootstepConfig, FootstepPlanner
 from footfall.control.stance_checks import stride_on
-from footfall.core.clearance import leg_gaps, shin_fractions
+from footfall.core.clearance import leg_gaps, posed_leg_gaps, shin_fractions
 from footfall.core.heightmap import HeightMap
+from footfall.core.kinematics import body_to_world, inverse_kinematics, knee_position, world_to_body
 from footfall.core.robot import LEG_NAMES, LITTLEDOG
 from footfall.core.state import nominal_state
 from footfall.features.candidates import leg_clearances
@@ -101,3 +102,38 @@ def test_the_leg_clearance_is_nan_where_the_leg_cannot_reach():
     foot = state.feet[LEG_NAMES.index("RH")][None]
     out = leg_clearances(hmap, state, np.vstack([foot, foot + (0.5, 0.0, 0.0)]))
     assert np.isfinite(out[0]) and out[0] > 0.01 and np.isnan(out[1])
+
+
+def test_the_compiled_posed_clearance_is_the_numpy_composition():
+    """posed_leg_gaps (one compiled pass) against the functions it fuses -- world_to_body,
+    inverse_kinematics, knee_position, body_to_world, leg_gaps -- on rough maps with holes, at
+    tilted body poses, for every leg: the same NaN (no posture) and inf (no data) points, the
+    gaps to rounding (the body-frame products may be summed in another order)."""
+    rng = np.random.default_rng(7)
+    no_data = 0
+    for trial in range(6):
+        h = rng.normal(0.0, 0.004, (400, 300)).cumsum(axis=0) * 0.1
+        h[rng.random(h.shape) < 0.02 * (trial % 2)] = np.nan
+        if trial % 3 == 2:
+            h[150:260, :] = np.nan  # a wide hole: samples with no data at all
+        hmap = HeightMap(h, 0.002, (-0.3, -0.3))
+        body = np.array([rng.uniform(0.0, 0.3), rng.uniform(-0.05, 0.05), 0.15])
+        rpy = rng.uniform(-0.2, 0.2, 3)
+        for name in LEG_NAMES:
+            leg = LITTLEDOG.leg(name)
+            hip = body_to_world(np.array(leg.hip), body, rpy)
+            centre = np.column_stack([hip[:2] + rng.uniform(-0.15, 0.15, (300, 2)),
+                                      rng.uniform(-0.03, 0.06, 300)])
+            got = posed_leg_gaps(hmap, leg, centre, body, rpy, LITTLEDOG, 10, None)
+            q, _ = inverse_kinematics(leg, world_to_body(centre, body, rpy), LITTLEDOG)
+            solved = np.isfinite(q).all(axis=1)
+            knee = body_to_world(knee_position(leg, q, LITTLEDOG), body, rpy)
+            want = np.where(solved, leg_gaps(hmap, np.where(solved[:, None], knee, 0.0), centre,
+                                             LITTLEDOG, 10), np.nan)
+            assert 0 < solved.sum() < solved.size
+            np.testing.assert_array_equal(np.isnan(got), np.isnan(want))
+            np.testing.assert_array_equal(np.isinf(got), np.isinf(want))
+            finite = np.isfinite(want)
+            np.testing.assert_allclose(got[finite], want[finite], rtol=0, atol=1e-12)
+            no_data += int(np.isinf(want).sum())
+    assert no_data > 0  # the wide holes left some legs with no terrain below any sample

@@ -160,16 +160,22 @@ def reaches_points(leg: Leg, points: np.ndarray, body_position: np.ndarray,
                          robot.hip_offset, lo, hi)
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def rotation3(rpy):  # pragma: no cover - compiled
+    """:func:`rotation_matrix` of one roll, pitch, yaw (3,) [rad], compiled: (3, 3)."""
+    cr, cp, cy = math.cos(rpy[0]), math.cos(rpy[1]), math.cos(rpy[2])
+    sr, sp, sy = math.sin(rpy[0]), math.sin(rpy[1]), math.sin(rpy[2])
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
 @numba.njit(cache=True, nogil=True)
 def _reach_kernel(points, body, rpy, hip, side, knee, l1, l2, d, lo, hi
                   ):  # pragma: no cover - compiled
     """:func:`reaches_points`: the rotation of :func:`rotation_matrix`, the closed form of
     :func:`_ik_angles`, the limits of :func:`within_limits`, point by point."""
-    cr, cp, cy = math.cos(rpy[0]), math.cos(rpy[1]), math.cos(rpy[2])
-    sr, sp, sy = math.sin(rpy[0]), math.sin(rpy[1]), math.sin(rpy[2])
-    rot = np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-                    [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-                    [-sp, cp * sr, cp * cr]])
+    rot = rotation3(rpy)
     out = np.zeros(points.shape[0], dtype=np.bool_)
     for i in range(points.shape[0]):
         v0, v1, v2 = points[i, 0] - body[0], points[i, 1] - body[1], points[i, 2] - body[2]

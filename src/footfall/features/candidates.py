@@ -10,14 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from footfall.core.clearance import leg_gaps
+from footfall.core.clearance import posed_leg_gaps
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import (
     body_to_world,
     inverse_kinematics,
     joint_limit_margin,
-    knee_position,
     reaches_points,
     world_to_body,
 )
@@ -69,17 +68,12 @@ def leg_clearances(hmap: HeightMap, state: RobotState, footholds: np.ndarray,
     """Least clearance [m] of the swing leg's knee and shin above the terrain with the ball-foot
     centre on each contact point (n, 3) [m] -> (n,), at the state's body pose: ``samples``
     spheres of the lower leg's radius from the knee down to the ball, or to ``span`` [-] of
-    the way to its centre (:func:`footfall.core.clearance.leg_gaps`); 0 where the leg touches
+    the way to its centre (:func:`footfall.core.clearance.posed_leg_gaps`); 0 where the leg touches
     the terrain,
     negative where it would cut into it, NaN where the leg cannot reach the point."""
-    leg = robot.leg(state.swing_leg)
     centre = np.asarray(footholds, dtype=np.float64) + (0.0, 0.0, robot.foot_radius)
-    q, _ = inverse_kinematics(leg, world_to_body(centre, state.body_position, state.body_rpy),
-                              robot)
-    knee = body_to_world(knee_position(leg, q, robot), state.body_position, state.body_rpy)
-    solved = np.isfinite(q).all(axis=-1)
-    gaps = leg_gaps(hmap, np.where(solved[:, None], knee, 0.0), centre, robot, samples, span)
-    return np.where(solved, gaps, np.nan)
+    return posed_leg_gaps(hmap, robot.leg(state.swing_leg), centre, state.body_position,
+                          state.body_rpy, robot, samples, span)
 
 
 def reachable_footholds(hmap: HeightMap, state: RobotState, robot: RobotDescription = LITTLEDOG,

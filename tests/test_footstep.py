@@ -348,7 +348,12 @@ def test_the_body_is_predicted_for_the_stance_after_the_step_so_a_front_foot_rea
 
 
 def test_the_compiled_reach_test_is_the_inverse_kinematics_within_limits():
-    from footfall.core.kinematics import inverse_kinematics, reaches_points, world_to_body
+    from footfall.core.kinematics import (
+        body_to_world,
+        inverse_kinematics,
+        reaches_points,
+        world_to_body,
+    )
     from footfall.core.robot import LITTLEDOG
 
     rng = np.random.default_rng(9)
@@ -358,3 +363,14 @@ def test_the_compiled_reach_test_is_the_inverse_kinematics_within_limits():
         _, expect = inverse_kinematics(leg, world_to_body(points, body, rpy), LITTLEDOG)
         got = reaches_points(leg, points, body, rpy, LITTLEDOG)
         assert (got == expect).all() and 0 < got.sum() < got.size
+        # The kernel skips the trigonometry beyond the farthest reach, sqrt(d^2 + (l1 + l2)^2)
+        # from the hip: on shells just inside and outside it, the answers are the IK's too.
+        far = np.sqrt(LITTLEDOG.hip_offset ** 2 + (LITTLEDOG.upper_leg + LITTLEDOG.lower_leg) ** 2)
+        u = rng.normal(size=(3000, 3))
+        u[:, 2] = -np.abs(u[:, 2])  # below the hip, where the leg hangs
+        u /= np.linalg.norm(u, axis=1, keepdims=True)
+        scale = far * (1.0 + rng.choice([-1e-3, -1e-9, -1e-12, 0.0, 1e-12, 1e-10, 1e-3], 3000))
+        local = np.asarray(leg.hip) + u * scale[:, None]
+        points = body_to_world(local, body, rpy)
+        _, expect = inverse_kinematics(leg, world_to_body(points, body, rpy), LITTLEDOG)
+        assert (reaches_points(leg, points, body, rpy, LITTLEDOG) == expect).all()

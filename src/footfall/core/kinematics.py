@@ -174,14 +174,22 @@ def rotation3(rpy):  # pragma: no cover - compiled
 def _reach_kernel(points, body, rpy, hip, side, knee, l1, l2, d, lo, hi
                   ):  # pragma: no cover - compiled
     """:func:`reaches_points`: the rotation of :func:`rotation_matrix`, the closed form of
-    :func:`_ik_angles`, the limits of :func:`within_limits`, point by point."""
+    :func:`_ik_angles`, the limits of :func:`within_limits`, point by point.
+
+    A point farther from the hip than any foot can be -- |p|^2 > d^2 + (l1 + l2)^2, where the
+    closed form's knee cosine exceeds 1 -- is not reached, and is told so without the
+    trigonometry (with a margin of 1e-9 of that bound, far beyond rounding, so that no
+    answer changes: the lattice around the hip is mostly such points)."""
     rot = rotation3(rpy)
     out = np.zeros(points.shape[0], dtype=np.bool_)
+    far = (d * d + (l1 + l2) * (l1 + l2)) * (1.0 + 1e-9)
     for i in range(points.shape[0]):
         v0, v1, v2 = points[i, 0] - body[0], points[i, 1] - body[1], points[i, 2] - body[2]
         px = v0 * rot[0, 0] + v1 * rot[1, 0] + v2 * rot[2, 0] - hip[0]
         py = v0 * rot[0, 1] + v1 * rot[1, 1] + v2 * rot[2, 1] - hip[1]
         pz = v0 * rot[0, 2] + v1 * rot[1, 2] + v2 * rot[2, 2] - hip[2]
+        if px * px + py * py + pz * pz > far:
+            continue
         q1, q2, q3, ok = leg_angles(px, py, pz, side, knee, l1, l2, d)
         if not ok:
             continue

@@ -64,7 +64,7 @@ def posed_leg_gaps(hmap: HeightMap, leg: Leg, centre: np.ndarray, body_position:
     no sample has terrain data below it."""
     surface = board_sphere(hmap, robot.lower_leg_radius)
     points = np.ascontiguousarray(centre, dtype=np.float64).reshape(-1, 3)
-    if surface is None:  # no terrain anywhere: no obstacle, but still no posture where none
+    if surface is None:  # a map without data: every reachable point inf, the others NaN
         filled, known, origin, res, complete = (np.zeros((2, 2)), np.zeros((2, 2)),
                                                 np.array([np.nan, np.nan]), 1.0, False)
     else:

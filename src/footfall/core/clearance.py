@@ -22,7 +22,7 @@ import numpy as np
 
 from footfall.core.bilinear import surface_point
 from footfall.core.heightmap import HeightMap
-from footfall.core.kinematics import leg_angles, rotation3
+from footfall.core.kinematics import hip_frame, leg_angles, rotation3
 from footfall.core.robot import Leg, RobotDescription
 from footfall.core.sphere_surface import board_sphere, sample_surface
 
@@ -82,7 +82,7 @@ def posed_leg_gaps(hmap: HeightMap, leg: Leg, centre: np.ndarray, body_position:
 @numba.njit(cache=True, nogil=True)
 def _posed_kernel(points, body, rpy, hip, side, knee_sign, l1, l2, d, t, filled, known, ox, oy,
                   res, complete):  # pragma: no cover - compiled
-    """:func:`posed_leg_gaps`: the body frame of :func:`~footfall.core.kinematics.world_to_body`,
+    """:func:`posed_leg_gaps`: the hip frame of :func:`~footfall.core.kinematics.hip_frame`,
     the angles of :func:`~footfall.core.kinematics.leg_angles`, the knee of
     :func:`~footfall.core.kinematics.knee_position` back in the world frame, and the samples of
     :func:`leg_gaps`, point by point."""
@@ -91,10 +91,7 @@ def _posed_kernel(points, body, rpy, hip, side, knee_sign, l1, l2, d, t, filled,
     out = np.empty(n)
     for i in range(n):
         cx, cy, cz = points[i, 0], points[i, 1], points[i, 2]
-        v0, v1, v2 = cx - body[0], cy - body[1], cz - body[2]
-        px = v0 * rot[0, 0] + v1 * rot[1, 0] + v2 * rot[2, 0] - hip[0]
-        py = v0 * rot[0, 1] + v1 * rot[1, 1] + v2 * rot[2, 1] - hip[1]
-        pz = v0 * rot[0, 2] + v1 * rot[1, 2] + v2 * rot[2, 2] - hip[2]
+        px, py, pz = hip_frame(rot, body, hip, cx, cy, cz)
         q1, q2, q3, _ = leg_angles(px, py, pz, side, knee_sign, l1, l2, d)
         if not (math.isfinite(q1) and math.isfinite(q2) and math.isfinite(q3)):
             out[i] = np.nan

@@ -170,6 +170,17 @@ def rotation3(rpy):  # pragma: no cover - compiled
                      [-sp, cp * sr, cp * cr]])
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def hip_frame(rot, body, hip, x, y, z):  # pragma: no cover - compiled
+    """The world point (x, y, z) [m] relative to the hip ``hip`` (3,) [m] in the body frame of
+    a body at ``body`` (3,) [m] turned by ``rot`` (:func:`rotation3`): :func:`world_to_body`
+    less the hip, compiled."""
+    v0, v1, v2 = x - body[0], y - body[1], z - body[2]
+    return (v0 * rot[0, 0] + v1 * rot[1, 0] + v2 * rot[2, 0] - hip[0],
+            v0 * rot[0, 1] + v1 * rot[1, 1] + v2 * rot[2, 1] - hip[1],
+            v0 * rot[0, 2] + v1 * rot[1, 2] + v2 * rot[2, 2] - hip[2])
+
+
 @numba.njit(cache=True, nogil=True)
 def _reach_kernel(points, body, rpy, hip, side, knee, l1, l2, d, lo, hi
                   ):  # pragma: no cover - compiled
@@ -184,10 +195,7 @@ def _reach_kernel(points, body, rpy, hip, side, knee, l1, l2, d, lo, hi
     out = np.zeros(points.shape[0], dtype=np.bool_)
     far = (d * d + (l1 + l2) * (l1 + l2)) * (1.0 + 1e-9)
     for i in range(points.shape[0]):
-        v0, v1, v2 = points[i, 0] - body[0], points[i, 1] - body[1], points[i, 2] - body[2]
-        px = v0 * rot[0, 0] + v1 * rot[1, 0] + v2 * rot[2, 0] - hip[0]
-        py = v0 * rot[0, 1] + v1 * rot[1, 1] + v2 * rot[2, 1] - hip[1]
-        pz = v0 * rot[0, 2] + v1 * rot[1, 2] + v2 * rot[2, 2] - hip[2]
+        px, py, pz = hip_frame(rot, body, hip, points[i, 0], points[i, 1], points[i, 2])
         if px * px + py * py + pz * pz > far:
             continue
         q1, q2, q3, ok = leg_angles(px, py, pz, side, knee, l1, l2, d)

@@ -68,9 +68,9 @@ def leg_clearances(hmap: HeightMap, state: RobotState, footholds: np.ndarray,
     """Least clearance [m] of the swing leg's knee and shin above the terrain with the ball-foot
     centre on each contact point (n, 3) [m] -> (n,), at the state's body pose: ``samples``
     spheres of the lower leg's radius from the knee down to the ball, or to ``span`` [-] of
-    the way to its centre (:func:`footfall.core.clearance.posed_leg_gaps`); 0 where the leg touches
-    the terrain,
-    negative where it would cut into it, NaN where the leg cannot reach the point."""
+    the way to its centre (:func:`footfall.core.clearance.posed_leg_gaps`); 0 where the leg
+    touches the terrain, negative where it would cut into it, NaN where the leg cannot reach
+    the point."""
     centre = np.asarray(footholds, dtype=np.float64) + (0.0, 0.0, robot.foot_radius)
     return posed_leg_gaps(hmap, robot.leg(state.swing_leg), centre, state.body_position,
                           state.body_rpy, robot, samples, span)

@@ -139,6 +139,10 @@ class ExpertConfig(Params):
                           doc="penalty per metre of drop-off depth above drop_free")
     drop_free: float = param(0.005, unit="m", range=_NONNEGATIVE,
                              doc="drop-off depth that does no harm (ball compliance, texture)")
+    crown_radius: float = param(0.015, unit="m", range=above(0),
+                                doc="radius of the ring around the foothold whose ball-centre "
+                                    "heights the crown is read against (at the foothold itself, "
+                                    "not at its placement error)")
     riser_distance: float = param(0.04, unit="m", range=_NONNEGATIVE,
                                   doc="a riser farther ahead of the foothold than this does not "
                                       "catch the swing leaving it")
@@ -146,6 +150,12 @@ class ExpertConfig(Params):
                            doc="penalty per metre of (weighted) riser ahead above riser_free")
     riser_free: float = param(0.0, unit="m", range=_NONNEGATIVE,
                               doc="riser ahead that the swing's lift clears without catching")
+    w_crown: float = param(0.0, unit="value/m", range=_NONNEGATIVE,
+                           doc="penalty per metre of crown above crown_free (0: a crest is "
+                               "judged by its hold alone)")
+    crown_free: float = param(0.002, unit="m", range=_NONNEGATIVE,
+                              doc="crown that does no harm (a ball sliding over it is caught "
+                                  "before the ground falls away)")
     w_leg: float = param(300.0, unit="value/m", range=_NONNEGATIVE,
                          doc="penalty per metre of leg clearance below leg_safe")
     leg_safe: float = param(0.01, unit="m", range=_NONNEGATIVE,

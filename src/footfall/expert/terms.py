@@ -49,6 +49,11 @@ EXPERT_TERMS: dict[str, str] = {
     "drop_off": "[m] worst drop-off near the foot: largest fall of the ball-centre surface below "
                 "a cone falling at walkable_slope from the ball centre, at slip distance s along "
                 "any ray, weighted by (1 - s / edge_radius)",
+    "crown": "[m] how far the seated ball centre stands above the mean height of the ball-centre "
+             "surface on a ring of crown_radius around the foothold (16 directions, samples "
+             "without data skipped; 0 where none has data): > 0 on a crest or a rock's top, where "
+             "the ground falls away whichever way the ball slides and falls faster the farther it "
+             "goes; < 0 in a hollow. Read at the foothold itself, never at a placement error",
     "riser_ahead": "[m] the riser the swing leaving the foothold must climb at once: largest "
                    "rise of the ball-centre surface ahead along the heading at distance s up to "
                    "riser_distance, weighted by (1 - s / riser_distance) (the swing lifts "
@@ -99,6 +104,13 @@ def terrain_terms(hmap: HeightMap, f: np.ndarray, cfg: ExpertConfig, robot: Robo
     trap_depth = np.clip(trap, 0.0, None)
     drop_off = np.clip(drop, 0.0, None)
 
+    # Crown: the seat against the ball-centre surface on a ring around it.
+    ring = xy[:, None, :] + cfg.crown_radius * dirs[None, :, :]  # (n, K, 2) [m]
+    around = sample_surface(ball, ring)
+    seen = np.isfinite(around).any(axis=1)
+    mean = np.nanmean(np.where(seen[:, None], around, 0.0), axis=1)
+    crown = np.where(seen, seat - mean, 0.0)
+
     # Riser ahead: the ball-centre surface rising along the heading, nearer counting more.
     ahead = np.arange(1, int(math.floor(cfg.riser_distance / cfg.far_step + 1e-9)) + 1) * cfg.far_step
     if ahead.size:
@@ -114,7 +126,7 @@ def terrain_terms(hmap: HeightMap, f: np.ndarray, cfg: ExpertConfig, robot: Robo
                             np.ascontiguousarray(xy), dirs, rays.unknown)
 
     terms = {"slip_margin": slip_margin, "pinch": pinch, "trap_depth": trap_depth,
-             "drop_off": drop_off, "riser_ahead": riser_ahead, "unknown": unknown}
+             "drop_off": drop_off, "crown": crown, "riser_ahead": riser_ahead, "unknown": unknown}
     return terms, seat
 
 
@@ -185,6 +197,7 @@ def terrain_utilities(terms: dict[str, np.ndarray], cfg: ExpertConfig, robot: Ro
                                         0.0, None),
         "trap_depth": -cfg.w_trap * np.clip(terms["trap_depth"] - cfg.trap_free, 0.0, None),
         "drop_off": -cfg.w_drop * np.clip(terms["drop_off"] - cfg.drop_free, 0.0, None),
+        "crown": -cfg.w_crown * np.clip(terms["crown"] - cfg.crown_free, 0.0, None),
         "riser_ahead": -cfg.w_riser * np.clip(terms["riser_ahead"] - cfg.riser_free, 0.0, None),
         "unknown": -cfg.w_unknown * terms["unknown"],
     }
@@ -213,8 +226,10 @@ def worst_placement(hmap: HeightMap, f: np.ndarray, yaw: float, cfg: ExpertConfi
 
     The terrain terms of candidates f (n, 3) are computed, in one pass, at f and
     at f shifted ``placement_error`` [m] forward and backward along the heading
-    ``yaw`` [rad]; for each candidate, all of them are taken from the placement
-    whose terrain utilities sum lowest (ties: the foothold itself, then forward).
+    ``yaw`` [rad]; for each candidate, all of them but the crown are taken from the
+    placement whose terrain utilities (the crown's left out) sum lowest (ties: the
+    foothold itself, then forward). The crown is the foothold's own: it reads the ground
+    2 cm around, where a placement a few mm off would only move it onto a wall's edge.
     With ``roll_back`` [m] set, a shifted placement whose seat is more than that
     above the foothold's own does not count: the ground between falls toward the
     foothold, and a ball set there slides back to it -- unless, with ``roll_back_wall``
@@ -227,7 +242,9 @@ def worst_placement(hmap: HeightMap, f: np.ndarray, yaw: float, cfg: ExpertConfi
     shift = cfg.placement_error * np.array([math.cos(yaw), math.sin(yaw), 0.0])
     # A shifted ball without data under it falls back to the candidate's own height.
     terms, seat = terrain_terms(hmap, np.concatenate([f, f + shift, f - shift]), cfg, robot, yaw)
-    score = sum(terrain_utilities(terms, cfg, robot).values()).reshape(3, n)
+    utilities = terrain_utilities(terms, cfg, robot)
+    utilities.pop("crown")  # read at the aim: it judges the ground around, not a placement
+    score = sum(utilities.values()).reshape(3, n)
     if cfg.roll_back is not None:
         rise = seat.reshape(3, n)[1:] - seat[:n]  # (2, n) [m] of the shifted seats over f's
         back = rise > cfg.roll_back
@@ -236,4 +253,6 @@ def worst_placement(hmap: HeightMap, f: np.ndarray, yaw: float, cfg: ExpertConfi
         score[1:] = np.where(back, np.inf, score[1:])
     worst = np.argmin(score, axis=0)  # first minimum: the foothold itself on ties
     cols = np.arange(n)
-    return {name: v.reshape(3, n)[worst, cols] for name, v in terms.items()}, seat[:n]
+    out = {name: v.reshape(3, n)[worst, cols] for name, v in terms.items()}
+    out["crown"] = terms["crown"][:n]
+    return out, seat[:n]

@@ -341,6 +341,52 @@ def test_a_wall_is_not_a_flank_the_ball_slides_back_down():
     assert all(c[k][0] == here[k][0] for k in EXPERT_TERM_NAMES)
 
 
+def test_the_crown_reads_a_crest_above_its_ring_and_a_trough_below_it():
+    """The crown: the seated ball centre against the ball-centre surface 2 cm around the aim."""
+    x, y = grid()
+    u = x - P[0]  # [m] along the heading, 0 at the foothold
+    bend = u * u / (2 * 0.015)  # a round profile of 1.5 cm radius
+    trough = hmap(np.minimum(bend, 0.03))
+    crest = hmap(np.maximum(0.03 - bend, 0.0))
+    cand = lambda m: np.array([[P[0], P[1], float(m.height_at(np.asarray(P)))]])  # noqa: E731
+    config = ExpertConfig(crown_radius=0.02)
+    judge_ = SyntheticExpert(config)
+    # The ring: 16 directions; along the heading the profile is 0.02^2 / 0.03 = 13.3 mm off, across
+    # it 0. The ball's centre follows the profile's offset curve: lower over the crest's convex
+    # flanks, higher on the trough's concave ones (it rests on a 53 deg flank 17 mm above it).
+    on_crest = judge_.terms(crest, STATE, cand(crest))["crown"][0]
+    in_trough = judge_.terms(trough, STATE, cand(trough))["crown"][0]
+    flat = judge_.terms(FLAT, STATE, cand(FLAT))["crown"][0]
+    assert 0.004 < on_crest < 0.008
+    assert -0.016 < in_trough < -0.008
+    assert abs(flat) < 1e-12
+    # Off by default: the value is the one without the term, to the last bit.
+    weighted = SyntheticExpert(ExpertConfig(crown_radius=0.02, w_crown=8000.0))
+    assert judge_.values(crest, STATE, cand(crest))[0] == EXPERT.values(crest, STATE, cand(crest))[0]
+    # Weighted: 8 value units a mm above 2 mm, on the crest only.
+    drop = (judge_.values(crest, STATE, cand(crest))[0]
+            - weighted.values(crest, STATE, cand(crest))[0])
+    assert drop == pytest.approx(8000.0 * (on_crest - 0.002), rel=1e-9)
+    assert weighted.values(trough, STATE, cand(trough))[0] == judge_.values(
+        trough, STATE, cand(trough))[0]
+
+
+def test_the_crown_is_read_at_the_aim_not_at_a_placement_error():
+    """A foothold 12 mm before a 4 cm bar: a placement 7 mm on stands at the bar's edge, whose
+    crown is large; the crown stays the aim's, and it does not pick the worst placement."""
+    x, y = grid()
+    bar = hmap(np.where(x > P[0] + 0.012, 0.04, 0.0))
+    cand = np.array([[P[0], P[1], 0.0]])
+    at_aim = SyntheticExpert(ExpertConfig(crown_radius=0.02, w_crown=8000.0))
+    placed = SyntheticExpert(ExpertConfig(crown_radius=0.02, w_crown=8000.0, placement_error=0.007))
+    plain = SyntheticExpert(ExpertConfig(placement_error=0.007))
+    a, b, c = (e.terms(bar, STATE, cand) for e in (at_aim, placed, plain))
+    assert b["crown"][0] == a["crown"][0] < 0.0  # the bar beside it: the aim stands low
+    for name in EXPERT_TERM_NAMES:  # every other term from the same placement as without it
+        if name != "crown":
+            assert b[name][0] == c[name][0], name
+
+
 def test_roll_back_keeps_an_edge_ahead_and_changes_nothing_on_flat_ground():
     x, y = grid()
     back = SyntheticExpert(ExpertConfig(placement_error=0.007, roll_back=0.001))

@@ -49,7 +49,7 @@ FIT_L2_GRID = (1e-3, 1e-2, 1e-1, 1.0)  # [-] ridge penalties the outcome fit cho
 
 TERM_WORSE_HIGHER: dict[str, bool] = {
     "slip_margin": False, "pinch": True, "trap_depth": True, "drop_off": True,
-    "riser_ahead": True, "leg_clearance": False, "unknown": True, "progress": False,
+    "crown": True, "riser_ahead": True, "leg_clearance": False, "unknown": True, "progress": False,
     "stance_offset": True, "stability": False, "reach_margin": False, "joint_margin": False}
 """For each expert term: is more of it worse for the foothold (True) or better (False)?"""
 

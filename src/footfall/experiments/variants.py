@@ -70,10 +70,6 @@ ROLL_BACK_WALL = 1.0  # [-] with-flank-roll-back: ground rising faster than 1 : 
 # average) from the aim to a placement is a wall (a riser, a bar, a rock's side): the ball lands
 # on its edge or top, it does not slide back (round 4: every choice the roll-back changed on the
 # steps and barrier boards stood at a wall's foot, 19-63 mm below the placement 7 mm ahead)
-CROWN_RADIUS = 0.02  # [m] with-crown: the ring the crown is read on, about how far a ball that
-# slides off a crest runs before the controller catches it (22-55 mm on the d = 1 ridges)
-CROWN_WEIGHT = 8000.0  # [value/m] with-crown: chosen offline on training runs by a gate written
-# before (docs/terrain-suite.md, "A crown term")
 
 
 def _reflexes(walk: WalkConfig, **switches) -> WalkConfig:
@@ -143,10 +139,9 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
     register_variant("with-roll-back", "with the expert counting no placement error that seats "
                      "the ball more than 1 mm above its aim: the ball slides back (off by "
                      "default)", lambda w: w, lambda e: replace(e, roll_back=ROLL_BACK)),
-    register_variant("with-crown", "with the expert's crown term: a foothold standing more than "
-                     "2 mm above the ball-centre surface 2 cm around it (a crest, a rock's top) "
-                     "loses 8 value units a mm (off by default)", lambda w: w,
-                     lambda e: replace(e, crown_radius=CROWN_RADIUS, w_crown=CROWN_WEIGHT)),
+    register_variant("no-crown", "without the expert's crown term (a foothold standing more "
+                     "than 2 mm above the ball-centre surface 2 cm around it losing 8 value units "
+                     "a mm)", lambda w: w, lambda e: replace(e, w_crown=0.0)),
     register_variant("with-flank-roll-back", "with-roll-back, but a placement seated higher "
                      "above the aim than the placement error itself (45 deg on average: a wall) "
                      "counts (off by default)", lambda w: w,

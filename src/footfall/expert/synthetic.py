@@ -139,7 +139,7 @@ class ExpertConfig(Params):
                           doc="penalty per metre of drop-off depth above drop_free")
     drop_free: float = param(0.005, unit="m", range=_NONNEGATIVE,
                              doc="drop-off depth that does no harm (ball compliance, texture)")
-    crown_radius: float = param(0.015, unit="m", range=above(0),
+    crown_radius: float = param(0.02, unit="m", range=above(0),
                                 doc="radius of the ring around the foothold whose ball-centre "
                                     "heights the crown is read against (at the foothold itself, "
                                     "not at its placement error)")
@@ -198,6 +198,12 @@ WALKER_PLACEMENT_ERROR: float = 0.007
 walker on flat ground (6.1 +- 1.7 mm over 21 runs, docs/reproduce)."""
 
 
+WALKER_CROWN_WEIGHT: float = 8000.0
+"""[value/m] The walking expert's crown weight (on ``crown_radius``'s 2 cm ring): a crest 10 mm
+above the ground around it costs 64 value units. Chosen offline on training runs by a gate
+written before, adopted by the ablation's training-suite rule (round 6, docs/terrain-suite.md)."""
+
+
 def walking_expert(lead: float, placement_error: float = WALKER_PLACEMENT_ERROR) -> ExpertConfig:
     """The synthetic expert as it judges a fixed-advance gait's steps: the foot where the gait needs it.
 
@@ -217,14 +223,16 @@ def walking_expert(lead: float, placement_error: float = WALKER_PLACEMENT_ERROR)
     sent: it judges the terrain where the foot would fare worst within
     ``placement_error`` [m] ahead of or behind the foothold along the heading
     (see :attr:`ExpertConfig.placement_error`), so a foothold a few mm from a
-    riser's edge or a pit's rim is judged by the edge or the rim.
+    riser's edge or a pit's rim is judged by the edge or the rim. And it knows that a
+    ball set on a crest slides off whichever way it moves: a foothold standing above the
+    ground 2 cm around it loses ``WALKER_CROWN_WEIGHT`` a metre of the difference (the crown).
     """
     for name, v in (("stance lead", lead), ("placement error", placement_error)):
         if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
             raise FootfallError(f"the {name} must be a number >= 0 [m], got {v!r}")
     base = ExpertConfig()
     return replace(base, w_progress=0.0, w_stance=base.w_progress, stance_lead=float(lead),
-                   placement_error=float(placement_error))
+                   placement_error=float(placement_error), w_crown=WALKER_CROWN_WEIGHT)
 
 
 _SEAT = "seat"  # the memo's name for the seated ball-centre height [m]

@@ -82,15 +82,32 @@ EXPERT_TERMS: dict[str, str] = {
 EXPERT_TERM_NAMES: tuple[str, ...] = tuple(EXPERT_TERMS)
 
 
+def ray_directions(cfg: ExpertConfig) -> np.ndarray:
+    """The ``cfg.directions`` unit ray directions (K, 2) around a foothold; dirs[k + K/2] = -dirs[k]."""
+    k = int(cfg.directions)
+    angles = 2 * np.pi * np.arange(k) / k
+    return np.column_stack([np.cos(angles), np.sin(angles)])
+
+
+def crown_term(hmap: HeightMap, xy: np.ndarray, seat: np.ndarray, cfg: ExpertConfig,
+               robot: RobotDescription) -> np.ndarray:
+    """The crown (n,) [m] of footholds xy (n, 2) [m] whose seated ball centres are ``seat`` (n,)
+    [m]: the seat less the mean of the ball-centre surface on the ring of ``crown_radius``
+    (samples without data skipped; 0 where none has data)."""
+    ring = xy[:, None, :] + cfg.crown_radius * ray_directions(cfg)[None, :, :]  # (n, K, 2) [m]
+    around = sample_surface(board_sphere(hmap, robot.foot_radius), ring)
+    seen = np.isfinite(around).any(axis=1)
+    mean = np.nanmean(np.where(seen[:, None], around, 0.0), axis=1)
+    return np.where(seen, seat - mean, 0.0)
+
+
 def terrain_terms(hmap: HeightMap, f: np.ndarray, cfg: ExpertConfig, robot: RobotDescription,
                   yaw: float = 0.0) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """The ball-foot terms of candidates f (n, 3) and the seated ball-centre heights (n,) [m];
     ``yaw`` [rad] is the heading the swing leaving a foothold takes (the riser term)."""
     n = f.shape[0]
     r = robot.foot_radius
-    k = int(cfg.directions)
-    angles = 2 * np.pi * np.arange(k) / k
-    dirs = np.column_stack([np.cos(angles), np.sin(angles)])  # (K, 2); dirs[k + K/2] = -dirs[k]
+    dirs = ray_directions(cfg)
     xy = f[:, :2]
     ball = board_sphere(hmap, r)
     seat = sample_surface(ball, xy)  # (n,) [m] seated ball-centre height
@@ -103,13 +120,6 @@ def terrain_terms(hmap: HeightMap, f: np.ndarray, cfg: ExpertConfig, robot: Robo
     pinch = robot.foot_friction * np.clip(pair, 0.0, None)
     trap_depth = np.clip(trap, 0.0, None)
     drop_off = np.clip(drop, 0.0, None)
-
-    # Crown: the seat against the ball-centre surface on a ring around it.
-    ring = xy[:, None, :] + cfg.crown_radius * dirs[None, :, :]  # (n, K, 2) [m]
-    around = sample_surface(ball, ring)
-    seen = np.isfinite(around).any(axis=1)
-    mean = np.nanmean(np.where(seen[:, None], around, 0.0), axis=1)
-    crown = np.where(seen, seat - mean, 0.0)
 
     # Riser ahead: the ball-centre surface rising along the heading, nearer counting more.
     ahead = np.arange(1, int(math.floor(cfg.riser_distance / cfg.far_step + 1e-9)) + 1) * cfg.far_step
@@ -126,7 +136,7 @@ def terrain_terms(hmap: HeightMap, f: np.ndarray, cfg: ExpertConfig, robot: Robo
                             np.ascontiguousarray(xy), dirs, rays.unknown)
 
     terms = {"slip_margin": slip_margin, "pinch": pinch, "trap_depth": trap_depth,
-             "drop_off": drop_off, "crown": crown, "riser_ahead": riser_ahead, "unknown": unknown}
+             "drop_off": drop_off, "riser_ahead": riser_ahead, "unknown": unknown}
     return terms, seat
 
 
@@ -197,7 +207,6 @@ def terrain_utilities(terms: dict[str, np.ndarray], cfg: ExpertConfig, robot: Ro
                                         0.0, None),
         "trap_depth": -cfg.w_trap * np.clip(terms["trap_depth"] - cfg.trap_free, 0.0, None),
         "drop_off": -cfg.w_drop * np.clip(terms["drop_off"] - cfg.drop_free, 0.0, None),
-        "crown": -cfg.w_crown * np.clip(terms["crown"] - cfg.crown_free, 0.0, None),
         "riser_ahead": -cfg.w_riser * np.clip(terms["riser_ahead"] - cfg.riser_free, 0.0, None),
         "unknown": -cfg.w_unknown * terms["unknown"],
     }
@@ -209,6 +218,7 @@ def contributions(terms: dict[str, np.ndarray], cfg: ExpertConfig, robot: RobotD
     leg = terms["leg_clearance"]
     parts = {
         **terrain_utilities(terms, cfg, robot),
+        "crown": -cfg.w_crown * np.clip(terms["crown"] - cfg.crown_free, 0.0, None),
         "leg_clearance": (-cfg.w_leg * np.clip(cfg.leg_safe - leg, 0.0, None)
                           - cfg.w_leg_collision * np.clip(-leg, 0.0, None)),
         "progress": cfg.w_progress * terms["progress"],
@@ -226,10 +236,10 @@ def worst_placement(hmap: HeightMap, f: np.ndarray, yaw: float, cfg: ExpertConfi
 
     The terrain terms of candidates f (n, 3) are computed, in one pass, at f and
     at f shifted ``placement_error`` [m] forward and backward along the heading
-    ``yaw`` [rad]; for each candidate, all of them but the crown are taken from the
-    placement whose terrain utilities (the crown's left out) sum lowest (ties: the
-    foothold itself, then forward). The crown is the foothold's own: it reads the ground
-    2 cm around, where a placement a few mm off would only move it onto a wall's edge.
+    ``yaw`` [rad]; for each candidate, all of them are taken from the placement whose
+    terrain utilities sum lowest (ties: the foothold itself, then forward). The crown
+    (:func:`crown_term`) is read at f alone and plays no part in that choice: it reads the
+    ground 2 cm around, where a placement a few mm off would only move it onto a wall's edge.
     With ``roll_back`` [m] set, a shifted placement whose seat is more than that
     above the foothold's own does not count: the ground between falls toward the
     foothold, and a ball set there slides back to it -- unless, with ``roll_back_wall``
@@ -238,13 +248,12 @@ def worst_placement(hmap: HeightMap, f: np.ndarray, yaw: float, cfg: ExpertConfi
     """
     n = f.shape[0]
     if cfg.placement_error == 0:
-        return terrain_terms(hmap, f, cfg, robot, yaw)
+        terms, seat = terrain_terms(hmap, f, cfg, robot, yaw)
+        return {**terms, "crown": crown_term(hmap, f[:, :2], seat, cfg, robot)}, seat
     shift = cfg.placement_error * np.array([math.cos(yaw), math.sin(yaw), 0.0])
     # A shifted ball without data under it falls back to the candidate's own height.
     terms, seat = terrain_terms(hmap, np.concatenate([f, f + shift, f - shift]), cfg, robot, yaw)
-    utilities = terrain_utilities(terms, cfg, robot)
-    utilities.pop("crown")  # read at the aim: it judges the ground around, not a placement
-    score = sum(utilities.values()).reshape(3, n)
+    score = sum(terrain_utilities(terms, cfg, robot).values()).reshape(3, n)
     if cfg.roll_back is not None:
         rise = seat.reshape(3, n)[1:] - seat[:n]  # (2, n) [m] of the shifted seats over f's
         back = rise > cfg.roll_back
@@ -254,5 +263,4 @@ def worst_placement(hmap: HeightMap, f: np.ndarray, yaw: float, cfg: ExpertConfi
     worst = np.argmin(score, axis=0)  # first minimum: the foothold itself on ties
     cols = np.arange(n)
     out = {name: v.reshape(3, n)[worst, cols] for name, v in terms.items()}
-    out["crown"] = terms["crown"][:n]
-    return out, seat[:n]
+    return {**out, "crown": crown_term(hmap, f[:, :2], seat[:n], cfg, robot)}, seat[:n]

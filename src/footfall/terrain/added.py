@@ -1,15 +1,17 @@
-"""Training kinds beyond the paper's: ground of ridges, and a deck with foot-sized pits.
+"""Training kinds beyond the paper's: ridges, a deck with foot-sized pits, and rock as scanned.
 
 The paper's module kinds (:mod:`footfall.terrain.generators`,
 :mod:`footfall.terrain.rocky`) are the terrain footfall's parameters were first
-chosen on. These two widen the training side with characters none of them has
-(docs/terrain-suite.md, "Two more training kinds"): each is a
+chosen on. These three widen the training side with characters none of them
+has (docs/terrain-suite.md, "Two more training kinds" and "A training kind
+with holes"): each is a
 :data:`~footfall.terrain.geometry.Generator`, registered in
 :mod:`footfall.terrain.kinds`, walked by the training suite and the ablation,
 and -- unlike the held-out kinds -- open to tuning.
 
 * ``ridges`` -- ground made of ridges across the path and nothing else;
-* ``pitted`` -- a raised deck with round pits through it that the ball foot sinks into.
+* ``pitted`` -- a raised deck with round pits through it that the ball foot sinks into;
+* ``rockyscan`` -- the paper's rocky module as a scanner sees it: no data behind rises.
 
 Their difficulty mappings were fixed from the robot's geometry (heights of the
 scale of steps and rocky at the same difficulty, flanks about the ball's
@@ -23,6 +25,8 @@ import math
 import numpy as np
 
 from footfall.terrain.geometry import MODULE_CELLS, MODULE_SIZE, cell_centres, lerp
+from footfall.terrain.occlusion import as_scanned
+from footfall.terrain.rocky import rocky
 
 RIDGE_SPAN = (0.05, 0.56)  # [m] stretch of the module whose ridge centres lie in
 RIDGE_FADE = (0.01, 0.07)  # [m] from either end, the ridges rise from 0 to full height over this
@@ -103,5 +107,23 @@ def pitted(difficulty: float, rng: np.random.Generator) -> np.ndarray:
     return np.where(on_deck & ~in_pit, deck, 0.0)
 
 
-ADDED = (("ridges", ridges), ("pitted", pitted))
+def rockyscan(difficulty: float, rng: np.random.Generator) -> np.ndarray:
+    """The paper's rocky module as a scanner sees it: NaN behind rises and in dropouts.
+
+    The surface is :func:`footfall.terrain.rocky.rocky` at the same difficulty
+    and from the same ``rng``; the cells a scanner 0.3 m behind the module at
+    0.6 m cannot see (in cracks, holes and behind rock edges that fall away
+    from it) and a few dropout discs have no data, by the rule of
+    :func:`footfall.terrain.occlusion.as_scanned` that the held-out ``scan``
+    uses. The planner has no data there; the simulator fills those cells down
+    to the board's lowest height, so a hidden crack or hole is at least as deep
+    as the board's floor.
+
+    Difficulty mapping (d in [0, 1]): the rocky kind's, and ``2 + round(8 d)``
+    dropouts of radius U(0.008, 0.02) m.
+    """
+    return as_scanned(rocky(difficulty, rng), difficulty, rng)
+
+
+ADDED = (("ridges", ridges), ("pitted", pitted), ("rockyscan", rockyscan))
 """The training kinds beyond the paper's, name -> generator, in the training suite's order."""

@@ -39,6 +39,7 @@ from footfall.terrain.geometry import (
     cell_centres,
     lerp,
 )
+from footfall.terrain.occlusion import as_scanned
 
 EDGE = 0.05  # [m] flat approach and exit at both ends of every held-out module
 RAMP = 0.03  # [m] over which a raised bed rises from and returns to z = 0
@@ -223,8 +224,10 @@ def scan(difficulty: float, rng: np.random.Generator) -> np.ndarray:
     The surface is :func:`rolling` ground with rock-like bumps (smoothed noise
     at 1-2 cm); a scanner 0.3 m behind the module's start at 0.6 m height sees
     no surface where a rise in front hides it (the shadow), and misses a few
-    blobs of cells elsewhere (dropouts). Those cells are NaN: the planner has
-    no data there, and the simulator fills them down to the map's lowest height.
+    blobs of cells elsewhere (dropouts), by the rule of
+    :func:`footfall.terrain.occlusion.as_scanned`. Those cells are NaN: the
+    planner has no data there, and the simulator fills them down to the map's
+    lowest height.
 
     Difficulty mapping (d in [0, 1]):
 
@@ -232,25 +235,13 @@ def scan(difficulty: float, rng: np.random.Generator) -> np.ndarray:
       ``0.002 + 0.008 d`` [m]; the scanner 0.3 m behind the module at 0.6 m;
     * dropouts ``2 + round(8 d)`` blobs of radius U(0.008, 0.02) m.
     """
-    x, y = cell_centres()
+    x, _ = cell_centres()
     z = rolling(difficulty, rng)
     bumps = gaussian_filter(rng.standard_normal((MODULE_CELLS, MODULE_CELLS)),
                             rng.uniform(0.01, 0.02) / MODULE_RESOLUTION, mode="wrap")
     z = np.clip(z + bumps / max(float(bumps.std()), 1e-12)
                 * lerp(difficulty, 0.002, 0.01) * _window(x), 0.0, None)
-    # The scanner's shadow: a cell is hidden when the ray from the scanner passes under a
-    # nearer cell's height (the ray's slope to each cell against the running maximum in x).
-    sx, sz = -0.3, 0.6  # [m] the scanner behind the module
-    slope = (z - sz) / (x - sx)  # [-] of the ray from the scanner to each cell
-    hidden = (slope < np.maximum.accumulate(slope, axis=0) - 1e-9) & _inside(x)
-    out = np.where(hidden, np.nan, z)
-    n = 2 + int(round(8 * difficulty))
-    bx = rng.uniform(EDGE + RAMP, MODULE_SIZE - EDGE - RAMP, n)
-    by = rng.uniform(-0.28, 0.28, n)
-    br = rng.uniform(0.008, 0.02, n)
-    for k in range(n):
-        out = np.where((x - bx[k]) ** 2 + (y - by[k]) ** 2 <= br[k] ** 2, np.nan, out)
-    return out
+    return as_scanned(z, difficulty, rng)
 
 
 HELD_OUT = (("stones", stones), ("washboard", washboard), ("scree", scree),

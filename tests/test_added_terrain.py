@@ -9,16 +9,18 @@ from footfall.core.robot import RobotDescription
 from footfall.terrain import make_module
 from footfall.terrain.added import PIT_REACH
 from footfall.terrain.kinds import ADDED_KINDS
+from footfall.terrain.occlusion import SCANNER_BEHIND, SCANNER_HEIGHT, SEEN_EDGE, shadow
 
 FOOT = RobotDescription().foot_radius  # [m]
+SEEN_EDGE_CELLS = int(SEEN_EDGE * 1000) - 1  # cells at either end that always have data
 
 
 @pytest.mark.parametrize("kind", ADDED_KINDS)
 def test_an_added_kind_is_seeded_reproducible_and_meets_its_neighbours_at_zero(kind):
     a, b = make_module(kind, 0.7, 5).heights, make_module(kind, 0.7, 5).heights
-    assert np.array_equal(a, b)
-    assert not np.array_equal(a, make_module(kind, 0.7, 6).heights)
-    assert np.all(a[:10] == 0) and np.all(a[-10:] == 0) and np.all(a >= 0)
+    assert np.array_equal(a, b, equal_nan=True)
+    assert not np.array_equal(a, make_module(kind, 0.7, 6).heights, equal_nan=True)
+    assert np.all(a[:10] == 0) and np.all(a[-10:] == 0) and np.all(a[np.isfinite(a)] >= 0)
 
 
 def test_ridges_cover_the_ground_with_flanks_near_the_friction_cone_that_grow_with_difficulty():
@@ -50,3 +52,28 @@ def test_a_pitted_deck_has_pits_the_ball_sinks_into_to_the_ground():
     r = int(math.ceil(FOOT * 1e3))
     disc = np.hypot(*np.mgrid[-r:r + 1, -r:r + 1]) <= r
     assert binary_erosion(pits, disc).any()
+
+
+def test_rock_as_scanned_is_the_rocky_module_with_no_data_only_where_a_scanner_sees_nothing():
+    scanned = make_module("rockyscan", 0.7, 4).heights
+    rock = make_module("rocky", 0.7, 4).heights  # the same generator from the same seed stream
+    holes = np.isnan(scanned)
+    assert np.array_equal(scanned[~holes], rock[~holes])
+    assert 0.05 < holes.mean() < 0.4
+    assert not holes[:SEEN_EDGE_CELLS].any() and not holes[-SEEN_EDGE_CELLS:].any()
+    hidden = shadow(rock)
+    assert hidden.any() and np.all(holes[hidden])  # every shadowed cell is a hole ...
+    dropouts = holes & ~hidden
+    assert dropouts.any()  # ... and a few holes are dropouts where the scanner could see
+    # A shadowed cell lies below the ray from the scanner over some nearer cell.
+    x = (np.arange(rock.shape[0]) + 0.5) * 0.001  # [m] cell centres along the path
+    i, j = np.argwhere(hidden)[len(np.argwhere(hidden)) // 2]
+    ray = SCANNER_HEIGHT + (rock[i, j] - SCANNER_HEIGHT) * (x[:i] + SCANNER_BEHIND) / (
+        x[i] + SCANNER_BEHIND)  # [m] the ray's height over the nearer cells
+    assert np.any(rock[:i, j] > ray)
+
+
+def test_more_difficult_rock_hides_more_of_itself_from_the_scanner():
+    share = [np.isnan(make_module("rockyscan", d, s).heights).mean()
+             for d in (0.2, 1.0) for s in (0, 1)]
+    assert max(share[:2]) < min(share[2:])

@@ -24,7 +24,8 @@ from footfall.terrain import (
 )
 
 ALL_KINDS = sorted(KINDS)
-ADDED_KINDS = ("ridges", "pitted")  # footfall.terrain.added
+SHAPE_KINDS = ("ridges", "pitted")  # added training kinds whose documented top is 5 cm at d = 1
+HOLED_KINDS = ("scan", "rockyscan")  # kinds with no-data cells (footfall.terrain.occlusion)
 OBSTACLE_KINDS = [k for k in ALL_KINDS if k != "flat"]
 MAX_HEIGHT = 0.12  # [m] nothing a LittleDog (~18 cm legs) could not cross
 EDGE_TOLERANCE = 1e-9  # [m] module ends "at" the ground plane
@@ -41,8 +42,9 @@ def test_registry_holds_the_paper_kinds_the_added_training_ones_and_the_held_out
     from footfall.terrain.kinds import ADDED_KINDS, HELD_OUT_KINDS, PAPER_KINDS, TRAINING_KINDS
 
     assert PAPER_KINDS == ("flat", "steps", "barrier", "slope", "logs", "rocky")
-    assert ADDED_KINDS == ("ridges", "pitted")
-    assert TRAINING_KINDS == ("steps", "barrier", "slope", "logs", "rocky", "ridges", "pitted")
+    assert ADDED_KINDS == ("ridges", "pitted", "rockyscan")
+    assert TRAINING_KINDS == ("steps", "barrier", "slope", "logs", "rocky", "ridges", "pitted",
+                              "rockyscan")
     assert HELD_OUT_KINDS == ("stones", "washboard", "scree", "logbarrier", "rolling", "scan")
     assert set(KINDS) == set(PAPER_KINDS + ADDED_KINDS + HELD_OUT_KINDS)
     assert all(callable(g) for _, g in KINDS.items())
@@ -105,7 +107,7 @@ def test_module_geometry_and_metadata(kind):
 @pytest.mark.parametrize("difficulty", [0.0, 0.6, 1.0])
 def test_heights_are_finite_non_negative_and_crossable(kind, difficulty):
     h = module(kind, difficulty, 1).heights
-    assert kind == "scan" or not np.isnan(h).any()  # only a scan has no-data cells
+    assert kind in HOLED_KINDS or not np.isnan(h).any()  # only scanned kinds have no-data cells
     assert not np.isinf(h).any()
     assert np.nanmin(h) >= 0.0
     assert np.nanmax(h) <= MAX_HEIGHT
@@ -122,7 +124,7 @@ def test_max_obstacle_height_grows_with_difficulty(kind, seed):
     assert tops[0] < 0.05  # easy modules have small obstacles ...
     # ... hard ones real obstacles of several cm (the added training kinds' character is their
     # shape -- flanks, pits -- and their documented top is 5 cm at d = 1)
-    assert tops[2] > (0.035 if kind in ADDED_KINDS else 0.06)
+    assert tops[2] > (0.035 if kind in SHAPE_KINDS else 0.06)
 
 
 def test_steps_climb_to_a_platform_and_back_down():

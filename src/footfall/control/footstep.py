@@ -23,11 +23,12 @@ import numpy as np
 
 from footfall.control.body_path import BodyPath
 from footfall.control.grids import grid_spacing, grid_values, terrain_grids
-from footfall.control.stance_checks import stance_checks, stride_on
+from footfall.control.stance_checks import stance_checks, stride_on, unless_none_left
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, above, at_least, param
 from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG, RobotDescription
+from footfall.core.sphere_surface import seen_under_sphere
 from footfall.core.state import RobotState, feet_pitch
 from footfall.features.candidates import lattice, reachable_footholds, reaches
 from footfall.features.dense import ScoreGrid
@@ -93,6 +94,11 @@ class FootstepConfig(Params):
                                               "contact tilts more than atan(foot friction / this) "
                                               "anywhere within footing_margin is dropped from F "
                                               "(unless none holds); None: no check")
+    seen_footing: float | None = param(None, unit="m", range=above(0),
+                                       doc="seen footing: a foothold within this of a place "
+                                           "where the ball foot has no map data under it (a "
+                                           "hole in a scan wider than the ball) is dropped from "
+                                           "F (unless every one is); None: no check")
     joint_margin: float | None = param(None, unit="rad", range=above(0),
                                        doc="joint-limit margin: a foothold whose swing leg has "
                                            "a joint nearer its limit than this at touch-down or "
@@ -416,6 +422,9 @@ class FootstepPlanner:
                                    self.rewards_[leg0].config if exact else None)
         terrain = self._terrain(leg0, cand, yaw0)
         keep = self._holding(cand, np.isfinite(terrain))
+        if cfg.seen_footing is not None:  # beside a hole in the scan the ball could drop into
+            keep = unless_none_left(keep, seen_under_sphere(
+                self.hmap, cand[:, :2], self.robot.foot_radius, cfg.seen_footing))
         if cfg.search_radius is not None:  # F: the footholds near the gait-nominal position, or,
             # where none near it is usable (a step edge, a gap), every reachable one
             near = np.sum((cand[:, :2] - target) ** 2, axis=1) <= cfg.search_radius ** 2

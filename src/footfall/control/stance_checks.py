@@ -60,7 +60,7 @@ def stance_checks(hmap: HeightMap, st0: RobotState, later: RobotState, cand: np.
     cannot reach at one of the two poses is judged at the other; at neither, it fails."""
     if config.joint_margin is not None:
         least = np.fmin(joint_margins(st0, cand, robot), joint_margins(later, cand, robot))
-        keep = _unless_none_left(keep, least >= config.joint_margin)
+        keep = unless_none_left(keep, least >= config.joint_margin)
     if config.leg_clearance is not None:
         idx = np.flatnonzero(keep)  # a few hundred IK solutions at two poses, on the kept only
         least = np.full(cand.shape[0], np.nan)
@@ -68,11 +68,11 @@ def stance_checks(hmap: HeightMap, st0: RobotState, later: RobotState, cand: np.
             leg_clearances(hmap, st0, cand[idx], robot, config.leg_samples, config.leg_span),
             leg_clearances(hmap, later, cand[idx], robot, config.leg_samples,
                            config.leg_span))
-        keep = _unless_none_left(keep, least >= config.leg_clearance)
+        keep = unless_none_left(keep, least >= config.leg_clearance)
     return keep
 
 
-def _unless_none_left(keep: np.ndarray, passes: np.ndarray) -> np.ndarray:
+def unless_none_left(keep: np.ndarray, passes: np.ndarray) -> np.ndarray:
     """``keep & passes``, or ``keep`` where that would leave nothing."""
     both = keep & passes
     return both if both.any() else keep

@@ -15,6 +15,7 @@ import weakref
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.ndimage import distance_transform_edt
 
 from footfall.core.ball import ball_centre_surface
 from footfall.core.bilinear import surface_along_rays, surface_at
@@ -137,3 +138,35 @@ def no_data(hmap: HeightMap, points: np.ndarray) -> np.ndarray:
     i = np.clip(idx[..., 0], 0, nx - 1)
     j = np.clip(idx[..., 1], 0, ny - 1)
     return ~inside | np.isnan(hmap.heights[i, j])
+
+
+_BLIND_DISTANCES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+# map -> {radius [m]: distance [m] from each cell to the nearest where a sphere of that radius
+# has nothing under it, or None where there is no such cell}
+
+
+def seen_under_sphere(hmap: HeightMap, points: np.ndarray, radius: float, reach: float
+                      ) -> np.ndarray:
+    """Whether a sphere of ``radius`` [m] has some map data under it everywhere within ``reach``
+    [m] of each point (..., 2) [m]: bool (...); False for a point off the map.
+
+    A sphere has nothing under it where no cell with data lies within its radius
+    (its centre-height surface, :func:`board_sphere`, is unknown there): a hole in
+    a scan wider than the sphere, which it could drop into unseen. The distances to
+    those places are found once per map and radius (a Euclidean distance transform,
+    cell centre to cell centre); a map without them answers True for every point on it.
+    """
+    per_map = _BLIND_DISTANCES.setdefault(hmap, {})
+    if radius not in per_map:
+        blind = board_surface(hmap, radius)[1] == 0.0
+        per_map[radius] = (distance_transform_edt(~blind) * hmap.resolution
+                           if blind.any() else None)
+    distance = per_map[radius]
+    idx = hmap.position_to_index(points)
+    nx, ny = hmap.shape
+    inside = (idx[..., 0] >= 0) & (idx[..., 0] < nx) & (idx[..., 1] >= 0) & (idx[..., 1] < ny)
+    if distance is None:
+        return inside
+    i = np.clip(idx[..., 0], 0, nx - 1)
+    j = np.clip(idx[..., 1], 0, ny - 1)
+    return inside & (distance[i, j] > reach)

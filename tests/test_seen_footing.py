@@ -78,3 +78,11 @@ def test_without_holes_the_check_changes_nothing():
     plain, checked = planner(hmap).plan(state), planner(hmap, seen_footing=0.017).plan(state)
     np.testing.assert_array_equal(checked.candidates, plain.candidates)
     np.testing.assert_array_equal(checked.foothold, plain.foothold)
+
+
+def test_the_walk_checks_for_holes_wider_than_the_ball_by_default():
+    from footfall.expert.synthetic import WALKER_PLACEMENT_ERROR
+    from footfall.sim.episode import WalkConfig
+
+    assert WalkConfig().footstep.seen_footing == R + WALKER_PLACEMENT_ERROR  # [m] 0.017
+    assert FootstepConfig().seen_footing is None  # a planner made by hand checks only if asked

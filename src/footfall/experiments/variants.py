@@ -18,8 +18,7 @@ from typing import Callable
 
 from footfall.core.errors import FootfallError
 from footfall.core.registry import Registry
-from footfall.core.robot import LITTLEDOG
-from footfall.expert.synthetic import WALKER_PLACEMENT_ERROR, ExpertConfig
+from footfall.expert.synthetic import ExpertConfig
 from footfall.sim.episode import WalkConfig
 
 
@@ -67,11 +66,6 @@ ROLL_BACK = 0.001  # [m] with-roll-back: a placement error seated higher than th
 # the walking expert's 7 mm placement error is ground falling back at 8 deg on average)
 
 
-SEEN_FOOTING = LITTLEDOG.foot_radius + WALKER_PLACEMENT_ERROR  # [m] with-seen-footing: a
-# foothold this near a place where the ball has no map data under it is dropped -- a ball
-# landing its placement error off the aim stands, with its whole radius, over seen ground
-
-
 ROLL_BACK_WALL = 1.0  # [-] with-flank-roll-back: ground rising faster than 1 : 1 (45 deg on
 # average) from the aim to a placement is a wall (a riser, a bar, a rock's side): the ball lands
 # on its edge or top, it does not slide back (round 4: every choice the roll-back changed on the
@@ -110,6 +104,10 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
                      "leg's knee or shin comes within 5 mm of the terrain at touch-down or a "
                      "stride on", lambda w: replace(w, footstep=replace(w.footstep,
                                                                         leg_clearance=None))),
+    register_variant("no-seen-footing", "without footholds dropped within 17 mm (the ball's "
+                     "radius and the expert's placement error) of a place where the ball has no "
+                     "map data under it, a hole in a scan wider than the ball",
+                     lambda w: replace(w, footstep=replace(w.footstep, seen_footing=None))),
     register_variant("no-cog-reach", "without the COG plan within the legs' reach", _no_reach),
     register_variant("no-hand-over", "without the body correction handed to the stance anchors "
                      "at each touch-down", lambda w: _lowlevel(w, hand_over=False)),
@@ -139,10 +137,6 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
                      "within 0.1 rad of a joint limit at touch-down or a stride on (off by "
                      "default)",
                      lambda w: replace(w, footstep=replace(w.footstep, joint_margin=0.1))),
-    register_variant("with-seen-footing", "with footholds dropped within 17 mm (the ball's "
-                     "radius and the expert's placement error) of a place where the ball has no "
-                     "map data under it: a hole in a scan wider than the ball (off by default)",
-                     lambda w: replace(w, footstep=replace(w.footstep, seen_footing=SEEN_FOOTING))),
     register_variant("with-slow-shift", "with the body's shift between swings taking 0.3 s "
                      "instead of 0.15 s (off by default)",
                      lambda w: replace(w, cog=replace(w.cog, shift_duration=0.3))),

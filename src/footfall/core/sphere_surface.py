@@ -157,6 +157,8 @@ def seen_under_sphere(hmap: HeightMap, points: np.ndarray, radius: float, reach:
     cell centre to cell centre); a map without them answers True for every point on it.
     """
     per_map = _BLIND_DISTANCES.setdefault(hmap, {})
+    if radius not in per_map and not np.isnan(hmap.heights).any():
+        per_map[radius] = None  # a sphere has data under it wherever a map has it everywhere
     if radius not in per_map:
         blind = board_surface(hmap, radius)[1] == 0.0
         per_map[radius] = (distance_transform_edt(~blind) * hmap.resolution

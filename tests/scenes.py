@@ -1,6 +1,9 @@
 """Scenes on the robot: a controller whose ``step_phases`` stages one situation, walked once."""
 
+from footfall.control.body_path import BodyPath, terrain_grids
 from footfall.control.controller import Controller
+from footfall.control.footstep import FootstepConfig, FootstepPlanner
+from footfall.core.heightmap import HeightMap
 from footfall.features.reward import default_reward
 from footfall.sim.episode import Walk, WalkConfig
 from maps import short_flat_board
@@ -18,3 +21,12 @@ def staged(controller_class: type[Controller], **settings) -> Walk:
     run = scene(short_flat_board(), lambda leg: default_reward(), 1, config)
     run.record = run.run()
     return run
+
+
+def centre_line_planner(hmap: HeightMap, **config) -> FootstepPlanner:
+    """The hand-tuned reward's footstep planner along the map's centre line from x = 0.1 to
+    0.8 m, F within 3 cm; ``config`` are further :class:`FootstepConfig` fields."""
+    reward = default_reward()
+    return FootstepPlanner(hmap, lambda leg: reward, BodyPath.straight((0.1, 0.0), (0.8, 0.0)),
+                           grids=terrain_grids(hmap, lambda leg: reward),
+                           config=FootstepConfig(search_radius=0.03, **config))

@@ -2,13 +2,12 @@
 
 import numpy as np
 
-from footfall.control.body_path import BodyPath, terrain_grids
-from footfall.control.footstep import FootstepConfig, FootstepPlanner
+from footfall.control.footstep import FootstepConfig
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LITTLEDOG
 from footfall.core.sphere_surface import seen_under_sphere
 from footfall.core.state import nominal_state
-from footfall.features.reward import default_reward
+from scenes import centre_line_planner
 
 R = LITTLEDOG.foot_radius  # [m] 0.01
 
@@ -47,35 +46,29 @@ def test_a_sphere_is_blind_only_over_a_hole_wider_than_itself():
     assert not seen_under_sphere(plain, np.array([[-0.1, 0.0], [0.5, 0.4]]), R, 0.0).any()
 
 
-def planner(hmap: HeightMap, **config) -> FootstepPlanner:
-    """The hand-tuned reward's planner along the map's centre line, F within 3 cm."""
-    reward = default_reward()
-    return FootstepPlanner(hmap, lambda leg: reward, BodyPath.straight((0.1, 0.0), (0.8, 0.0)),
-                           grids=terrain_grids(hmap, lambda leg: reward),
-                           config=FootstepConfig(search_radius=0.03, **config))
-
-
 def test_the_planner_drops_footholds_beside_a_hole_wider_than_the_ball():
     start = (0.23, 0.0)
-    probe = planner(holed_map(None)).plan(nominal_state(holed_map(None), start, 0.0, "LF"))
+    flat = holed_map(None)
+    probe = centre_line_planner(flat).plan(nominal_state(flat, start, 0.0, "LF"))
     fx, fy = probe.foothold[:2]  # where the front foot steps on flat ground
     hmap = holed_map((fx + 0.012, fx + 0.05, fy - 0.03, fy + 0.03))  # a hole just ahead of it
     state = nominal_state(hmap, start, 0.0, "LF")
-    plain = planner(hmap).plan(state)
+    plain = centre_line_planner(hmap).plan(state)
     seen = seen_under_sphere(hmap, plain.candidates[:, :2], R, 0.017)
     assert 0 < seen.sum() < seen.size  # the hole's rim is in F
-    checked = planner(hmap, seen_footing=0.017).plan(state)
+    checked = centre_line_planner(hmap, seen_footing=0.017).plan(state)
     np.testing.assert_array_equal(checked.candidates, plain.candidates[seen])
     assert seen_under_sphere(hmap, checked.foothold[None, :2], R, 0.017)[0]
     # a reach no candidate of F satisfies drops nothing
-    wide = planner(hmap, seen_footing=1.0).plan(state)
+    wide = centre_line_planner(hmap, seen_footing=1.0).plan(state)
     np.testing.assert_array_equal(wide.candidates, plain.candidates)
 
 
 def test_without_holes_the_check_changes_nothing():
     hmap = holed_map(None, crack=0.35)  # a crack narrower than the ball: no blind place
     state = nominal_state(hmap, (0.23, 0.0), 0.0, "LF")
-    plain, checked = planner(hmap).plan(state), planner(hmap, seen_footing=0.017).plan(state)
+    plain = centre_line_planner(hmap).plan(state)
+    checked = centre_line_planner(hmap, seen_footing=0.017).plan(state)
     np.testing.assert_array_equal(checked.candidates, plain.candidates)
     np.testing.assert_array_equal(checked.foothold, plain.foothold)
 

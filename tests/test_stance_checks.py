@@ -4,8 +4,6 @@ stride on, on scripted maps; and the footstep planner's use of it, within F."""
 import numpy as np
 import pytest
 
-from footfall.control.body_path import BodyPath, terrain_grids
-from footfall.control.footstep import FootstepConfig, FootstepPlanner
 from footfall.control.stance_checks import stride_on
 from footfall.core.clearance import leg_gaps, posed_leg_gaps, shin_fractions
 from footfall.core.heightmap import HeightMap
@@ -13,7 +11,7 @@ from footfall.core.kinematics import body_to_world, inverse_kinematics, knee_pos
 from footfall.core.robot import LEG_NAMES, LITTLEDOG
 from footfall.core.state import nominal_state
 from footfall.features.candidates import leg_clearances
-from footfall.features.reward import default_reward
+from scenes import centre_line_planner
 
 RHO = LITTLEDOG.lower_leg_radius  # [m] 0.006
 
@@ -23,14 +21,6 @@ def bar_map(height: float = 0.07) -> HeightMap:
     x = np.arange(901) * 0.001
     heights = np.repeat(np.where((x >= 0.40) & (x <= 0.44), height, 0.0)[:, None], 601, axis=1)
     return HeightMap(heights, 0.001, (0.0, -0.3))
-
-
-def planner(hmap: HeightMap, **config) -> FootstepPlanner:
-    """The hand-tuned reward's planner along the board's centre line, F within 3 cm."""
-    reward = default_reward()
-    return FootstepPlanner(hmap, lambda leg: reward, BodyPath.straight((0.1, 0.0), (0.8, 0.0)),
-                           grids=terrain_grids(hmap, lambda leg: reward),
-                           config=FootstepConfig(search_radius=0.03, **config))
 
 
 def test_a_vertical_shin_over_flat_ground_clears_it_by_its_lowest_sample():
@@ -77,9 +67,9 @@ def test_a_stride_on_moves_the_body_along_the_path_and_with_the_other_feet_s_gro
 def test_a_front_foot_just_before_a_bar_would_lean_its_shin_on_it_a_stride_on():
     hmap = bar_map()
     state = nominal_state(hmap, (0.23, 0.0), 0.0, "LF")
-    plain = planner(hmap).plan(state)
+    plain = centre_line_planner(hmap).plan(state)
     assert 0.36 < plain.foothold[0] < 0.40  # without the check: 1-3 cm before the bar
-    ahead = planner(hmap)._horizon(state)
+    ahead = centre_line_planner(hmap)._horizon(state)
     later = stride_on(plain.state, ahead.legs, ahead.body_xy, ahead.grounds)
     now = leg_clearances(hmap, plain.state, plain.candidates)
     then = leg_clearances(hmap, later, plain.candidates)
@@ -87,12 +77,12 @@ def test_a_front_foot_just_before_a_bar_would_lean_its_shin_on_it_a_stride_on():
     assert then[i] < min(now[i] - 0.01, -0.02)  # deep into the bar a stride on, deeper than now
     clear = np.fmin(now, then) >= 0.005
     assert 0 < clear.sum() < clear.size
-    checked = planner(hmap, leg_clearance=0.005).plan(state)
+    checked = centre_line_planner(hmap, leg_clearance=0.005).plan(state)
     np.testing.assert_array_equal(checked.candidates, plain.candidates[clear])
     assert min(leg_clearances(hmap, plain.state, checked.foothold[None])[0],
                leg_clearances(hmap, later, checked.foothold[None])[0]) >= 0.005
     # a clearance no foothold of F has drops nothing: F stays F, not every reachable foothold
-    none = planner(hmap, leg_clearance=1.0).plan(state)
+    none = centre_line_planner(hmap, leg_clearance=1.0).plan(state)
     np.testing.assert_array_equal(none.candidates, plain.candidates)
 
 

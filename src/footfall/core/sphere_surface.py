@@ -132,12 +132,17 @@ def sample_surface(surface: SphereSurface | None, points: np.ndarray) -> np.ndar
 
 def no_data(hmap: HeightMap, points: np.ndarray) -> np.ndarray:
     """Whether the map has no data at points (..., 2) [m]: off the map or a NaN cell."""
+    inside, i, j = _cells(hmap, points)
+    return ~inside | np.isnan(hmap.heights[i, j])
+
+
+def _cells(hmap: HeightMap, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The cell holding each point (..., 2) [m]: whether it is on the map, and its indices
+    (clipped onto the map where it is not)."""
     idx = hmap.position_to_index(points)
     nx, ny = hmap.shape
     inside = (idx[..., 0] >= 0) & (idx[..., 0] < nx) & (idx[..., 1] >= 0) & (idx[..., 1] < ny)
-    i = np.clip(idx[..., 0], 0, nx - 1)
-    j = np.clip(idx[..., 1], 0, ny - 1)
-    return ~inside | np.isnan(hmap.heights[i, j])
+    return inside, np.clip(idx[..., 0], 0, nx - 1), np.clip(idx[..., 1], 0, ny - 1)
 
 
 _BLIND_DISTANCES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -164,11 +169,5 @@ def seen_under_sphere(hmap: HeightMap, points: np.ndarray, radius: float, reach:
         per_map[radius] = (distance_transform_edt(~blind) * hmap.resolution
                            if blind.any() else None)
     distance = per_map[radius]
-    idx = hmap.position_to_index(points)
-    nx, ny = hmap.shape
-    inside = (idx[..., 0] >= 0) & (idx[..., 0] < nx) & (idx[..., 1] >= 0) & (idx[..., 1] < ny)
-    if distance is None:
-        return inside
-    i = np.clip(idx[..., 0], 0, nx - 1)
-    j = np.clip(idx[..., 1], 0, ny - 1)
-    return inside & (distance[i, j] > reach)
+    inside, i, j = _cells(hmap, points)
+    return inside if distance is None else inside & (distance[i, j] > reach)

@@ -114,9 +114,9 @@ def test_the_default_boards_are_the_issue_s():
     assert len(cal) == 6 and sum(v[2] for v in cal.values()) == 48
     assert cal["cal0.6-801"] == ((("rocky", 0.6), ("steps", 0.6)), 801, 8, 0)
     suite = {k: v for k, v in boards.items() if k.startswith("suite")}
-    assert len(suite) == 32 and sum(v[2] for v in suite.values()) == 256
+    assert len(suite) == 36 and sum(v[2] for v in suite.values()) == 288
     assert {v[0][0][0] for v in suite.values()} == {"steps", "barrier", "slope", "logs", "rocky",
-                                                    "ridges", "pitted", "rockyscan"}
+                                                    "ridges", "pitted", "rockyscan", "pavers"}
     assert suite["suite-barrier-1102"] == ((("barrier", 0.7), ("barrier", 0.7)), 1102, 8, 0)
 
 

@@ -77,3 +77,28 @@ def test_more_difficult_rock_hides_more_of_itself_from_the_scanner():
     share = [np.isnan(make_module("rockyscan", d, s).heights).mean()
              for d in (0.2, 1.0) for s in (0, 1)]
     assert max(share[:2]) < min(share[2:])
+
+
+def test_pavers_are_level_tops_of_the_documented_heights_with_joints_open_to_the_ground():
+    from scipy.ndimage import binary_erosion, label
+
+    d = 0.7
+    h = make_module("pavers", d, 8).heights
+    labels, n = label(h > 0)
+    tops = [np.unique(h[labels == k]) for k in range(1, n + 1)]
+    assert n >= 20 and all(t.size == 1 for t in tops)  # every paver is level, one height
+    top = np.concatenate(tops)
+    high = 0.01 + 0.04 * d  # [m] the documented top height, times U(0.5, 1)
+    assert np.all(top >= 0.5 * high - 1e-12) and np.all(top <= high + 1e-12)
+    assert top.max() - top.min() > 0.25 * high  # neighbours stand at different heights
+    # The joints are open ground of the documented width, 36 mm at 0.7: on
+    # pavers about 7 cm across they take most of the strip, and the ball fits
+    # into them: a joint eroded by the ball's radius keeps (36 - 20) / 36 =
+    # 44 % of its width, more where joints meet.
+    middle = h[150:460] == 0
+    assert 0.5 < middle.mean() < 0.9
+    r = int(math.ceil(FOOT * 1e3))
+    disc = np.hypot(*np.mgrid[-r:r + 1, -r:r + 1]) <= r
+    assert binary_erosion(middle, disc).mean() > 0.44 * middle.mean()
+    # At d = 0 the joints are 4 mm cracks: the strip is nearly all paver.
+    assert (make_module("pavers", 0.0, 8).heights[150:460] > 0).mean() > 0.85

@@ -24,7 +24,7 @@ from footfall.terrain import (
 )
 
 ALL_KINDS = sorted(KINDS)
-SHAPE_KINDS = ("ridges", "pitted")  # added training kinds whose documented top is 5 cm at d = 1
+SHAPE_KINDS = ("ridges", "pitted", "pavers")  # added training kinds whose documented top is 5 cm at d = 1
 HOLED_KINDS = ("scan", "rockyscan")  # kinds with no-data cells (footfall.terrain.occlusion)
 OBSTACLE_KINDS = [k for k in ALL_KINDS if k != "flat"]
 MAX_HEIGHT = 0.12  # [m] nothing a LittleDog (~18 cm legs) could not cross
@@ -42,9 +42,9 @@ def test_registry_holds_the_paper_kinds_the_added_training_ones_and_the_held_out
     from footfall.terrain.kinds import ADDED_KINDS, HELD_OUT_KINDS, PAPER_KINDS, TRAINING_KINDS
 
     assert PAPER_KINDS == ("flat", "steps", "barrier", "slope", "logs", "rocky")
-    assert ADDED_KINDS == ("ridges", "pitted", "rockyscan")
+    assert ADDED_KINDS == ("ridges", "pitted", "rockyscan", "pavers")
     assert TRAINING_KINDS == ("steps", "barrier", "slope", "logs", "rocky", "ridges", "pitted",
-                              "rockyscan")
+                              "rockyscan", "pavers")
     assert HELD_OUT_KINDS == ("stones", "washboard", "scree", "logbarrier", "rolling", "scan")
     assert set(KINDS) == set(PAPER_KINDS + ADDED_KINDS + HELD_OUT_KINDS)
     assert all(callable(g) for _, g in KINDS.items())

@@ -359,7 +359,8 @@ def _variant_names() -> list[str]:
 @click.option("--training-suite/--no-training-suite", "training_suite", default=True,
               show_default=True,
               help="Walk the training suite too (four boards KIND:0.7 KIND:0.7 of each of "
-                   "the training kinds -- steps, barrier, slope, logs, rocky, ridges, pitted, rockyscan: 256 "
+                   "the training kinds -- steps, barrier, slope, logs, rocky, ridges, pitted, rockyscan, pavers: "
+                   "288 "
                    "runs per variant and chooser; "
                    "the training-suite rule judges on it). A folder keeps its choice.")
 @click.option("--seeds-round", "seeds_round", type=click.IntRange(0, 1000), default=0,

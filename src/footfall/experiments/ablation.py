@@ -19,7 +19,7 @@ choosing every foothold and with the hand-tuned reward, over
   of the seeds; on these about two in five, so their 64 paired runs can, and
 * the training suite: four boards ``KIND:0.7 KIND:0.7`` of each training kind
   (:data:`footfall.terrain.kinds.TRAINING_KINDS`: the paper's but flat -- steps,
-  barrier, slope, logs, rocky -- and ridges, pitted and rockyscan), board seeds
+  barrier, slope, logs, rocky -- and ridges, pitted, rockyscan and pavers), board seeds
   1100-1103, with run seeds 0-7 -- the terrain every parameter may be chosen
   on, not only the two kinds of the other boards,
 

@@ -1,21 +1,22 @@
-"""Training kinds beyond the paper's: ridges, a deck with foot-sized pits, and rock as scanned.
+"""Training kinds beyond the paper's: ridges, a pitted deck, rock as scanned, pavers with open joints.
 
 The paper's module kinds (:mod:`footfall.terrain.generators`,
 :mod:`footfall.terrain.rocky`) are the terrain footfall's parameters were first
 chosen on. These three widen the training side with characters none of them
-has (docs/terrain-suite.md, "Two more training kinds" and "A training kind
-with holes"): each is a
+has (docs/terrain-suite.md, "Two more training kinds", "A training kind
+with holes" and "A training kind with stepping stones"): each is a
 :data:`~footfall.terrain.geometry.Generator`, registered in
 :mod:`footfall.terrain.kinds`, walked by the training suite and the ablation,
 and -- unlike the held-out kinds -- open to tuning.
 
 * ``ridges`` -- ground made of ridges across the path and nothing else;
 * ``pitted`` -- a raised deck with round pits through it that the ball foot sinks into;
-* ``rockyscan`` -- the paper's rocky module as a scanner sees it: no data behind rises.
+* ``rockyscan`` -- the paper's rocky module as a scanner sees it: no data behind rises;
+* ``pavers`` -- level pavers of different heights whose joints are open to the ground.
 
 Their difficulty mappings were fixed from the robot's geometry (heights of the
 scale of steps and rocky at the same difficulty, flanks about the ball's
-friction cone, pits wider than the ball) before any run on them.
+friction cone, pits and joints wider than the ball) before any run on them.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from footfall.terrain.geometry import MODULE_CELLS, MODULE_SIZE, cell_centres, lerp
 from footfall.terrain.occlusion import as_scanned
@@ -32,6 +34,10 @@ RIDGE_SPAN = (0.05, 0.56)  # [m] stretch of the module whose ridge centres lie i
 RIDGE_FADE = (0.01, 0.07)  # [m] from either end, the ridges rise from 0 to full height over this
 MIN_RIDGE_WIDTH = 0.03  # [m] narrowest ridge, foot to foot
 PIT_REACH = 0.25  # [m] pit centres lie within this of the path's centre line (|y|)
+PAVER_SITES = 50  # Voronoi sites over the paved strip: pavers about 7 cm across on average
+PAVED_FROM = (0.06, 0.09)  # [m] the paved strip starts this far after the module's start (and
+# ends as far before its end), drawn uniformly
+JOINT_NEIGHBOURS = 4  # sites whose bisectors bound a cell's paver (the nearest and 3 more)
 
 
 def ridges(difficulty: float, rng: np.random.Generator) -> np.ndarray:
@@ -125,5 +131,42 @@ def rockyscan(difficulty: float, rng: np.random.Generator) -> np.ndarray:
     return as_scanned(rocky(difficulty, rng), difficulty, rng)
 
 
-ADDED = (("ridges", ridges), ("pitted", pitted), ("rockyscan", rockyscan))
+def pavers(difficulty: float, rng: np.random.Generator) -> np.ndarray:
+    """Level pavers of different heights with joints open to the ground; heights in [0, 0.05] m.
+
+    The paved strip runs from U(0.06, 0.09) m after the module's start to as
+    far before its end, across the whole width. It is the Voronoi partition of
+    :data:`PAVER_SITES` uniform random sites, each cell a paver with a level
+    top and vertical sides, shrunk back from every neighbour so that the joint
+    between two pavers is ground (z = 0) of the joint's width: a cell is
+    ground where it lies within half a joint of the bisector between its
+    nearest site and any of the next ``JOINT_NEIGHBOURS - 1``. Pavers come in
+    many sizes, slivers narrower than the ball among them.
+
+    Difficulty mapping (d in [0, 1]):
+
+    * joint width ``0.004 + 0.046 d`` [m]: 4 mm at d = 0 (the 2 cm ball
+      bridges it), 36 mm at d = 0.7, 50 mm at d = 1;
+    * each paver's top ``(0.01 + 0.04 d) * U(0.5, 1.0)`` [m]: 19-38 mm at
+      d = 0.7, up to 50 mm at d = 1;
+    * the sites and the strip's ends: independent of d.
+    """
+    x, y = cell_centres()
+    start = rng.uniform(*PAVED_FROM)  # [m]
+    end = MODULE_SIZE - rng.uniform(*PAVED_FROM)  # [m]
+    sites = np.column_stack([rng.uniform(start, end, PAVER_SITES),
+                             rng.uniform(-0.5 * MODULE_SIZE, 0.5 * MODULE_SIZE, PAVER_SITES)])
+    top = lerp(difficulty, 0.01, 0.05) * rng.uniform(0.5, 1.0, PAVER_SITES)  # [m]
+    joint = lerp(difficulty, 0.004, 0.05)  # [m]
+    cells = np.column_stack([np.broadcast_to(x, (MODULE_CELLS, MODULE_CELLS)).ravel(),
+                             np.broadcast_to(y, (MODULE_CELLS, MODULE_CELLS)).ravel()])
+    dist, idx = cKDTree(sites).query(cells, k=JOINT_NEIGHBOURS)
+    near = sites[idx[:, :1]]  # (cells, 1, 2) the paver's own site
+    apart = np.linalg.norm(sites[idx[:, 1:]] - near, axis=-1)  # [m] to each next site
+    to_joint = (dist[:, 1:] ** 2 - dist[:, :1] ** 2) / (2.0 * apart)  # [m] to each bisector
+    paved = (to_joint.min(axis=1) >= 0.5 * joint) & (cells[:, 0] >= start) & (cells[:, 0] <= end)
+    return np.where(paved, top[idx[:, 0]], 0.0).reshape(MODULE_CELLS, MODULE_CELLS)
+
+
+ADDED = (("ridges", ridges), ("pitted", pitted), ("rockyscan", rockyscan), ("pavers", pavers))
 """The training kinds beyond the paper's, name -> generator, in the training suite's order."""

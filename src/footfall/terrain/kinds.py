@@ -1,4 +1,4 @@
-"""Terrain module kinds by name: the paper's six, two more for training, six held out from all
+"""Terrain module kinds by name: the paper's six, four more for training, six held out from all
 tuning, and any you register.
 
 A kind is a :data:`~footfall.terrain.geometry.Generator` ``(difficulty in [0, 1],

@@ -3,6 +3,7 @@
 import json
 from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from cli_helpers import assert_user_error, run
@@ -303,3 +304,34 @@ def test_the_table_says_what_the_rule_decided():
     assert (row["suite_won"], row["suite_lost"], row["hard_won"]) == (1, 0, 1)
     table = ablation_markdown(config, summary)
     assert "training suite: won / lost (p)" in table and table.count("| adopted |") == 1
+
+
+def test_the_riser_variant_costs_a_hind_foot_at_a_riser_s_foot_and_nothing_farther_back():
+    """with-riser-ahead: 1 value unit a mm of weighted riser above 2 cm, for the walking expert."""
+    from footfall.core.heightmap import HeightMap
+    from footfall.core.robot import LITTLEDOG
+    from footfall.core.state import nominal_state
+    from footfall.experiments.variants import RISER_FREE, RISER_WEIGHT, VARIANTS
+    from footfall.expert.synthetic import SyntheticExpert, walking_expert
+
+    plain = walking_expert(AblationConfig().walk.footstep.lead)
+    riser = VARIANTS.get("with-riser-ahead")
+    assert riser.changes_expert
+    assert AblationConfig().variant_walk("with-riser-ahead") == AblationConfig().variant_walk("defaults")
+    cautious = riser.expert(plain)
+    assert cautious == replace(plain, w_riser=RISER_WEIGHT, riser_free=RISER_FREE)
+    # A 71 mm riser across the path at x = 0.4 m; one foothold with its ball centre 20 mm
+    # before the face (the walking expert's usual stand before a riser), one 45 mm before it.
+    x = np.arange(0.0, 0.8, 0.001) + 0.0005
+    z = np.where(x > 0.4, 0.071, 0.0)[:, None] * np.ones((1, 400))
+    board = HeightMap(z, 0.001, (0.0, -0.2))
+    state = nominal_state(board, (0.25, 0.0), 0.0, "LH")
+    cand = np.array([[0.4 - 0.02, 0.081, 0.0], [0.4 - 0.045, 0.081, 0.0]])
+    a, b = SyntheticExpert(plain), SyntheticExpert(cautious)
+    rise = b.terms(board, state, cand)["riser_ahead"]
+    # the riser's full height lies within 20 mm ahead of the ball centre, weighted at least 1/2
+    assert 0.5 * 0.071 <= rise[0] <= 0.071 + LITTLEDOG.foot_radius
+    assert rise[1] < RISER_FREE  # 35 mm on, weighted 1/8: the lift clears it
+    cost = a.values(board, state, cand) - b.values(board, state, cand)
+    assert cost[0] == pytest.approx(RISER_WEIGHT * (rise[0] - RISER_FREE), rel=1e-9)
+    assert cost[1] == 0.0

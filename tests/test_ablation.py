@@ -306,22 +306,28 @@ def test_the_table_says_what_the_rule_decided():
     assert "training suite: won / lost (p)" in table and table.count("| adopted |") == 1
 
 
-def test_the_riser_variant_costs_a_hind_foot_at_a_riser_s_foot_and_nothing_farther_back():
-    """with-riser-ahead: 1 value unit a mm of weighted riser above 2 cm, for the walking expert."""
+def test_the_walking_expert_s_riser_term_costs_a_foot_at_a_riser_s_foot_and_nothing_farther_back():
+    """1 value unit a mm of weighted riser above 2 cm; no-riser-ahead walks without it."""
     from footfall.core.heightmap import HeightMap
     from footfall.core.robot import LITTLEDOG
     from footfall.core.state import nominal_state
-    from footfall.experiments.variants import RISER_FREE, RISER_WEIGHT, VARIANTS
-    from footfall.expert.synthetic import SyntheticExpert, walking_expert
+    from footfall.experiments.variants import VARIANTS
+    from footfall.expert.synthetic import (
+        WALKER_RISER_FREE,
+        WALKER_RISER_WEIGHT,
+        SyntheticExpert,
+        walking_expert,
+    )
 
-    plain = walking_expert(AblationConfig().walk.footstep.lead)
-    riser = VARIANTS.get("with-riser-ahead")
-    assert riser.changes_expert
-    assert AblationConfig().variant_walk("with-riser-ahead") == AblationConfig().variant_walk("defaults")
-    cautious = riser.expert(plain)
-    assert cautious == replace(plain, w_riser=RISER_WEIGHT, riser_free=RISER_FREE)
+    cautious = walking_expert(AblationConfig().walk.footstep.lead)
+    assert (cautious.w_riser, cautious.riser_free) == (WALKER_RISER_WEIGHT, WALKER_RISER_FREE)
+    without = VARIANTS.get("no-riser-ahead")
+    assert without.changes_expert
+    assert AblationConfig().variant_walk("no-riser-ahead") == AblationConfig().variant_walk("defaults")
+    plain = without.expert(cautious)
+    assert plain == replace(cautious, w_riser=0.0)
     # A 71 mm riser across the path at x = 0.4 m; one foothold with its ball centre 20 mm
-    # before the face (the walking expert's usual stand before a riser), one 45 mm before it.
+    # before the face (where the expert without the term stood before a riser), one 45 mm before.
     x = np.arange(0.0, 0.8, 0.001) + 0.0005
     z = np.where(x > 0.4, 0.071, 0.0)[:, None] * np.ones((1, 400))
     board = HeightMap(z, 0.001, (0.0, -0.2))
@@ -331,7 +337,7 @@ def test_the_riser_variant_costs_a_hind_foot_at_a_riser_s_foot_and_nothing_farth
     rise = b.terms(board, state, cand)["riser_ahead"]
     # the riser's full height lies within 20 mm ahead of the ball centre, weighted at least 1/2
     assert 0.5 * 0.071 <= rise[0] <= 0.071 + LITTLEDOG.foot_radius
-    assert rise[1] < RISER_FREE  # 35 mm on, weighted 1/8: the lift clears it
+    assert rise[1] < WALKER_RISER_FREE  # 35 mm on, weighted 1/8: the lift clears it
     cost = a.values(board, state, cand) - b.values(board, state, cand)
-    assert cost[0] == pytest.approx(RISER_WEIGHT * (rise[0] - RISER_FREE), rel=1e-9)
+    assert cost[0] == pytest.approx(WALKER_RISER_WEIGHT * (rise[0] - WALKER_RISER_FREE), rel=1e-9)
     assert cost[1] == 0.0

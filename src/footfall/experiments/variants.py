@@ -72,12 +72,6 @@ ROLL_BACK_WALL = 1.0  # [-] with-flank-roll-back: ground rising faster than 1 : 
 # steps and barrier boards stood at a wall's foot, 19-63 mm below the placement 7 mm ahead)
 
 
-RISER_WEIGHT = 1000.0  # [value/m] with-riser-ahead: a mm of riser the swing's lift cannot clear
-# costs what a mm of drop-off does (the walking expert's w_drop)
-RISER_FREE = 0.02  # [m] with-riser-ahead: the swing's straight lift (SwingConfig.lift_height)
-# clears a riser this high without catching
-
-
 def _reflexes(walk: WalkConfig, **switches) -> WalkConfig:
     return replace(walk, reflexes=replace(walk.reflexes, **switches))
 
@@ -149,10 +143,10 @@ BUILTIN_VARIANTS = tuple(variant.name for variant in (
     register_variant("with-roll-back", "with the expert counting no placement error that seats "
                      "the ball more than 1 mm above its aim: the ball slides back (off by "
                      "default)", lambda w: w, lambda e: replace(e, roll_back=ROLL_BACK)),
-    register_variant("with-riser-ahead", "with the expert's riser term: a foothold whose "
+    register_variant("no-riser-ahead", "without the expert's riser term (a foothold whose "
                      "swing must climb a riser within 4 cm ahead losing 1 value unit a mm of "
-                     "(nearer-weighted) rise above 2 cm (off by default)", lambda w: w,
-                     lambda e: replace(e, w_riser=RISER_WEIGHT, riser_free=RISER_FREE)),
+                     "nearer-weighted rise above 2 cm)", lambda w: w,
+                     lambda e: replace(e, w_riser=0.0)),
     register_variant("no-crown", "without the expert's crown term (a foothold standing more "
                      "than 2 mm above the ball-centre surface 2 cm around it losing 8 value units "
                      "a mm)", lambda w: w, lambda e: replace(e, w_crown=0.0)),

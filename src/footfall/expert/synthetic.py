@@ -204,6 +204,18 @@ above the ground around it costs 64 value units. Chosen offline on training runs
 written before, adopted by the ablation's training-suite rule (round 6, docs/terrain-suite.md)."""
 
 
+WALKER_RISER_WEIGHT: float = 1000.0
+"""[value/m] The walking expert's riser weight (on ``riser_ahead`` above ``WALKER_RISER_FREE``): a
+mm of riser within 4 cm ahead that the swing's lift cannot clear costs what a mm of drop-off does
+(``w_drop``). Written down from a diagnosis of training runs (a hind foot standing within 30 mm
+of a riser missed its next foothold in 12 % of the climbs), adopted by the ablation's
+training-suite rule (round 8, docs/terrain-suite.md)."""
+
+WALKER_RISER_FREE: float = 0.02
+"""[m] The riser the walking expert's swing clears without catching: the swing's straight lift
+(``SwingConfig.lift_height``)."""
+
+
 def walking_expert(lead: float, placement_error: float = WALKER_PLACEMENT_ERROR) -> ExpertConfig:
     """The synthetic expert as it judges a fixed-advance gait's steps: the foot where the gait needs it.
 
@@ -225,14 +237,18 @@ def walking_expert(lead: float, placement_error: float = WALKER_PLACEMENT_ERROR)
     (see :attr:`ExpertConfig.placement_error`), so a foothold a few mm from a
     riser's edge or a pit's rim is judged by the edge or the rim. And it knows that a
     ball set on a crest slides off whichever way it moves: a foothold standing above the
-    ground 2 cm around it loses ``WALKER_CROWN_WEIGHT`` a metre of the difference (the crown).
+    ground 2 cm around it loses ``WALKER_CROWN_WEIGHT`` a metre of the difference (the crown),
+    and that a foot set just before a riser must climb it from there: a foothold with a riser
+    within 4 cm ahead loses ``WALKER_RISER_WEIGHT`` a metre of (nearer-weighted) rise above
+    ``WALKER_RISER_FREE``, what the swing's lift clears.
     """
     for name, v in (("stance lead", lead), ("placement error", placement_error)):
         if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
             raise FootfallError(f"the {name} must be a number >= 0 [m], got {v!r}")
     base = ExpertConfig()
     return replace(base, w_progress=0.0, w_stance=base.w_progress, stance_lead=float(lead),
-                   placement_error=float(placement_error), w_crown=WALKER_CROWN_WEIGHT)
+                   placement_error=float(placement_error), w_crown=WALKER_CROWN_WEIGHT,
+                   w_riser=WALKER_RISER_WEIGHT, riser_free=WALKER_RISER_FREE)
 
 
 _SEAT = "seat"  # the memo's name for the seated ball-centre height [m]

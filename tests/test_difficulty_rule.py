@@ -6,7 +6,10 @@ from footfall.core.errors import FootfallError
 from footfall.experiments.difficulty import (
     calibration_held,
     choose_difficulty,
+    confirm_choice,
+    confirms,
     deciding_levels,
+    next_to_confirm,
 )
 
 
@@ -115,3 +118,44 @@ def test_the_levels_the_choice_rests_on_are_walked_until_they_hold_enough_runs()
 def test_the_hardest_level_passing_needs_only_itself_and_no_level_passing_the_easiest_two():
     assert deciding_levels({0.5: (10, 10), 0.9: (10, 10)}, 0.9, 30) == [0.9]
     assert deciding_levels({0.5: (3, 10), 0.7: (2, 10), 0.9: (0, 10)}, 0.9, 30) == [0.5, 0.7]
+
+
+def test_fresh_runs_confirm_a_level_unless_their_interval_stays_below_the_threshold():
+    # 95 % Wilson upper ends: 24 / 30 reaches 90 % (90.5 %), 23 / 30 does not (88.3 %)
+    assert confirms(24, 30, 0.9) and not confirms(23, 30, 0.9)
+    assert confirms(30, 30, 0.9) and not confirms(0, 30, 0.9)
+
+
+def test_the_choice_is_confirmed_on_fresh_boards_stepping_down_until_one_stands():
+    grid = (0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
+    # the reproduction's case: 27 / 30 at 1 chose 1 (fitted exactly 90 %)
+    choice = choose_difficulty({0.5: (10, 10), 0.6: (9, 10), 0.7: (10, 10), 0.8: (10, 10),
+                                0.9: (9, 10), 1.0: (27, 30)})
+    assert choice.difficulty == 1.0
+    walked = {}
+    assert next_to_confirm(choice, grid, walked) == 1.0  # the chosen level first
+    walked[1.0] = (20, 30)  # 67 %: not confirmed -> the next easier level, fresh boards
+    assert next_to_confirm(choice, grid, walked) == 0.9
+    walked[0.9] = (26, 30)  # confirmed: over
+    assert next_to_confirm(choice, grid, walked) is None
+    done = confirm_choice(choice, walked)
+    assert done.difficulty == 0.9 and done.met and done.selected == 1.0
+    assert list(done.confirmations) == ["1", "0.9"]  # hardest first
+    assert [v["confirmed"] for v in done.confirmations.values()] == [False, True]
+    assert "confirmed on fresh boards" in done.rule
+    # the test boards are held against the confirmation's runs, not the chosen level's 27 / 30
+    held = calibration_held(done.as_dict(), 45, 63)
+    assert held["against"] == "confirmation" and held["calibration"] == [26, 30]
+    assert calibration_held(choice.as_dict(), 45, 63)["against"] == "calibration"
+
+
+def test_a_confirmation_that_never_stands_ends_at_the_easiest_level_not_met():
+    grid = (0.5, 0.6)
+    choice = choose_difficulty({0.5: (10, 10), 0.6: (28, 30)})
+    walked = {0.6: (15, 30)}
+    assert next_to_confirm(choice, grid, walked) == 0.5
+    walked[0.5] = (18, 30)
+    assert next_to_confirm(choice, grid, walked) is None  # nothing easier to walk
+    done = confirm_choice(choice, walked)
+    assert done.difficulty == 0.5 and not done.met
+    assert confirm_choice(choice, {}) is choice  # nothing walked: the choice unchanged

@@ -19,7 +19,8 @@ from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig
 
 TINY = ReproduceConfig(
     train_boards=((("rocky", 0.5),),), test_kinds=("rocky",), difficulties=(0.6,),
-    calibration_boards=1, calibration_runs=1, calibration_level_runs=2, test_boards=2, sweep_runs=1, rounds=2, target_demos=1000, corrections_per_run=None, margin=2.0, library_size=30,
+    calibration_boards=1, calibration_runs=1, calibration_level_runs=2, confirmation_runs=2,
+    test_boards=2, sweep_runs=1, rounds=2, target_demos=1000, corrections_per_run=None, margin=2.0, library_size=30,
     training_candidates=20, cv=2, final_bandwidth_rms=0.004, eval_runs=1, offline_demos=4,
     walk=WalkConfig(max_steps=8),  # eight steps a run: small, but every stage runs
     expert=ExpertConfig(), teacher="expert")  # the expert who values progress corrects most of
@@ -88,7 +89,8 @@ def test_the_reproduction_has_every_table(uninterrupted):
     planned = planned_seeds(TINY)  # every run drew its seed from the stream of its purpose
     with DemoStore(uninterrupted / "reproduce.sqlite") as store:
         for prefix, purpose in (("correct/", "correction runs"), ("eval/", "evaluation runs"),
-                                ("calibrate/", "calibration runs"), ("sweep/", "sweep runs")):
+                                ("calibrate/", "calibration runs"), ("sweep/", "sweep runs"),
+                                ("confirm/", "confirmation runs")):
             seeds = {store.run(x["id"]).seed for x in store.runs(key_prefix=prefix)}
             assert seeds and seeds <= set(planned[purpose])
     assert {r["boards"][f"test{b}"]["seed"] for b in range(2)} <= set(planned["boards"])
@@ -119,6 +121,17 @@ def test_the_unseen_terrain_stage_is_calibrated_pooled_paired_and_swept(uninterr
     assert list(cal["levels"]) == ["0.6"] and cal["levels"]["0.6"]["runs"] == 2
     assert {b for b in r["boards"] if b.startswith("cal")} == {"cal0.6-0", "cal0.6-1"}
     assert r["test_difficulty"] == 0.6 and "90%" in cal["rule"]
+    # the choice confirmed on two fresh boards (one run each), the only level there is
+    assert cal["selected"] == 0.6 and list(cal["confirmations"]) == ["0.6"]
+    assert cal["confirmations"]["0.6"]["runs"] == 2
+    assert {b for b in r["boards"] if b.startswith("confirm")} == {"confirm0.6-0", "confirm0.6-1"}
+    assert "confirmed on fresh boards" in cal["rule"]
+    with DemoStore(uninterrupted / "reproduce.sqlite") as store:
+        confirm = [x["result"]["success"] for x in store.runs(key_prefix="confirm/0.6/")]
+    assert cal["confirmations"]["0.6"]["successes"] == sum(map(bool, confirm)) and len(confirm) == 2
+    held = cal["held_on_test"]  # the test boards held against the confirmation, not the choice
+    assert held["against"] == "confirmation"
+    assert held["calibration"] == [cal["confirmations"]["0.6"]["successes"], 2]
     assert r["boards"]["test0"]["modules"] == [["rocky", 0.6]]
     assert set(r["table2_boards"]) == {"test0", "test1"}
     for k in METHODS:  # pooled = the two boards' runs together

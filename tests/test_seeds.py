@@ -9,7 +9,11 @@ from footfall.core.errors import FootfallError
 from footfall.core.seeds import PURPOSES, SeedStreams
 from footfall.experiments.offline import OfflineConfig
 from footfall.experiments.reproduce import ReproduceConfig
-from footfall.experiments.workspace import most_calibration_boards, planned_seeds
+from footfall.experiments.workspace import (
+    confirmation_board_count,
+    most_calibration_boards,
+    planned_seeds,
+)
 
 
 def test_a_stream_gives_the_same_seed_for_the_same_name_and_index():
@@ -50,16 +54,22 @@ def test_two_reproduction_seeds_share_no_board_seed_and_no_run_seed(make):
         c = make(seed=seed)  # training, flat, test, and per grid level sweep and calibration
         cal = most_calibration_boards(c)  # every board a level may get, the rule's extra ones too
         assert cal == max(c.calibration_boards, -(-c.calibration_level_runs // c.calibration_runs))
+        confirm = confirmation_board_count(c)  # fresh boards that may confirm each level
+        assert confirm * c.calibration_runs >= c.confirmation_runs
         assert len(by_purpose["boards"]) == len(c.train_boards) + 1 + c.test_boards + \
-            len(c.difficulties) * (1 + cal)
-        # every calibration board has run seeds of its own (not the same few on every board)
+            len(c.difficulties) * (1 + cal + confirm)
+        # every calibration and confirmation board has run seeds of its own (not the same few
+        # on every board)
         assert len(set(by_purpose["calibration runs"])) == \
             len(c.difficulties) * cal * c.calibration_runs
+        assert len(set(by_purpose["confirmation runs"])) == \
+            len(c.difficulties) * confirm * c.calibration_runs
     for (a, pa), (b, pb) in combinations(planned.items(), 2):
         for purpose in pa:
             assert not set(pa[purpose]) & set(pb[purpose]), \
                 f"reproduction seeds {a} and {b} share {purpose} seeds"
-        run_purposes = ("correction runs", "calibration runs", "evaluation runs", "sweep runs")
+        run_purposes = ("correction runs", "calibration runs", "confirmation runs",
+                        "evaluation runs", "sweep runs")
         runs_a = {s for p in run_purposes for s in pa[p]}
         runs_b = {s for p in run_purposes for s in pb[p]}
         assert not runs_a & runs_b  # not even across purposes (seed 5's corrections, 0's eval)

@@ -16,7 +16,8 @@ from footfall.sim.episode import WalkConfig
 
 TINY = ReproduceConfig(
     train_boards=((("rocky", 0.5),),), test_kinds=("rocky",), difficulties=(0.6,),
-    calibration_boards=1, calibration_runs=1, test_boards=1, eval_runs=1, sweep_runs=1,
+    calibration_boards=1, calibration_runs=1, confirmation_runs=1, test_boards=1, eval_runs=1,
+    sweep_runs=1,
     rounds=2, target_demos=1000, corrections_per_run=None, library_size=30,
     training_candidates=20, cv=2, final_bandwidth_rms=0.004, offline_demos=4,
     walk=WalkConfig(max_steps=6), expert=ExpertConfig(),

@@ -30,6 +30,7 @@ PURPOSES = (
     "demonstrations",   # the synthetic expert's demonstrations (walker)
     "learning",         # the learner: template library sample, training pairs
     "calibration runs",  # the expert's runs on the calibration boards (the test difficulty)
+    "confirmation runs",  # the expert's runs on the boards that confirm the test difficulty
 )
 SEED_BITS = 63  # seeds are non-negative 63-bit integers: any store or file keeps them exactly
 

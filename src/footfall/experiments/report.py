@@ -200,12 +200,26 @@ def _calibration(results: dict) -> list[str]:
         lines.append(f"| {d} | {v['successes']} / {v['runs']} | {_pct(v['success_ci'][0])} - "
                      f"{_pct(v['success_ci'][1])} | {_pct(v['fitted'])} | "
                      f"{'yes' if v['passes'] else 'no'} |")
+    confirmations = c.get("confirmations") or {}
+    if confirmations:
+        per_board = cfg["calibration_runs"]
+        lines += ["", f"The rule chose {c['selected']:g}. Its choice confirmed on fresh boards "
+                      f"({-(-cfg['confirmation_runs'] // per_board)} boards a level, "
+                      f"{per_board} runs each, never used to choose), hardest first:", "",
+                  "| difficulty | teacher crossed | 95 % CI (Wilson) | "
+                  f"interval reaches {c['threshold']:.0%} |", "| --- | --- | --- | --- |"]
+        for d, v in confirmations.items():
+            lines.append(f"| {d} | {v['successes']} / {v['runs']} | "
+                         f"{_pct(v['success_ci'][0])} - {_pct(v['success_ci'][1])} | "
+                         f"{'yes: the test difficulty' if v['confirmed'] else 'no'} |")
     held = c.get("held_on_test")
     if held:
         (k, n), (t, m), (lo, hi) = held["calibration"], held["test"], held["calibration_ci"]
+        where = ("confirmation" if held.get("against", "calibration") == "confirmation"
+                 else "calibration")
         lines += ["", f"Did the calibration hold? The teacher crossed {t} / {m} "
                       f"({_pct(held['test_rate'])}) of its test-board runs against {k} / {n} on "
-                      f"the calibration boards of that difficulty: "
+                      f"the {where} boards of that difficulty: "
                       + ("inside" if held["inside"] else "**outside**")
                       + f" their 95 % interval ({_pct(lo)} - {_pct(hi)}); Fisher's exact test "
                       f"p = {held['fisher_p']:.3g}."]

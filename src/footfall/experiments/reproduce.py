@@ -72,6 +72,8 @@ from footfall.experiments.workspace import (
     Workspace,
     boards,
     calibration_boards,
+    confirmation_board_count,
+    confirmation_boards,
     correction_seeds,
     open_workspace,
     test_boards,
@@ -146,6 +148,11 @@ class ReproduceConfig(Params):
         doc="the expert's runs the levels the difficulty rule's choice rests on (the chosen "
             "level and the next harder one) must hold before it decides: more calibration "
             "boards of those levels are walked until they do")
+    confirmation_runs: int = param(
+        30, range=at_least(0),
+        doc="the teacher's runs on fresh boards (calibration_runs a board) that confirm the "
+            "chosen test difficulty, and each easier level walked after one that does not "
+            "(experiments.difficulty); 0: not confirmed")
     calibration_success: float = param(
         0.9, unit="-", range=within(0.0, 1.0, low_open=True),
         doc="the expert's success rate the rule requires at the test difficulty")
@@ -221,9 +228,9 @@ class ReproduceConfig(Params):
         """A small version (a few minutes on two cores): fewer boards, runs and templates."""
         return cls(seed=seed, train_boards=((("rocky", 0.5),), (("steps", 0.5),)),
                    test_kinds=("rocky",), difficulties=(0.5, 0.9), calibration_boards=1,
-                   calibration_runs=2, calibration_level_runs=4, test_boards=2, rounds=2, target_demos=24,
-                   corrections_per_run=6, library_size=200, training_candidates=40, cv=3,
-                   final_bandwidth_rms=0.004, eval_runs=3, sweep_runs=1, offline_demos=12)
+                   calibration_runs=2, calibration_level_runs=4, confirmation_runs=2,
+                   test_boards=2, rounds=2, target_demos=24, corrections_per_run=6,
+                   library_size=200, training_candidates=40, cv=3, final_bandwidth_rms=0.004, eval_runs=3, sweep_runs=1, offline_demos=12)
 
 
 REPRODUCTION_SEARCH_RADIUS = 0.03  # [m] the candidate set F of a step in the reproduction: the
@@ -312,13 +319,17 @@ def correction_rounds(ws: Workspace, runner: Runner) -> Corrections:
 
 # ---------------------------------------------------------------- stage 3
 def _calibration_boards_walked(config: ReproduceConfig, choice) -> dict:
-    """The calibration boards of every grid level the rule walked (more where it needed runs)."""
+    """The calibration boards of every grid level the rule walked (more where it needed runs),
+    and the confirmation boards of every level confirmed."""
     out = {}
     for j, d in enumerate(config.difficulties):
         level = choice.levels.get(f"{d:g}")
         walked = config.calibration_boards if level is None else -(
             -level["runs"] // config.calibration_runs)
         out.update(calibration_boards(config, j, range(walked)))
+    for j, d in enumerate(config.difficulties):
+        if f"{d:g}" in choice.confirmations:
+            out.update(confirmation_boards(config, j, range(confirmation_board_count(config))))
     return {name: {"modules": [list(m) for m in spec], "seed": seed}
             for name, (spec, seed) in out.items()}
 

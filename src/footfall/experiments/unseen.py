@@ -4,9 +4,10 @@
    choosing every foothold walks ``calibration_boards`` boards of the test
    kinds at every difficulty of the grid, ``calibration_runs`` runs each, and
    more boards of the levels the rule's choice rests on until each holds
-   ``calibration_level_runs`` runs; the test difficulty is the hardest level
-   up to which it still crosses 90 % of its runs
-   (:mod:`footfall.experiments.difficulty`).
+   ``calibration_level_runs`` runs; the rule chooses the hardest level up
+   to which it still crosses 90 % of its runs, and that choice is confirmed
+   on fresh boards (:func:`confirm`, ``confirmation_runs`` runs; the next
+   easier level where it does not stand) (:mod:`footfall.experiments.difficulty`).
 2. **Table II on several unseen boards** (:func:`evaluate`): the three
    learned functions, the synthetic expert and the hand-tuned reward walk
    ``test_boards`` fresh boards at that difficulty with the same run seeds
@@ -19,7 +20,7 @@
 3. **Success against difficulty** (:func:`sweep`): every method on one board
    per grid difficulty, ``sweep_runs`` runs each, always.
 
-Run keys: ``calibrate/D/I/sSEED``, ``eval/BOARD/METHOD/sSEED`` (BOARD ``test0``,
+Run keys: ``calibrate/D/I/sSEED``, ``confirm/D/I/sSEED``, ``eval/BOARD/METHOD/sSEED`` (BOARD ``test0``,
 ``test1``, ... or ``flat``), ``sweep/D/METHOD/sSEED``; a stopped stage resumes
 where it stopped (:class:`footfall.experiments.runs.Runner`).
 """
@@ -33,7 +34,9 @@ from footfall.experiments.batch import summarise
 from footfall.experiments.difficulty import (
     DifficultyChoice,
     choose_difficulty,
+    confirm_choice,
     deciding_levels,
+    next_to_confirm,
 )
 from footfall.experiments.paired import RunOutcome, compare_all, distance_summary
 from footfall.experiments.runs import RunJob, Runner
@@ -42,6 +45,9 @@ from footfall.experiments.workspace import (
     Workspace,
     calibration_boards,
     calibration_seeds,
+    confirmation_board_count,
+    confirmation_boards,
+    confirmation_seeds,
     evaluation_seeds,
     most_calibration_boards,
     sweep_seeds,
@@ -103,10 +109,34 @@ def calibrate(ws: Workspace, runner: Runner) -> DifficultyChoice:
         runner.log("calibration: " + ", ".join(f"{d:g}" for d in more) + " decide the rule; "
                    f"walking them to {config.calibration_level_runs} runs")
     choice = choose_difficulty(outcomes, config.calibration_success)
-    runner.log("test difficulty " + f"{choice.difficulty:g}" + (
+    runner.log("calibration: the rule chose " + f"{choice.difficulty:g}" + (
         "" if choice.met else " (the teacher missed the threshold even at the easiest level)")
         + ": the teacher crossed " + ", ".join(
             f"{v['successes']}/{v['runs']} at {k}" for k, v in choice.levels.items()))
+    if config.confirmation_runs:
+        choice = confirm(ws, runner, choice)
+    return choice
+
+
+def confirm(ws: Workspace, runner: Runner, choice: DifficultyChoice) -> DifficultyChoice:
+    """The rule's choice confirmed on fresh boards, stepping down the grid where it is not
+    (:func:`footfall.experiments.difficulty.next_to_confirm`); run keys
+    ``confirm/D/I/sSEED`` on boards ``confirm<D>-<I>``."""
+    config = ws.config
+    boards = range(confirmation_board_count(config))
+    walked: dict[float, tuple[int, int]] = {}
+    while (d := next_to_confirm(choice, config.difficulties, walked)) is not None:
+        j = config.difficulties.index(d)
+        ws.add_boards(confirmation_boards(config, j, boards))
+        jobs = [method_job(ws, f"confirm/{d:g}/{i}/s{s}", f"confirm{d:g}-{i}", "expert", s)
+                for i in boards for s in confirmation_seeds(config, j, i)]
+        runner.run(jobs, f"confirmation runs at {d:g} (the teacher, fresh boards)")
+        stored = {r["key"]: r["result"] for r in runner.store.runs(key_prefix=f"confirm/{d:g}/")}
+        walked[d] = (sum(bool(stored[j.key]["success"]) for j in jobs), len(jobs))
+        runner.log(f"confirmation at {d:g}: the teacher crossed {walked[d][0]}/{walked[d][1]}")
+    choice = confirm_choice(choice, walked)
+    runner.log("test difficulty " + f"{choice.difficulty:g}"
+               + ("" if choice.met else " (the rule is not met)"))
     return choice
 
 

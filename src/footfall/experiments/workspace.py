@@ -64,6 +64,26 @@ def most_calibration_boards(config: ReproduceConfig) -> int:
                -(-config.calibration_level_runs // config.calibration_runs))
 
 
+def confirmation_boards(config: ReproduceConfig, level: int, which: range
+                        ) -> dict[str, tuple[Spec, int]]:
+    """Confirmation boards ``which`` of grid level ``level`` (fresh boards that confirm the
+    rule's choice, :mod:`footfall.experiments.difficulty`): ``confirm<d>-<i>`` -> (spec, seed)."""
+    d = config.difficulties[level]
+    streams = seed_streams(config)
+    return {f"confirm{d:g}-{i}": (_kinds_at(config, d), streams.seed_for("boards", 5, level, i))
+            for i in which}
+
+
+def confirmation_board_count(config: ReproduceConfig) -> int:
+    """Fresh boards a confirmed level gets: ``confirmation_runs``, ``calibration_runs`` each."""
+    return -(-config.confirmation_runs // config.calibration_runs)
+
+
+def confirmation_seeds(config: ReproduceConfig, level: int, board: int) -> list[int]:
+    """The teacher's run seeds on confirmation board ``board`` of grid level ``level``."""
+    return seed_streams(config).seeds("confirmation runs", config.calibration_runs, level, board)
+
+
 def test_boards(config: ReproduceConfig, difficulty: float) -> dict[str, tuple[Spec, int]]:
     """The unseen test boards at ``difficulty``: test0, test1, ... (fresh seeds)."""
     streams = seed_streams(config)
@@ -108,15 +128,18 @@ def planned_seeds(config: ReproduceConfig) -> dict[str, list[int]]:
     streams = seed_streams(config)
     rounds = range(config.rounds + config.extra_rounds)
     extra = range(config.calibration_boards, most_calibration_boards(config))
+    confirm = range(confirmation_board_count(config))
+    levels = range(len(config.difficulties))
     return {"boards": [seed for _, seed in boards(config).values()]
-            + [seed for j in range(len(config.difficulties))
-               for _, seed in calibration_boards(config, j, extra).values()]
+            + [seed for j in levels for _, seed in calibration_boards(config, j, extra).values()]
+            + [seed for j in levels for _, seed in confirmation_boards(config, j, confirm).values()]
             + [seed for _, seed in test_boards(config, 0.0).values()],
             "correction runs": [a for r in rounds for a, _ in correction_seeds(config, r)],
             "inspection": [b for r in rounds for _, b in correction_seeds(config, r)],
-            "calibration runs": [s for j in range(len(config.difficulties))
-                                 for i in range(most_calibration_boards(config))
+            "calibration runs": [s for j in levels for i in range(most_calibration_boards(config))
                                  for s in calibration_seeds(config, j, i)],
+            "confirmation runs": [s for j in levels for i in confirm
+                                  for s in confirmation_seeds(config, j, i)],
             "evaluation runs": evaluation_seeds(config), "sweep runs": sweep_seeds(config),
             "demonstrations": [streams.seed_for("demonstrations", 0)],
             "learning": [streams.seed_for("learning")]}

@@ -90,6 +90,11 @@ def test_a_study_resumes_after_an_interruption_and_its_seeds_share_nothing(tmp_p
     for v in summary["against_start"]:  # the teacher and the functions against the start
         assert v["pairs"] == 2 * TINY.test_boards * TINY.eval_runs
     assert "Against the hand-tuned reward" in md
+    for seed in (0, 1):  # each seed's teacher on its test boards against its confirmation
+        held = summary["per_seed"][seed]["calibration_held"]
+        assert held["against"] == "confirmation" and held["calibration"][1] == 1
+        assert held["test"][1] == TINY.test_boards * TINY.eval_runs
+        assert f"{held['test'][0]} / {held['test'][1]} against" in md
     assert set(summary["fewer_templates_than_demonstrations"]) == {"templates", "both"}
 
     again: list[str] = []  # a third time: nothing left to walk

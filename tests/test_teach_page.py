@@ -236,6 +236,30 @@ def test_the_queue_counts_my_steps_and_finds_the_next_unlabelled(store, open_pag
                                f".textContent === '1 / {STEPS}'", timeout=15_000)
 
 
+def test_a_label_given_while_the_expert_judges_is_not_lost_when_its_verdicts_arrive(
+        store, open_page):
+    """The judged run is read when judging begins; a label given before it arrives stays
+    counted (it once went back to 0 until the next refresh)."""
+    import re
+
+    held = []
+    with serving(TeachService(store)) as (_, _, address):
+        page = open_page(address)
+        # the judged run read by the server at once, its answer held back
+        page.route(re.compile(r"/api/runs/\d+$"), lambda route: held.append((route, route.fetch())))
+        _open_run(page, order="run")
+        page.wait_for_function("window.teach.state.judging", timeout=15_000)
+        page.keyboard.press("f")
+        _message(page, "fine")
+        assert page.text_content("#queue") == f"1 of {STEPS} steps labelled by ada"
+        page.wait_for_timeout(100)  # the route handler runs while Playwright waits
+        assert len(held) == 1
+        route, answer = held[0]
+        route.fulfill(response=answer)  # now the verdicts arrive, read before the label
+        _judged(page)
+        assert page.text_content("#queue") == f"1 of {STEPS} steps labelled by ada"
+
+
 def test_the_top_view_zooms_pans_and_still_labels_what_is_clicked(store, open_page):
     with serving(TeachService(store)) as (_, _, address):
         page = open_page(address)

@@ -168,6 +168,16 @@ def run_study(out: str | os.PathLike, seeds: list[int], quick: bool = False,
     return summary
 
 
+def _held(held: dict | None) -> str:
+    """A seed's calibration check in words: the teacher's test runs against the runs its test
+    difficulty was calibrated (or confirmed) on."""
+    if not held:
+        return "-"
+    (t, m), (k, n) = held["test"], held["calibration"]
+    return (f"{t} / {m} against {k} / {n} ({held.get('against', 'calibration')}): "
+            f"{'inside' if held['inside'] else 'outside'}, p = {held['fisher_p']:.2g}")
+
+
 def summarise_study(results: dict[int, dict], outcomes: dict) -> dict:
     """The study's summary from each seed's reproduction results and every seed's paired test
     runs (method -> ("seedN/board", run seed) -> RunOutcome)."""
@@ -177,6 +187,8 @@ def summarise_study(results: dict[int, dict], outcomes: dict) -> dict:
         per_seed[seed] = {
             "test_difficulty": r["test_difficulty"],
             "calibration_met": r["calibration"]["met"],
+            "calibration_held": r["calibration"].get("held_on_test"),  # the teacher's test runs
+            # against its confirmation's (or calibration's) interval; None: not calibrated
             "test_boards": len(r["table2_boards"]),
             "table2_pooled": {m: _brief(t) for m, t in r["table2_pooled"].items()},
             "table2_one_board": {m: _brief(t) for m, t in r["table2"].items()},
@@ -259,8 +271,9 @@ def study_markdown(summary: dict) -> str:
                      f"{_pct(sp['success_max'])} |")
     lines += ["", "## Each seed", "", "| seed | test difficulty | boards | one-board table: "
               "templates + features | demonstrations (front / hind) | Table I: templates kept "
-              "(small, medium, large; front / hind), templates only | templates + features |",
-              "| --- | --- | --- | --- | --- | --- | --- |"]
+              "(small, medium, large; front / hind), templates only | templates + features | "
+              "the teacher on the test boards against its calibration |",
+              "| --- | --- | --- | --- | --- | --- | --- | --- |"]
     for s in seeds:
         p = summary["per_seed"][s]
         one = p["table2_one_board"]["both"]
@@ -270,7 +283,8 @@ def study_markdown(summary: dict) -> str:
         demos = p.get("demonstrations", {})
         lines.append(f"| {s} | {p['test_difficulty']:g}{met} | {p['test_boards']} | "
                      f"{one['successes']} / {one['runs']} | {demos.get('front', '?')} / "
-                     f"{demos.get('hind', '?')} | {t1['templates']} | {t1['both']} |")
+                     f"{demos.get('hind', '?')} | {t1['templates']} | {t1['both']} | "
+                     f"{_held(p.get('calibration_held'))} |")
     fewer = summary.get("fewer_templates_than_demonstrations")
     if fewer:
         lines += ["", "Fewer templates kept than demonstrations, every seed and leg group: "

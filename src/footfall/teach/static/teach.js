@@ -154,6 +154,15 @@ async function judgeRun(id, seq) {  // the expert's verdicts, in the background
   try {
     const judged = await api(`/api/runs/${id}`, { quiet: true });
     if (seq !== state.runSeq) return;
+    // The judged copy was read when the judging began: a label I gave (or undid) while the
+    // expert judged is not in it. My part of each step's labellers is this page's; the
+    // others' is the judged copy's.
+    const name = me();
+    const mine = new Map(state.run.steps.map((s) => [s.k, (s.labelers || []).includes(name)]));
+    for (const s of judged.steps) {
+      const others = (s.labelers || []).filter((n) => n !== name);
+      s.labelers = mine.get(s.k) ? [...others, name] : others;
+    }
     state.run = judged;
     if ($("order").value === "look") {  // the steps seen so far keep their places
       const seen = state.order.slice(0, state.shownPos + 1);

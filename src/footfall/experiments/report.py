@@ -215,8 +215,7 @@ def _calibration(results: dict) -> list[str]:
     held = c.get("held_on_test")
     if held:
         (k, n), (t, m), (lo, hi) = held["calibration"], held["test"], held["calibration_ci"]
-        where = ("confirmation" if held.get("against", "calibration") == "confirmation"
-                 else "calibration")
+        where = held.get("against", "calibration")  # results before the confirmation: none
         lines += ["", f"Did the calibration hold? The teacher crossed {t} / {m} "
                       f"({_pct(held['test_rate'])}) of its test-board runs against {k} / {n} on "
                       f"the {where} boards of that difficulty: "

@@ -230,7 +230,8 @@ class ReproduceConfig(Params):
                    test_kinds=("rocky",), difficulties=(0.5, 0.9), calibration_boards=1,
                    calibration_runs=2, calibration_level_runs=4, confirmation_runs=2,
                    test_boards=2, rounds=2, target_demos=24, corrections_per_run=6,
-                   library_size=200, training_candidates=40, cv=3, final_bandwidth_rms=0.004, eval_runs=3, sweep_runs=1, offline_demos=12)
+                   library_size=200, training_candidates=40, cv=3, final_bandwidth_rms=0.004,
+                   eval_runs=3, sweep_runs=1, offline_demos=12)
 
 
 REPRODUCTION_SEARCH_RADIUS = 0.03  # [m] the candidate set F of a step in the reproduction: the
@@ -327,7 +328,6 @@ def _calibration_boards_walked(config: ReproduceConfig, choice) -> dict:
         walked = config.calibration_boards if level is None else -(
             -level["runs"] // config.calibration_runs)
         out.update(calibration_boards(config, j, range(walked)))
-    for j, d in enumerate(config.difficulties):
         if f"{d:g}" in choice.confirmations:
             out.update(confirmation_boards(config, j, range(confirmation_board_count(config))))
     return {name: {"modules": [list(m) for m in spec], "seed": seed}

@@ -20,8 +20,8 @@
 3. **Success against difficulty** (:func:`sweep`): every method on one board
    per grid difficulty, ``sweep_runs`` runs each, always.
 
-Run keys: ``calibrate/D/I/sSEED``, ``confirm/D/I/sSEED``, ``eval/BOARD/METHOD/sSEED`` (BOARD ``test0``,
-``test1``, ... or ``flat``), ``sweep/D/METHOD/sSEED``; a stopped stage resumes
+Run keys: ``calibrate/D/I/sSEED``, ``confirm/D/I/sSEED``, ``eval/BOARD/METHOD/sSEED``
+(BOARD ``test0``, ``test1``, ... or ``flat``), ``sweep/D/METHOD/sSEED``; a stopped stage resumes
 where it stopped (:class:`footfall.experiments.runs.Runner`).
 """
 
@@ -132,7 +132,7 @@ def confirm(ws: Workspace, runner: Runner, choice: DifficultyChoice) -> Difficul
                 for i in boards for s in confirmation_seeds(config, j, i)]
         runner.run(jobs, f"confirmation runs at {d:g} (the teacher, fresh boards)")
         stored = {r["key"]: r["result"] for r in runner.store.runs(key_prefix=f"confirm/{d:g}/")}
-        walked[d] = (sum(bool(stored[j.key]["success"]) for j in jobs), len(jobs))
+        walked[d] = (sum(bool(stored[job.key]["success"]) for job in jobs), len(jobs))
         runner.log(f"confirmation at {d:g}: the teacher crossed {walked[d][0]}/{walked[d][1]}")
     choice = confirm_choice(choice, walked)
     runner.log("test difficulty " + f"{choice.difficulty:g}"

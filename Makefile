@@ -63,6 +63,8 @@ bench: $(STAMP) libgomp chromium
 	$(BIN)/footfall bench learning
 	$(BIN)/footfall bench rankers
 	$(BIN)/footfall bench expert
+	$(BIN)/footfall bench sampling
+	$(BIN)/footfall bench pose
 	$(BIN)/footfall bench sim
 	$(BIN)/footfall bench executors
 	$(BIN)/footfall bench teach

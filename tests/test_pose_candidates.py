@@ -1,13 +1,17 @@
 """Candidate footholds and pose features."""
 
+import json
+
 import numpy as np
 import pytest
 
+from cli_helpers import run
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.kinematics import inverse_kinematics, world_to_body
 from footfall.core.robot import LEG_NAMES, LITTLEDOG
 from footfall.core.state import RobotState, nominal_state
+from footfall.experiments.bench.pose import hull_area_reference, triangle_margins_reference
 from footfall.features.candidates import lattice, reachable_footholds
 from footfall.features.config import FeatureConfig
 from footfall.features.pose_features import (
@@ -108,6 +112,32 @@ def test_triangle_margins_and_hull_area():
     quads = np.array([[[0, 0], [1, 0], [1, 1], [0, 1]], [[0, 0], [1, 1], [1, 0], [0, 1]],
                       [[0, 0], [2, 0], [0, 2], [0.2, 0.2]]], float)
     np.testing.assert_allclose(hull_area(quads), [1.0, 1.0, 2.0])
+
+
+@pytest.mark.parametrize("n", [1, 2, 7, 32, 128, 1500])
+def test_the_compiled_support_features_are_the_numpy_definitions_to_the_last_bit(n):
+    rng = np.random.default_rng(n)
+    feet = rng.normal(0.0, 0.12, (n, 4, 2)) + rng.normal(0.0, 3.0, 2)  # metres, off the origin
+    # degenerate rows: two feet on one spot, three on a line, a NaN
+    feet[0, 1] = feet[0, 0]
+    if n > 2:
+        feet[1, 2] = 0.5 * (feet[1, 0] + feet[1, 1])
+        feet[2, 3, 1] = np.nan
+    point = rng.normal(0.0, 3.0, 2)
+    for lifted in range(4):
+        tri = feet[:, [k for k in range(4) if k != lifted]]
+        got, want = triangle_margins(tri, point), triangle_margins_reference(tri, point)
+        for g, w in zip(got, want):
+            np.testing.assert_array_equal(g, w)
+    np.testing.assert_array_equal(hull_area(feet), hull_area_reference(feet))
+
+
+def test_the_pose_benchmark_compares_equal_features(capsys):
+    code, out, _ = run(capsys, "bench", "pose", "--states", "1", "--json")
+    assert code == 0
+    result = json.loads(out)
+    assert result["equal"] is True and set(result["sets"]) == {"128", "32"}
+    assert all(s["numpy_us"] > 0 and s["compiled_us"] > 0 for s in result["sets"].values())
 
 
 def test_state_validation_and_vector_round_trip():

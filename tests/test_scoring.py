@@ -187,3 +187,67 @@ def test_the_generic_dense_form_gathers_the_patches_it_would_interpolate(mirror)
     assert (~valid).any() and valid.mean() > 0.5  # the hole and the border are in it
     np.testing.assert_array_equal(np.isfinite(grid.reward), valid)
     np.testing.assert_allclose(grid.reward[valid], slow[valid], rtol=0, atol=1e-10)
+
+
+@pytest.mark.parametrize("spacing", [SPACING, 0.003, 0.0042])
+@pytest.mark.parametrize("mirror", [False, True])
+def test_the_validity_grid_counts_what_the_patches_would_show(spacing, mirror):
+    """A value that needs the robot's state has a terrain part that is only validity; its grid,
+    counted by running sums without a patch, is the generic form's to the last bit -- holes, a
+    coverage limit and the map's border included -- and interpolates off the cells."""
+    from footfall.features.dense import dense_validity, dense_values
+
+    h = np.array(HMAP.heights)
+    h[:, 120:] = np.nan  # coverage falls off towards a strip without data
+    h[50:53, 30:90:7] = np.nan  # scattered single cells without data
+    hmap = HeightMap(h, RES, HMAP.origin)
+
+    def validity(c):
+        return np.where(c.patches.valid, 0.0, -np.inf)
+
+    grid = dense_validity(hmap, CONFIG, spacing=spacing, mirror=mirror)
+    slow = dense_values(hmap, validity, CONFIG, spacing=spacing, mirror=mirror)
+    for a, b in ((grid.x, slow.x), (grid.y, slow.y), (grid.reward, slow.reward),
+                 (grid.valid, slow.valid)):
+        np.testing.assert_array_equal(a, b)
+    assert (~grid.valid).any() and grid.valid.mean() > 0.3
+    turned = dense_validity(hmap, CONFIG, spacing=SPACING, yaw=0.3, mirror=mirror)
+    np.testing.assert_array_equal(
+        turned.valid, dense_values(hmap, validity, CONFIG, spacing=SPACING, yaw=0.3,
+                                   mirror=mirror).valid)
+
+
+def test_a_learned_function_with_pose_features_scores_only_validity_densely():
+    from footfall.features.dense import dense_validity
+    from footfall.features.pose_features import PoseFeatures
+    from footfall.learning.function import ColumnFunction, ColumnScorer
+
+    class Summed(ColumnFunction):  # the least non-linear function: columns summed
+        def __init__(self, families):
+            object.__setattr__(self, "families", families)
+            object.__setattr__(self, "info", {})
+
+        def predict(self, X):
+            return np.nansum(X, axis=1)
+
+        def arrays(self):
+            return {}
+
+        @classmethod
+        def from_arrays(cls, families, arrays, info, prefix=""):
+            return cls(families)
+
+    posed = ColumnScorer(Summed((TerrainFeatures(CONFIG), PoseFeatures())), CONFIG)
+    assert posed.has_state_part
+    grid = posed.dense(HMAP, spacing=SPACING, mirror=True)
+    want = dense_validity(HMAP, CONFIG, spacing=SPACING, mirror=True)
+    np.testing.assert_array_equal(grid.reward, want.reward)
+    assert set(np.unique(grid.reward)) == {0.0, -np.inf}
+    other = ColumnScorer(Summed((PoseFeatures(), TerrainFeatures(CONFIG))), CONFIG)
+    assert other.key(state=False) == posed.key(state=False)  # one validity grid for both
+    assert other.key(state=True) != posed.key(state=True)
+    terrain_only = ColumnScorer(Summed((TerrainFeatures(CONFIG),)), CONFIG)
+    assert terrain_only.key(state=False) != posed.key(state=False)
+    valued = terrain_only.dense(HMAP, spacing=SPACING)
+    assert np.isfinite(valued.reward[valued.valid]).all()
+    assert np.unique(valued.reward[valued.valid]).size > 100  # its value, not validity

@@ -11,6 +11,7 @@ from footfall.core.errors import FootfallError
 from footfall.experiments.bench.executors import bench_executors, format_executors
 from footfall.experiments.bench.expert import bench_expert, format_expert
 from footfall.experiments.bench.learning import bench_learning, format_learning
+from footfall.experiments.bench.pose import bench_pose, format_pose
 from footfall.experiments.bench.rankers import bench_rankers, format_rankers
 from footfall.experiments.bench.sampling import bench_sampling, format_sampling
 from footfall.experiments.bench.scoring import bench_scoring, format_scoring
@@ -42,6 +43,15 @@ def bench_learning_cmd(n_demos: int, library_size: int, as_json: bool) -> None:
     """Paper-scale learning against scikit-learn's LogisticRegressionCV."""
     result = bench_learning(n_demos=n_demos, library_size=library_size)
     emit(as_json, result, format_learning(result))
+
+
+@bench.command("pose")
+@click.option("--states", type=click.IntRange(1, 100), default=8, show_default=True)
+@json_option
+def bench_pose_cmd(states: int, as_json: bool) -> None:
+    """Pose features of a planning step: compiled support features against NumPy."""
+    result = bench_pose(states=states)
+    emit(as_json, result, format_pose(result))
 
 
 @bench.command("rankers")

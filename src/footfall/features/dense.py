@@ -23,6 +23,7 @@ from footfall.features.candidates import lattice
 from footfall.features.config import FeatureConfig
 from footfall.features.family import Candidates, FeatureFamily
 from footfall.features.patches import FootholdPatches, foothold_patches
+from footfall.features.window_sums import window_sums
 
 _BLOCK_FLOATS = 1 << 20  # patch values per block of the interpolating path
 
@@ -105,6 +106,47 @@ def dense_values(hmap: HeightMap, values: Callable[[Candidates], np.ndarray],
         patches = _aligned(hmap, cells, config, tap, mirror)
     r, valid = dense_general(hmap, values, config, pts, yaw, mirror, patches)
     return ScoreGrid(xs, ys, r.reshape(xs.size, ys.size), valid.reshape(xs.size, ys.size))
+
+
+def _valid_only(c: Candidates) -> np.ndarray:
+    """0 where a candidate is a valid foothold, -inf elsewhere (n,)."""
+    return np.where(c.patches.valid, 0.0, -np.inf)
+
+
+def dense_validity(hmap: HeightMap, config: FeatureConfig, *, spacing: float = 0.005,
+                   yaw: float = 0.0, mirror: bool = False) -> ScoreGrid:
+    """Where every lattice point is a valid foothold: reward 0 there, -inf elsewhere.
+
+    The dense form of a terrain part that is nothing but validity -- that of
+    a value that needs the robot's state (a learned function with pose
+    features) --: data under the point, and every scale's patch covered at
+    least ``config.min_coverage``. Where the lattice and the patch samples
+    fall on map cells (heading 0, whole ratios) the samples with data of each
+    window are counted by running sums (:func:`window_sums` of the data mask,
+    whole numbers, exact) instead of gathering every patch, and the coverage
+    rule is :func:`foothold_patches`'s in its arithmetic: the same grid as
+    :func:`dense_values` of the validity, bit for bit. Elsewhere it is that.
+    """
+    pts, xs, ys = lattice_points(hmap, spacing)
+    step = whole_ratio(spacing, hmap.resolution)
+    tap = whole_ratio(config.template_resolution, hmap.resolution)
+    if step is None or tap is None or yaw != 0.0:
+        return dense_values(hmap, _valid_only, config, spacing=spacing, yaw=yaw, mirror=mirror)
+    ox, oy = hmap.origin
+    ci = np.rint((xs - ox) / hmap.resolution).astype(np.intp)  # the lattice's map cells
+    cj = np.rint((ys - oy) / hmap.resolution).astype(np.intp)
+    data = ~np.isnan(hmap.heights)
+    valid = data[np.ix_(ci, cj)]
+    mx = max(g.half_counts[0] for g in config.grids) * tap
+    my = max(g.half_counts[1] for g in config.grids) * tap
+    padded = np.zeros((data.shape[0] + 2 * mx, data.shape[1] + 2 * my))  # off the map: no data
+    padded[mx:mx + data.shape[0], my:my + data.shape[1]] = data
+    for grid in config.grids:  # the windows are symmetric: mirroring changes no count
+        hu, hv = grid.half_counts
+        nu, nv = grid.shape
+        count, _ = window_sums(padded, tap, ci + mx - hu * tap, cj + my - hv * tap, nu, nv)
+        valid &= 1.0 - (grid.size - count) / grid.size >= config.min_coverage
+    return ScoreGrid(xs, ys, np.where(valid, 0.0, -np.inf), valid)
 
 
 def _aligned(hmap: HeightMap, cells: np.ndarray, config: FeatureConfig, tap: int, mirror: bool

@@ -30,10 +30,11 @@ from footfall.core.kinematics import (
     rotation_matrix,
     world_to_body,
 )
-from footfall.core.robot import LEG_NAMES, LITTLEDOG, Leg, RobotDescription
+from footfall.core.robot import LEG_NAMES, LITTLEDOG, Leg, RobotDescription, per_robot
 from footfall.core.state import RobotState
 from footfall.features.config import FeatureConfig
 from footfall.features.family import Candidates, FeatureFamily, register_family
+from footfall.features.support_kernels import hull_areas, triangles_margins
 
 CLEARANCE_CAP = 0.05  # [m] clearances above this count as fully clear
 BODY_CLEARANCE_CAP = 0.10  # [m] body clearances above this count as fully clear
@@ -73,22 +74,15 @@ POSE_FEATURE_NAMES: tuple[str, ...] = tuple(POSE_FEATURE_DOCS)
 
 
 def triangle_margins(tri: np.ndarray, point: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Inradius [m] and signed edge distance [m] of a point, triangles (n, 3, 2), point (2,)."""
-    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-    ab, bc, ca = b - a, c - b, a - c
-    la, lb, lc = (np.linalg.norm(e, axis=1) for e in (ab, bc, ca))
-    cross = ab[:, 0] * (c - a)[:, 1] - ab[:, 1] * (c - a)[:, 0]
-    area = 0.5 * np.abs(cross)
-    semi = 0.5 * (la + lb + lc)
-    inradius = np.divide(area, semi, out=np.zeros_like(area), where=semi > 0)
-    orient = np.where(cross >= 0, 1.0, -1.0)
-    dists = []
-    for start, edge, length in ((a, ab, la), (b, bc, lb), (c, ca, lc)):  # three edges
-        rel = point[None, :] - start
-        signed = orient * (edge[:, 0] * rel[:, 1] - edge[:, 1] * rel[:, 0])
-        # A degenerate edge (two feet on one spot) leaves no margin: distance 0.
-        dists.append(np.divide(signed, length, out=np.zeros_like(signed), where=length > 0))
-    return inradius, np.min(np.stack(dists), axis=0)
+    """Inradius [m] and signed edge distance [m] of a point, triangles (n, 3, 2), point (2,).
+
+    The inradius is the triangle's area over its semi-perimeter (0 for a
+    degenerate one); the distance is to the nearest edge, > 0 inside, for
+    either winding (0 for a degenerate edge: two feet on one spot leave no
+    margin). Compiled (:func:`footfall.features.support_kernels.triangles_margins`).
+    """
+    tri = np.ascontiguousarray(tri, dtype=np.float64).reshape(-1, 3, 2)
+    return triangles_margins(tri, float(point[0]), float(point[1]))
 
 
 def hull_area(points: np.ndarray) -> np.ndarray:
@@ -97,21 +91,32 @@ def hull_area(points: np.ndarray) -> np.ndarray:
     For four points in convex position the non-crossing ordering has the
     largest shoelace area (crossed orderings give a difference of two
     triangles); when one point lies inside the triangle of the others, that
-    triangle is the hull and is larger than every ordering's area.
+    triangle is the hull and is larger than every ordering's area. Compiled
+    (:func:`footfall.features.support_kernels.hull_areas`).
     """
-    def shoelace(order):
-        q = points[:, order]
-        x, y = q[..., 0], q[..., 1]
-        return 0.5 * np.abs(np.sum(x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y, axis=1))
-    quads = [shoelace(o) for o in ((0, 1, 2, 3), (0, 1, 3, 2), (0, 2, 1, 3))]
-    tris = [shoelace(o) for o in ((0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3))]
-    return np.max(np.stack(quads + tris), axis=0)
+    return hull_areas(np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 4, 2))
 
 
 def _terrain_clear(hmap: HeightMap, points: np.ndarray) -> np.ndarray:
     """Height [m] of points (..., 3) above the terrain; no data counts as clear (+inf)."""
     ground = hmap.height_at(points[..., :2])
     return np.where(np.isnan(ground), np.inf, points[..., 2] - ground)
+
+
+@per_robot
+def _samples(robot: RobotDescription) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The fixed sample points of the clearance features, made once per robot: the shin's
+    fractions from knee to foot (_SHIN_SAMPLES,) [-], the trunk footprint's grid in the heading
+    frame (_TRUNK_SAMPLES product, 2) [m], the swing path's fractions (_PATH_SAMPLES,) [-]."""
+    frac = np.linspace(0.0, 1.0 - robot.foot_radius / robot.lower_leg, _SHIN_SAMPLES)
+    lx, ly = robot.trunk_size[0] / 2, robot.trunk_size[1] / 2
+    gx, gy = np.meshgrid(np.linspace(-lx, lx, _TRUNK_SAMPLES[0]),
+                         np.linspace(-ly, ly, _TRUNK_SAMPLES[1]), indexing="ij")
+    trunk = np.column_stack([gx.ravel(), gy.ravel()])
+    path = np.linspace(0.0, 1.0, _PATH_SAMPLES)
+    for a in (frac, trunk, path):
+        a.flags.writeable = False  # shared between calls
+    return frac, trunk, path
 
 
 def pose_features(hmap: HeightMap, state: RobotState, footholds: np.ndarray,
@@ -212,7 +217,7 @@ def _reach_and_leg_clearance(hmap: HeightMap, state: RobotState, f: np.ndarray, 
     knee = knee_position(leg, q, robot) @ rot.T + state.body_position
     out["knee_clearance"] = np.minimum(_terrain_clear(hmap, knee), CLEARANCE_CAP)
     # Shin samples from the knee to one foot radius short of the foot centre.
-    frac = np.linspace(0.0, 1.0 - robot.foot_radius / robot.lower_leg, _SHIN_SAMPLES)
+    frac = _samples(robot)[0]
     shin = knee[:, None, :] + frac[None, :, None] * (centre - knee)[:, None, :]
     shin_clear = _terrain_clear(hmap, shin).min(axis=1) - robot.lower_leg_radius
     out["shin_clearance"] = np.minimum(shin_clear, CLEARANCE_CAP)
@@ -229,16 +234,13 @@ def _body_and_swing(hmap: HeightMap, state: RobotState, f: np.ndarray, robot: Ro
     out: dict[str, np.ndarray] = {}
     mean_feet_z = (feet[stance, 2].sum() + f[:, 2]) / 4.0
     body_z = mean_feet_z + robot.nominal_height
-    lx, ly = robot.trunk_size[0] / 2, robot.trunk_size[1] / 2
-    gx, gy = np.meshgrid(np.linspace(-lx, lx, _TRUNK_SAMPLES[0]),
-                         np.linspace(-ly, ly, _TRUNK_SAMPLES[1]), indexing="ij")
-    under = np.column_stack([gx.ravel(), gy.ravel()]) @ _heading_rotation(state.yaw).T + body_xy
+    _, trunk, t = _samples(robot)
+    under = trunk @ _heading_rotation(state.yaw).T + body_xy
     ground = hmap.height_at(under)
     top = np.nanmax(ground) if np.isfinite(ground).any() else -np.inf
     out["body_clearance"] = np.minimum(body_z - robot.trunk_size[2] / 2 - top, BODY_CLEARANCE_CAP)
     others = feet[stance, :2]
     out["min_foot_distance"] = np.min(np.linalg.norm(f[:, None, :2] - others[None], axis=2), axis=1)
-    t = np.linspace(0.0, 1.0, _PATH_SAMPLES)
     path = feet[s, None, None, :2] + t[None, :, None] * (f[:, None, :2] - feet[s, None, None, :2])
     path_ground = hmap.height_at(path)
     path_top = np.where(np.isfinite(path_ground).any(axis=1),

@@ -25,8 +25,10 @@ from typing import Any
 import numpy as np
 
 from footfall.core.errors import FootfallError
+from footfall.core.heightmap import HeightMap
 from footfall.core.validate import require_float_array
 from footfall.features.config import FeatureConfig
+from footfall.features.dense import ScoreGrid, dense_validity
 from footfall.features.family import Candidates, FeatureFamily
 from footfall.features.reward import LinearReward
 from footfall.features.scorer import FootholdScorer
@@ -227,6 +229,16 @@ class ColumnScorer(FootholdScorer):
             out[which[finite], where[finite]] = self.function.predict(X[finite])
         return out
 
+    def dense(self, hmap: HeightMap, *, spacing: float = 0.005, yaw: float = 0.0,
+              mirror: bool = False, dtype: type = np.float32, fast: bool = True) -> ScoreGrid:
+        """The terrain part at every lattice point: with a state family, only where a foothold
+        is valid (:func:`~footfall.features.dense.dense_validity`, counted without a patch),
+        else the generic dense form of the function's value."""
+        if self.has_state_part:
+            return dense_validity(hmap, self.config, spacing=spacing, yaw=yaw, mirror=mirror)
+        return super().dense(hmap, spacing=spacing, yaw=yaw, mirror=mirror, dtype=dtype,
+                             fast=fast)
+
     def terrain_values(self, c: Candidates) -> np.ndarray:
         """The value (terrain families only), or 0 / -inf (valid or not) when it needs the state."""
         if self.has_state_part:
@@ -257,7 +269,11 @@ class ColumnScorer(FootholdScorer):
         return digest.hexdigest()
 
     def key(self, state: bool) -> str:
-        """Digest of the function's families and arrays, the settings and the part."""
+        """Digest of the function's families and arrays, the settings and the part; with a state
+        family the terrain part is only validity under the settings, and so is its key (every
+        such function on a board shares one grid of it)."""
+        if not state and self.has_state_part:
+            return hashlib.sha256(f"validity:{self.config.to_dict()!r}".encode()).hexdigest()
         return hashlib.sha256(f"{self._digest}:{state}".encode()).hexdigest()
 
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import os
 import platform
-import time
 
 import numpy as np
 
@@ -20,6 +19,7 @@ from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LEG_NAMES
 from footfall.core.sphere_surface import SphereSurface, sphere_surface
 from footfall.core.state import nominal_state
+from footfall.experiments.bench.timing import best_time
 from footfall.features.candidates import reachable_footholds
 from footfall.features.config import FeatureConfig
 from footfall.terrain import make_board
@@ -76,15 +76,6 @@ def surface_reference(surface: SphereSurface, points: np.ndarray) -> np.ndarray:
     return out
 
 
-def _best(fn, repeats: int) -> float:
-    best = np.inf
-    for _ in range(repeats):
-        t = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t)
-    return best
-
-
 def bench_sampling(states: int = 8, repeats: int = 3, seed: int = 0) -> dict:
     """Compiled sampling against the NumPy rules on a rocky 0.5 module, per decision.
 
@@ -121,12 +112,12 @@ def bench_sampling(states: int = 8, repeats: int = 3, seed: int = 0) -> dict:
                      for a, b in zip(numpy_patches(), compiled_patches()))
         equal &= np.array_equal(surface_reference(ball, rays), ball.along_rays(xy, dirs, dist),
                                 equal_nan=True)
-        rows["patch_np"].append(_best(numpy_patches, repeats))
-        rows["patch_nb"].append(_best(compiled_patches, repeats))
-        rows["ray_np"].append(_best(lambda: surface_reference(
+        rows["patch_np"].append(best_time(numpy_patches, repeats))
+        rows["patch_nb"].append(best_time(compiled_patches, repeats))
+        rows["ray_np"].append(best_time(lambda: surface_reference(
             ball, xy[:, None, None, :] + dist[None, None, :, None] * dirs[None, :, None, :]),
             repeats))
-        rows["ray_nb"].append(_best(lambda: ball.along_rays(xy, dirs, dist), repeats))
+        rows["ray_nb"].append(best_time(lambda: ball.along_rays(xy, dirs, dist), repeats))
     med = {k: float(np.median(v)) * 1000 for k, v in rows.items()}
     return {"machine": {"cpus": os.cpu_count(), "python": platform.python_version()},
             "states": states, "candidates_median": float(np.median(sizes)), "equal": bool(equal),

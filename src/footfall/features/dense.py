@@ -127,11 +127,11 @@ def dense_validity(hmap: HeightMap, config: FeatureConfig, *, spacing: float = 0
     rule is :func:`foothold_patches`'s in its arithmetic: the same grid as
     :func:`dense_values` of the validity, bit for bit. Elsewhere it is that.
     """
-    pts, xs, ys = lattice_points(hmap, spacing)
     step = whole_ratio(spacing, hmap.resolution)
     tap = whole_ratio(config.template_resolution, hmap.resolution)
     if step is None or tap is None or yaw != 0.0:
         return dense_values(hmap, _valid_only, config, spacing=spacing, yaw=yaw, mirror=mirror)
+    _, xs, ys = lattice_points(hmap, spacing)
     ox, oy = hmap.origin
     ci = np.rint((xs - ox) / hmap.resolution).astype(np.intp)  # the lattice's map cells
     cj = np.rint((ys - oy) / hmap.resolution).astype(np.intp)

@@ -5,8 +5,8 @@ whole-array NumPy evaluations of the support triangles' margins and the four
 feet's hull area (footfall's before they were compiled): the baseline here and
 the specification the tests compare the kernels of
 :mod:`footfall.features.support_kernels` with, bit for bit. ``bench_pose``
-times the 26 pose features of a footstep planner's candidate sets with each,
-in the same process.
+times both on a footstep planner's candidate sets, in the same process, beside
+the 26 pose features' whole call.
 """
 
 from __future__ import annotations

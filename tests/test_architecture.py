@@ -398,6 +398,8 @@ LAZY_IMPORTS = {
     ("footfall.learning.boosted", "lightgbm"):
         "a second to import: only the boosted learner's training needs it (its model file "
         "holds arrays, scored without LightGBM)",
+    ("footfall.learning.veto", "lightgbm"):
+        "a second to import: only learning a veto needs it (its trees are arrays in the model)",
     ("footfall.cli.bench", "footfall.cli.fuzz.campaign"):
         "the fuzz suite is built on Hypothesis, a test extra: only `footfall bench fuzz`",
 }

@@ -8,7 +8,6 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from footfall.core.compute import available_memory, jobs_that_fit
 from footfall.core.errors import FootfallError
 from footfall.features.family import Candidates
 from footfall.features.templates import BANDWIDTH_RMS_GRID, ORDER_ONLY_RMS
@@ -74,21 +73,6 @@ def test_the_trees_do_not_depend_on_the_number_of_threads():
         np.testing.assert_array_equal(array, two.forest_.arrays()[name])
     with pytest.raises(FootfallError, match="n_jobs must be at least 1"):
         BoostedRanker(n_jobs=0).fit(X, y, groups)
-
-
-def test_the_folds_trained_in_threads_give_the_same_path_and_trees():
-    """Folds trained at once (one thread each) are independent: the same errors, the same
-    selection, the same trees as one after another."""
-    X, y, groups = _toy(4)
-    kw = dict(trees=(5, 15, 30), cv=4)
-    alone = BoostedRanker(**kw, fold_jobs=1).fit(X, y, groups)
-    together = BoostedRanker(**kw, fold_jobs=4).fit(X, y, groups)
-    assert [p.error for p in alone.path_] == [p.error for p in together.path_]
-    assert alone.n_trees_ == together.n_trees_
-    for name, array in alone.forest_.arrays().items():
-        np.testing.assert_array_equal(array, together.forest_.arrays()[name])
-    with pytest.raises(FootfallError, match="fold_jobs must be at least 1"):
-        BoostedRanker(fold_jobs=0).fit(X, y, groups)
 
 
 def test_a_row_s_value_is_its_own():
@@ -187,21 +171,6 @@ def test_a_tampered_model_file_is_refused_in_one_line(saved, tmp_path, key, make
     with pytest.raises(FootfallError, match=match) as err:
         FootholdModel.load(path)
     assert "\n" not in str(err.value)
-
-
-def test_folds_at_once_are_as_many_as_the_memory_holds():
-    gb = 1 << 30
-    assert jobs_that_fit(2, 5 * gb, 14 * gb) == 2  # 10.5 GB usable: two copies of 5
-    assert jobs_that_fit(2, 6 * gb, 14 * gb) == 1  # one copy at a time
-    assert jobs_that_fit(4, 6 * gb, 2 * gb) == 1  # never none
-    assert jobs_that_fit(3, 6 * gb, None) == 3  # memory unknown: the cores decide
-    available = available_memory()
-    assert available is None or available > 0
-    X, y, groups = _toy(5)  # small rows: threads as the cores allow, the same trees as one
-    auto = BoostedRanker(trees=(10, 30), cv=3).fit(X, y, groups)
-    one = BoostedRanker(trees=(10, 30), cv=3, fold_jobs=1).fit(X, y, groups)
-    for name, array in auto.forest_.arrays().items():
-        np.testing.assert_array_equal(array, one.forest_.arrays()[name])
 
 
 def test_the_trees_read_only_each_column_s_order():

@@ -95,3 +95,34 @@ def test_bad_margin_and_another_terrain_are_refused():
         inspect_run(run, hm, TableExpert(), margin=-1.0)
     with pytest.raises(FootfallError, match="another terrain"):
         inspect_run(run, terrain(seed=1), TableExpert())
+
+
+class VetoExpert(TableExpert):
+    """The table expert with a veto: it refuses every candidate below x = 0.315 m."""
+
+    def verdict(self, hmap, state, candidates):
+        return self.values(hmap, state, candidates), np.asarray(candidates)[:, 0] < 0.315
+
+
+def test_every_step_is_labelled_for_dagger_with_the_teachers_verdict():
+    hm = terrain()
+    run = _run(hm, [0.30, 0.34, 0.33, 0.31, 0.32])  # shortfalls 4, 0, 1, 3, 2
+    verdicts = inspect_run(run, hm, VetoExpert(), margin=1.5, every_step=True)
+    assert [v.k for v in verdicts if v.label is not None] == [0, 1, 2, 3, 4]
+    assert [v.k for v in worst_corrections(verdicts, 1.5, 2, every_step=True)
+            if v.label is not None] == [0, 3]  # the cap still keeps the worst
+    demos = corrections_to_demonstrations(run, "r", worst_corrections(verdicts, 1.5, None, True),
+                                          VetoExpert())
+    assert len(demos) == 5 and all(d.chosen == 4 for d in demos)  # where it chose as the teacher
+    np.testing.assert_allclose(demos[1].values, [30, 31, 32, 33, 34])
+    assert demos[1].refused.tolist() == [True, True, False, False, False]
+    # without a veto of its own, a teacher refuses what it values more than 10 below its best
+    plain = inspect_run(run, hm, TableExpert(), margin=1.5, every_step=True)
+    assert not any(v.refused.any() for v in plain)
+    # a step whose label its own veto refuses keeps the label: the refusal is cleared
+    class Stubborn(VetoExpert):
+        def choose(self, hmap, state, candidates, rng):
+            return 0
+    (d0,) = corrections_to_demonstrations(run, "r", inspect_run(run, hm, Stubborn(), 1.5)[:1],
+                                          Stubborn())
+    assert d0.chosen == 0 and d0.refused.tolist() == [False, True, False, False, False]

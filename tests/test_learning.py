@@ -5,7 +5,12 @@ import pytest
 from sklearn.linear_model import LogisticRegression
 
 from footfall.core.errors import FootfallError
-from footfall.learning.ranker import FootholdRanker, grouped_folds, pairwise_transform
+from footfall.learning.ranker import (
+    FootholdRanker,
+    grouped_folds,
+    pairwise_error,
+    pairwise_transform,
+)
 
 
 def test_pairwise_transform_on_a_hand_made_example():
@@ -29,13 +34,48 @@ def test_pairwise_transform_on_a_hand_made_example():
     ([1, 1, 0], [0, 0, 0], "exactly one chosen"),
     ([0, 0, 0], [0, 0, 0], "exactly one chosen"),
     ([1, 1, 0], [0, 1, 1], "at least two candidates"),
-    ([2, 0, 0], [0, 0, 0], "1 for the chosen"),
+    ([1.5, 0, 0], [0, 0, 0], "whole relevance levels"),
+    ([1, -1, 0], [0, 0, 0], "whole relevance levels"),
+    ([31, 0, 0], [0, 0, 0], "whole relevance levels"),
+    ([2, 2, 1], [0, 0, 0], "exactly one chosen"),
 ])
 def test_bad_demonstrations_are_rejected(y, groups, match):
     with pytest.raises(FootfallError, match=match):
         pairwise_transform(np.zeros((3, 2)), np.array(y), np.array(groups))
     with pytest.raises(FootfallError, match="NaN"):
         pairwise_transform(np.array([[np.nan], [0.0]]), np.array([1, 0]), np.array([0, 0]))
+
+
+def test_graded_levels_pair_each_candidate_with_one_of_every_level_above_it():
+    # one demonstration: row 2 chosen (3); rows 0 and 4 within the margin (2); row 1 short (1);
+    # row 3 refused (0). Each row pairs with the chosen row and the first row of every level
+    # between: 0 -> (2); 1 -> (2), (0); 3 -> (2), (0), (1); 4 -> (2).
+    X = np.arange(10.0).reshape(5, 2) ** 2
+    y = np.array([2, 1, 3, 0, 2])
+    pairs, labels, g = pairwise_transform(X, y, np.zeros(5, dtype=int), mirrored=False)
+    better = [2, 2, 0, 2, 0, 1, 2]
+    worse = [0, 1, 1, 3, 3, 3, 4]
+    np.testing.assert_array_equal(pairs, X[better] - X[worse])
+    assert (labels == 1).all() and (g == 0).all()
+    # a score that orders the levels right makes no error; one that swaps the top two levels
+    # errs on the pairs of the chosen row with the rows of level 2 only
+    assert pairwise_error(np.array([2.0, 1.0, 3.0, 0.0, 2.5]), y, np.zeros(5)) == 0.0
+    assert pairwise_error(np.array([3.0, 1.0, 2.0, 0.0, 2.5]), y, np.zeros(5)) == 2 / 7
+
+
+def test_a_choice_is_the_lowest_grading():
+    # levels 0 / 1 give the (chosen, other) pairs, as a choice always did
+    rng = np.random.default_rng(3)
+    X = rng.normal(size=(12, 3))
+    groups = np.repeat([4, 1, 9], 4)
+    y = np.zeros(12, dtype=int)
+    y[[2, 4, 11]] = 1
+    pairs, _, g = pairwise_transform(X, y, groups, mirrored=False)
+    chosen_of = {1: 4, 4: 2, 9: 11}
+    expected = [(chosen_of[k], i) for k in (1, 4, 9) for i in np.flatnonzero(groups == k)
+                if i != chosen_of[k]]
+    np.testing.assert_array_equal(pairs, np.array([X[c] - X[i] for c, i in expected]))
+    np.testing.assert_array_equal(g, [groups[i] for _, i in expected])
 
 
 def test_grouped_folds_never_split_a_demonstration():

@@ -2,6 +2,7 @@
 
 import json
 import shutil
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -279,3 +280,47 @@ def test_the_three_functions_learned_in_worker_processes_are_the_same_bits(unint
         assert learned[0].keys() == saved[0].keys()
         for k in saved[0]:
             np.testing.assert_array_equal(learned[0][k], saved[0][k])
+
+
+DAGGER = replace(TINY, every_step=True, round_runs=2, supervision="graded", teacher="accepted",
+                 expert=None, learner="lambdarank", template_budget=None)
+
+
+def _rounds(out, config, on_run=None):
+    from footfall.experiments.executors import LocalPool
+    from footfall.experiments.reproduce import STORE_NAME, correction_rounds
+    from footfall.experiments.runs import Runner
+
+    ws = open_workspace(out, config)
+    with DemoStore(out / STORE_NAME, create=True) as store:
+        return correction_rounds(ws, Runner(store, ws.by_hash, LocalPool(1), on_run,
+                                            lambda s: None))
+
+
+def test_dagger_labels_every_step_of_the_students_runs_and_resumes(tmp_path):
+    """The teacher labels every step of every run of each round (two a board), with its
+    verdict on every candidate; the labels grow round by round; a stopped round resumes to the
+    same labels."""
+    whole = _rounds(tmp_path / "whole", DAGGER)
+    with DemoStore(tmp_path / "whole" / "reproduce.sqlite") as store:
+        runs = {r["key"]: r["n_steps"] for r in store.runs()}
+    assert sorted(runs) == ["correct/r0/train00", "correct/r0/train00/s1",
+                            "correct/r1/train00", "correct/r1/train00/s1"]
+    totals = [r["demonstrations_total"] for r in whole.rounds]
+    assert totals == [runs["correct/r0/train00"] + runs["correct/r0/train00/s1"], len(whole.demos)]
+    assert 0 < totals[0] < totals[1]  # the student's own states added to the teacher's
+    assert whole.rounds[1]["reward"] == "models/round1.npz"  # round 1 walked the student
+    assert all(d.values is not None and d.refused is not None for d in whole.demos)
+    assert any(d.refused.any() for d in whole.demos)  # the veto says "never here" somewhere
+    first: list[str] = []
+
+    def stop_after_three(key: str) -> None:
+        first.append(key)
+        if len(first) == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        _rounds(tmp_path / "again", DAGGER, stop_after_three)
+    resumed = _rounds(tmp_path / "again", DAGGER)
+    assert [(d.source, d.chosen, d.values.tobytes()) for d in resumed.demos] == \
+        [(d.source, d.chosen, d.values.tobytes()) for d in whole.demos]

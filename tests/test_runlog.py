@@ -101,6 +101,8 @@ def test_a_version_1_store_is_upgraded_in_place_without_losing_anything(tmp_path
     with DemoStore(path, create=True) as store:
         store.add_demonstrations([demo(hm)], terrains=[hm])
     con = sqlite3.connect(path, isolation_level=None)  # make it look like a version-1 file
+    con.execute("DROP TABLE marks")
+    con.execute("DROP TABLE verdicts")
     con.execute("DROP TABLE judgements")
     con.execute("DROP TABLE replaced_labels")
     con.execute("DROP TABLE labels")
@@ -109,7 +111,7 @@ def test_a_version_1_store_is_upgraded_in_place_without_losing_anything(tmp_path
     con.execute("UPDATE meta SET value = '1' WHERE key = 'schema_version'")
     con.close()
     with DemoStore(path) as store:
-        assert store.schema_version == SCHEMA_VERSION == 4
+        assert store.schema_version == SCHEMA_VERSION == 5
         assert len(store.demonstrations()) == 1
         store.add_run(_run(hm))
         assert len(store.runs()) == 1

@@ -6,6 +6,7 @@ import sqlite3
 import subprocess
 import sys
 import textwrap
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -414,6 +415,8 @@ def _objects(path):
 
 def _as_version_1(path):
     with raw(path) as con:
+        con.execute("DROP TABLE marks")
+        con.execute("DROP TABLE verdicts")
         con.execute("DROP TABLE judgements")
         con.execute("DROP TABLE replaced_labels")
         con.execute("DROP TABLE labels")
@@ -437,8 +440,9 @@ def test_migrated_store_has_the_schema_of_a_new_one(filled, tmp_path):
 
 
 @pytest.mark.parametrize("version, newer", [
-    (2, ("judgements", "replaced_labels", "labels")),  # 3: people's labels
-    (3, ("judgements", "replaced_labels")),  # 4: undo history and the expert's judgements
+    (2, ("marks", "verdicts", "judgements", "replaced_labels", "labels")),  # 3: people's labels
+    (3, ("marks", "verdicts", "judgements", "replaced_labels")),  # 4: undo history, judgements
+    (4, ("marks", "verdicts")),  # 5: the teachers' verdicts on the other candidates, marks
 ])
 def test_an_older_store_gains_the_newer_tables_and_loses_nothing(filled, tmp_path, version,
                                                                  newer):
@@ -453,11 +457,12 @@ def test_an_older_store_gains_the_newer_tables_and_loses_nothing(filled, tmp_pat
     con.close()
     with DemoStore(path, read_only=True) as store:  # read as it is: nothing refused
         assert store.schema_version == version and store.judgement(1, "any") is None
+        assert store.marks() == [] and store.mark_counts() == {}  # no marks table: none
         if "labels" in newer:
             assert store.labels() == []
             assert store.summary()["labels"] == {"by_labeler": {}, "disagreements": 0}
     with DemoStore(path) as store:
-        assert store.schema_version == SCHEMA_VERSION == 4
+        assert store.schema_version == SCHEMA_VERSION == 5
     assert _objects(path) == _objects(tmp_path / "new.sqlite")
     assert contents(path) == before
 
@@ -474,3 +479,43 @@ def test_migration_leaves_a_store_another_process_upgraded_alone(filled):
             == (str(SCHEMA_VERSION),)
     con.close()
 
+
+
+# ------------------------------------------------------------ teachers' verdicts
+def test_a_teachers_verdict_round_trips_and_an_old_store_reads_without_one(store_path):
+    hm = terrain()
+    plain = demo(hm, "LF", 2, seed=1)
+    values = np.array([0.5, -12.0, 3.25, 1.0, -1e3])
+    refused = np.array([False, True, False, False, True])
+    graded = replace(demo(hm, "RH", 2, seed=2), values=values, refused=refused)
+    only_marks = replace(demo(hm, "LH", 0, seed=3), refused=np.eye(1, 5, 4, dtype=bool)[0])
+    with DemoStore(store_path, create=True) as store:
+        store.add_demonstrations([plain, graded, only_marks], terrains=[hm])
+    with DemoStore(store_path, read_only=True) as store:
+        a, b, c = store.demonstrations()
+        assert a.values is None and a.refused is None and not a.has_verdict
+        assert b.values.tobytes() == values.tobytes() and b.refused.tolist() == refused.tolist()
+        assert c.values is None and c.refused.tolist() == [False] * 4 + [True]
+        assert store.demonstrations(ids=[2])[0].refused.tolist() == refused.tolist()
+    with raw(store_path) as con:  # the same store as version 4: its demonstrations, no verdicts
+        con.execute("DROP TABLE marks")
+        con.execute("DROP TABLE verdicts")
+        con.execute("UPDATE meta SET value = '4' WHERE key = 'schema_version'")
+    con.close()
+    with DemoStore(store_path, read_only=True) as store:
+        assert [d.has_verdict for d in store.demonstrations()] == [False] * 3
+    with DemoStore(store_path) as store:  # opened to write: upgraded, the verdicts kept anew
+        store.add_demonstration(graded)
+        assert store.demonstrations(ids=[4])[0].values.tobytes() == values.tobytes()
+
+
+@pytest.mark.parametrize("values, refused, match", [
+    ([1.0, 2.0], None, "5 finite numbers"),
+    ([1.0, np.inf, 0, 0, 0], None, "5 finite numbers"),
+    (None, [0, 0, 1, 0, 0], "chosen candidate 2 is refused"),
+    (None, [0, 0.5, 0, 0, 0], "mask of 5 values 0 / 1"),
+    (None, [[0, 0, 0, 0, 0]], "mask of 5 values 0 / 1"),
+])
+def test_a_verdict_that_does_not_fit_its_candidates_is_refused(values, refused, match):
+    with pytest.raises(FootfallError, match=match):
+        replace(demo(terrain(), chosen=2), values=values, refused=refused)

@@ -159,6 +159,29 @@ def test_a_label_beyond_its_step_s_candidates_is_a_problem(clean, capsys):
                                  "candidates")
 
 
+@pytest.mark.parametrize("statement, problem", [
+    ("UPDATE marks SET candidate = 3", "marks row 1: candidate 3 is not one of its step's 3 "
+                                       "candidates"),
+    ("UPDATE marks SET k = 7", "marks row 1: run 1 has no step 7 in the store"),
+    ("UPDATE marks SET run_id = 5", "marks row 1: run 5 has no step 1 in the store"),
+    ("UPDATE marks SET candidate = 'x'", "marks row 1: candidate is not an integer (got text "
+                                         "'x')"),
+    ("UPDATE marks SET created = 'now'", "marks row 1: created is not a number"),
+    ("UPDATE marks SET labeler = x'00'", "marks row 1: a labeler name is a non-empty string"),
+    ("UPDATE marks SET candidate = 0", "marks row 1: candidate 0 is its labeler's own label of "
+                                       "the step"),
+])
+def test_a_bad_mark_row_is_a_problem(clean, capsys, statement, problem):
+    with DemoStore(clean) as store:
+        store.add_label(1, 1, "ada", "foothold", 0)
+        store.add_mark(1, 1, "ada", 1)
+    assert run(capsys, "store", "check", clean)[0] == 0
+    tamper(clean, "PRAGMA foreign_keys = OFF", statement)
+    code, out, err = run(capsys, "store", "check", clean)
+    assert_user_error(code, err, problem)
+    assert sum("marks row" in line for line in out.splitlines()) == 1
+
+
 def test_a_run_whose_steps_do_not_match_its_count_is_not_read_back(clean):
     tamper(clean, "DELETE FROM run_steps WHERE k = 1")
     with DemoStore(clean) as store, pytest.raises(FootfallError,

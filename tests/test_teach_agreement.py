@@ -1,6 +1,7 @@
 """People against the synthetic expert and against each other: agreement figures tested with
 scripted labelers of known noise, through the HTTP API, on the page's route and in
-``footfall demos info --json``; and the expert's judgement of a run kept in the store."""
+``footfall demos info --json``, their "never here" marks against the expert's refusals and each
+other's (by hand and through the API); and the expert's judgement of a run kept in the store."""
 
 import json
 
@@ -9,11 +10,20 @@ import pytest
 from scipy.stats import binomtest
 
 from cli_helpers import run
-from footfall.data.label import Label
+from footfall.core.state import RobotState
+from footfall.data.label import Label, Mark
 from footfall.data.store import DemoStore
+from footfall.expert.protocol import teacher_verdict
 from footfall.expert.synthetic import SyntheticExpert
 from footfall.teach import judging
-from footfall.teach.agreement import SAME_FOOTHOLD, agreement, expert_verdicts, same_choice
+from footfall.teach.agreement import (
+    SAME_FOOTHOLD,
+    agreement,
+    agreement_lines,
+    expert_verdicts,
+    marks_agreement,
+    same_choice,
+)
 from footfall.teach.client import ScriptedLabeler, TeachClient
 from footfall.teach.judging import default_expert, expert_key
 from footfall.teach.service import TeachService
@@ -32,8 +42,31 @@ def labelled(tmp_path_factory):
             labeler = ScriptedLabeler(client, expert, name=name, seed=seed, noise=noise)
             for run in client.runs():
                 labeler.label_run(run["id"])
+        _mark_run(client, expert, MARKED_RUN)
         figures = client._get("/api/agreement")
     return path, figures
+
+
+MARKED_RUN = 1  # the run whose steps the scripted labelers also mark "never here"
+
+
+def _mark_run(client, expert, run_id):
+    """On every step of a run: "careful" marks each candidate the expert refuses, "careless"
+    two candidates at random (never the one their own label names)."""
+    rng = np.random.default_rng(5)
+    board = None
+    for k in range(STEPS):
+        s = client.step(run_id, k, judge=False)
+        board = board or client.terrain(s["terrain_hash"])
+        state = RobotState.from_vector(np.array(s["state"]), s["leg"])
+        _, refused = teacher_verdict(expert, board, state, np.array(s["candidates"]))
+        own = {label["labeler"]: label["chosen"] for label in s["labels"]}
+        for i in np.flatnonzero(refused):
+            if i != own["careful"]:
+                client.mark(run_id, k, "careful", candidate=int(i))
+        for i in rng.choice([c for c in range(CANDIDATES) if c != own["careless"]], 2,
+                            replace=False):
+            client.mark(run_id, k, "careless", candidate=int(i))
 
 
 def test_a_careful_labeler_agrees_with_the_expert_and_with_another_careful_one(labelled):
@@ -63,6 +96,7 @@ def test_demos_info_gives_the_same_figures(labelled, capsys):
     assert code == 0 and json.loads(out)["agreement"] == figures
     code, out, _ = run(capsys, "demos", "info", str(path))
     assert code == 0 and "careful agrees with the synthetic expert on 40 of 40 steps (100 %)" in out
+    assert "careful's 'never here' marks: the synthetic expert also refuses" in out
 
 
 def test_the_judgement_of_a_run_is_kept_and_read_back_by_the_next_server(labelled, monkeypatch):
@@ -96,3 +130,43 @@ def test_same_choice_is_fine_alike_or_footholds_within_a_centimetre():
                         lambda run, k: 2, lambda run, k: f)
     assert figures["with_expert"]["a"] == {"steps": 1, "agree": 0, "share": 0.0, "exact": 0.0}
     assert figures["between"]["a | b"] == {"steps": 1, "agree": 1, "share": 1.0, "exact": 0.0}
+
+
+def test_marks_agree_with_the_expert_when_it_refuses_them_too(labelled):
+    path, figures = labelled
+    with DemoStore(path, read_only=True) as store:
+        careful = store.marks(labeler="careful")
+        careless_steps = {m.k for m in store.marks(labeler="careless")}
+    assert careful, "the expert refuses some candidates of the marked run"
+    steps = len({m.k for m in careful})
+    marks = figures["marks"]
+    assert marks["with_expert"]["careful"] == {"steps": steps, "marks": len(careful),
+                                               "refused": len(careful), "share": 1.0}
+    assert marks["with_expert"]["careless"]["marks"] == 2 * STEPS
+    assert marks["between"]["careful | careless"]["steps"] == len(careless_steps & {
+        m.k for m in careful})
+    assert set(marks["with_expert"]) == {"careful", "careless"}  # the others marked nothing
+
+
+def _mark(k, labeler, candidate):
+    return Mark(0, 1, k, labeler, candidate, 0.0, None)
+
+
+def test_marks_agreement_by_hand():
+    f = np.array([[0, 0, 0], [0.5 * SAME_FOOTHOLD, 0, 0], [5 * SAME_FOOTHOLD, 0, 0],
+                  [10 * SAME_FOOTHOLD, 0, 0]])
+    marks = [_mark(0, "a", 0), _mark(0, "a", 2), _mark(0, "b", 1), _mark(0, "b", 3),
+             _mark(1, "a", 3), _mark(2, "b", 2)]
+    refusals = {0: np.array([False, False, True, True]), 1: np.zeros(4, dtype=bool), 2: None}
+    figures = marks_agreement(marks, lambda run, k: refusals[k], lambda run, k: f)
+    # a: steps 0 and 1 judged, 3 marks, of which the expert refuses candidate 2 of step 0
+    assert figures["with_expert"]["a"] == {"steps": 2, "marks": 3, "refused": 1, "share": 1 / 3}
+    # b: step 2 is not judged; on step 0 the expert refuses 3, not 1
+    assert figures["with_expert"]["b"] == {"steps": 1, "marks": 2, "refused": 1, "share": 0.5}
+    # both marked step 0 only: a's 0 and b's 1 lie 5 mm apart (the same foothold), 2 and 3 do not
+    assert figures["between"] == {"a | b": {"steps": 1, "marks": 4, "shared": 2, "share": 0.5}}
+    lines = agreement_lines({"with_expert": {}, "between": {}, "marks": figures})
+    assert lines == ["  a's 'never here' marks: the synthetic expert also refuses 1 of 3 (33 %)",
+                     "  b's 'never here' marks: the synthetic expert also refuses 1 of 2 (50 %)",
+                     "  a | b mark the same candidates: 2 of 4 marks on 1 steps (50 %)"]
+    assert marks_agreement([], lambda run, k: None, lambda run, k: f)["with_expert"] == {}

@@ -104,10 +104,11 @@ def test_undo_restores_the_label_it_replaced(server):
                                            "candidate": other, "labeler": "dee"}).json()
     fine = http.post("/api/labels", json={"run": 1, "step": 4, "verdict": "fine",
                                           "labeler": "dee"}).json()
-    assert [lab["verdict"] for lab in http.get("/api/runs/1/steps/4/labels").json()] == ["fine"]
+    assert [lab["verdict"] for lab in http.get("/api/runs/1/steps/4/labels").json()["labels"]] \
+        == ["fine"]
     undone = http.delete(f"/api/labels/{fine['id']}", params={"labeler": "dee"}).json()
     assert undone["removed"]["id"] == fine["id"] and undone["restored"]["id"] == first["id"]
-    (back,) = http.get("/api/runs/1/steps/4/labels").json()
+    (back,) = http.get("/api/runs/1/steps/4/labels").json()["labels"]
     assert (back["verdict"], back["chosen"]) == ("foothold", other)
     assert http.get("/api/runs/1/steps/99/labels").status_code == 404
 
@@ -173,3 +174,101 @@ def test_a_websocket_upgrade_is_not_served(server):
                                 "Sec-WebSocket-Version": "13",
                                 "Sec-WebSocket-Key": "dGhlIHNhbXBsZSBub25jZQ=="})
     assert answer.status_code == 200 and isinstance(answer.json(), list)  # plain HTTP only
+
+
+# ------------------------------------------------------------------ "never here" marks
+def _marks(path):
+    with DemoStore(path, read_only=True) as store:
+        return [(m.run_id, m.k, m.labeler, m.candidate) for m in store.marks()]
+
+
+def test_a_mark_by_candidate_or_point_is_in_the_step_and_its_poll_and_undoes(server):
+    http, base, token, _, path = server
+    assert httpx.post(base + "/api/marks", json={}).status_code == 401  # the token, as ever
+    step = http.get("/api/runs/2/steps/5").json()
+    assert step["marks"] == [] and step["snap_m"] == 0.03
+    i, j = [c for c in range(6) if c != step["chosen"]][:2]
+    body = {"run": 2, "step": 5, "candidate": i, "labeler": "ada", "request": "mark-1"}
+    first, again = http.post("/api/marks", json=body), http.post("/api/marks", json=body)
+    assert (first.status_code, again.status_code) == (201, 200) and first.json() == again.json()
+    assert {k: first.json()[k] for k in ("run_id", "k", "labeler", "candidate", "request")} == \
+        {"run_id": 2, "k": 5, "labeler": "ada", "candidate": i, "request": "mark-1"}
+    near = (np.array(step["candidates"][j][:2]) + 0.002).tolist()
+    by_point = http.post("/api/marks", json={"run": 2, "step": 5, "point": near, "labeler": "bob"})
+    assert by_point.status_code == 201 and by_point.json()["candidate"] == j
+    far = http.post("/api/marks", json={"run": 2, "step": 5, "point": [9.0, 9.0],
+                                        "labeler": "bob"})
+    assert far.status_code == 422 and "no candidate" in far.json()["detail"]
+    shown = http.get("/api/runs/2/steps/5").json()["marks"]
+    polled = http.get("/api/runs/2/steps/5/labels").json()
+    assert shown == polled["marks"] == [first.json(), by_point.json()] and polled["labels"] == []
+    assert _marks(path) == [(2, 5, "ada", i), (2, 5, "bob", j)]
+    assert http.get("/api/counts").json()["marks"] == {"ada": 1, "bob": 1}
+    mark_id = first.json()["id"]
+    other = http.delete(f"/api/marks/{mark_id}", params={"labeler": "bob"})
+    assert other.status_code == 404 and "of labeler 'bob'" in other.json()["detail"]
+    mine = http.delete(f"/api/marks/{mark_id}", params={"labeler": "ada"})
+    assert mine.status_code == 200 and mine.json() == {"removed": first.json()}
+    assert _marks(path) == [(2, 5, "bob", j)]
+
+
+def test_a_mark_on_ones_own_label_and_a_label_on_ones_mark_are_conflicts(server):
+    http, *_, path = server
+    step = http.get("/api/runs/2/steps/6").json()
+    a, b = [c for c in range(6) if c != step["chosen"]][:2]
+    http.post("/api/labels", json={"run": 2, "step": 6, "verdict": "foothold", "candidate": a,
+                                   "labeler": "cy"})
+    http.post("/api/marks", json={"run": 2, "step": 6, "candidate": b, "labeler": "cy"})
+    with DemoStore(path, read_only=True) as store:
+        before = (store.labels(), store.marks(), len(store))
+    mark = http.post("/api/marks", json={"run": 2, "step": 6, "candidate": a, "labeler": "cy"})
+    assert mark.status_code == 409 and "cy's own foothold label" in mark.json()["detail"]
+    label = http.post("/api/labels", json={"run": 2, "step": 6, "verdict": "foothold",
+                                           "candidate": b, "labeler": "cy"})
+    assert label.status_code == 409 and "undo that mark first" in label.json()["detail"]
+    with DemoStore(path, read_only=True) as store:
+        assert (store.labels(), store.marks(), len(store)) == before
+        (demo,) = store.demonstrations(source_prefix="human:run:2:step:6")
+        assert np.flatnonzero(demo.refused).tolist() == [b]  # cy's mark joins cy's label
+
+
+@pytest.mark.parametrize("method, path, kwargs, status, words", [
+    ("post", "/api/marks", {"json": {"run": 2, "step": 0, "labeler": "a"}}, 422,
+     "candidate index or a point"),
+    ("post", "/api/marks", {"json": {"run": 2, "step": 0, "candidate": 6, "labeler": "a"}}, 422,
+     "candidate 6 is not in F"),
+    ("post", "/api/marks", {"json": {"run": 999, "step": 0, "candidate": 0, "labeler": "a"}},
+     404, "run 999 is not in the store"),
+    ("post", "/api/marks", {"json": {"run": 2, "step": 99, "candidate": 0, "labeler": "a"}},
+     404, "has no step 99"),
+    ("post", "/api/marks", {"json": {"run": 2, "step": 0, "candidate": 0}}, 422,
+     "labeler name"),
+    ("post", "/api/marks", {"json": {"run": 2, "step": 0, "candidate": -1, "labeler": "a"}},
+     422, "candidate"),
+    ("post", "/api/marks", {"json": {"run": 2, "step": 0, "candidate": 0, "labeler": "a",
+                                     "verdict": "foothold"}}, 422, "verdict"),
+    ("post", "/api/marks", {"json": {"run": 2, "step": 0, "point": [0.1], "labeler": "a"}},
+     422, "point"),
+    ("post", "/api/marks", {"json": {"run": 2, "step": 0, "candidate": 0, "labeler": "a",
+                                     "request": "a b"}}, 422, "request id"),
+    ("post", "/api/marks", {"content": b"{\"run\": 2,",
+                            "headers": {"Content-Type": "application/json"}}, 400,
+     "malformed JSON"),
+    ("post", "/api/marks", {"json": [2, 0, 0]}, 400, "JSON object"),
+    ("post", "/api/marks", {"content": b"x" * (MAX_BODY + 1)}, 413, "over"),
+    ("delete", "/api/marks/12345", {"params": {"labeler": "a"}}, 404, "mark 12345"),
+    ("delete", "/api/marks/x", {"params": {"labeler": "a"}}, 422, "mark_id"),
+    ("delete", "/api/marks/1", {}, 422, "labeler name"),
+    ("put", "/api/marks", {}, 405, ""),
+])
+def test_bad_mark_requests_get_a_4xx_with_one_line_and_change_nothing(server, method, path,
+                                                                      kwargs, status, words):
+    http, *_, store_path = server
+    with DemoStore(store_path, read_only=True) as store:
+        before = (store.labels(), store.marks(), len(store))
+    answer = http.request(method.upper(), path, **kwargs)
+    assert answer.status_code == status, answer.text
+    detail = answer.json()["detail"]
+    assert words in detail and "\n" not in detail
+    with DemoStore(store_path, read_only=True) as store:
+        assert (store.labels(), store.marks(), len(store)) == before

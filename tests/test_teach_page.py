@@ -319,7 +319,8 @@ def test_question_mark_shows_the_keys(store, open_page):
         _open_run(page)
         assert not page.is_visible("#help")
         page.keyboard.press("?")
-        assert page.is_visible("#help") and "undo my label" in page.text_content("#help")
+        assert page.is_visible("#help") and "undo my last action" in page.text_content("#help")
+        assert "never here" in page.text_content("#help")  # X: the "never here" mark
         page.keyboard.press("Escape")
         page.wait_for_function("!document.getElementById('help').open")
 

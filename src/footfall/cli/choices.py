@@ -21,6 +21,7 @@ from footfall.expert.teachers import TEACHERS
 from footfall.features.family import FEATURE_SETS, feature_set_families
 from footfall.learning import ranker
 from footfall.learning.learner import LEARNERS
+from footfall.learning.supervision import SUPERVISIONS
 from footfall.terrain import KINDS
 
 
@@ -85,6 +86,10 @@ def _teachers() -> tuple[str, ...]:
     return TEACHERS.names()  # read when used, as the learners
 
 
+def _supervisions() -> tuple[str, ...]:
+    return SUPERVISIONS.names()
+
+
 def _variants() -> tuple[str, ...]:
     return VARIANTS.names()
 
@@ -104,6 +109,7 @@ def _recorded_steps() -> tuple[str, ...]:
 LEG = RegistryChoice(_legs)  # footfall.core.robot.LEG_NAMES
 LEARNER = RegistryChoice(_learners)  # footfall.learning.learner.LEARNERS
 TEACHER = RegistryChoice(_teachers)  # footfall.expert.teachers.TEACHERS
+SUPERVISION = RegistryChoice(_supervisions)  # footfall.learning.supervision.SUPERVISIONS
 VARIANT = RegistryChoice(_variants)  # footfall.experiments.variants.VARIANTS
 SELECTION = RegistryChoice(_selections)  # footfall.learning.ranker.SELECTIONS
 TERRAIN_KIND = RegistryChoice(  # footfall.terrain.KINDS, refused in the generator's words

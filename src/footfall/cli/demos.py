@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from footfall.cli.choices import RECORDED_STEP, SEED, Finite, count_range
+from footfall.cli.choices import RECORDED_STEP, SEED, TEACHER, Finite, count_range
 from footfall.cli.output import emit, json_option, progress_bar
 from footfall.control.footstep import FootstepConfig
 from footfall.data.inventory import store_inventory
@@ -13,8 +13,9 @@ from footfall.expert.collect import collect_into_store
 from footfall.expert.corrections import DEFAULT_MARGIN, correct_stored_runs
 from footfall.expert.settings_file import load_expert
 from footfall.expert.synthetic import SyntheticExpert, walking_expert
+from footfall.expert.teachers import TEACHERS
 from footfall.teach.agreement import agreement_lines
-from footfall.teach.judging import default_expert, labels_agreement
+from footfall.teach.judging import default_expert, store_agreement
 
 
 @click.group()
@@ -71,8 +72,16 @@ def demos_collect(terrains: tuple[str, ...], more_terrains: tuple[str, ...], n: 
 @click.option("--margin", type=Finite(min=0.0), default=2.0, show_default=True,
               help="A step is corrected when the robot's choice falls short of the expert's "
                    "best by more than this [value units] (the reproduction's margin).")
-@click.option("--per-run", type=count_range(1), default=6, show_default=True,
-              help="Label at most this many steps of a run, the worst (the reproduction's).")
+@click.option("--per-run", type=count_range(1), default=None,
+              help="Label at most this many steps of a run, the worst [default: 6, the "
+                   "reproduction's; with --every-step, all].")
+@click.option("--every-step", is_flag=True,
+              help="Label every step of a run, not only those short of the teacher's best by "
+                   "more than the margin: the teacher's choice on every state the robot visited "
+                   "(DAgger), each with its verdict on every candidate.")
+@click.option("--teacher", type=TEACHER, default="expert", show_default=True,
+              help="Who corrects: the synthetic expert, or the hand-tuned reward with its veto "
+                   "(guarded, accepted; docs/learning/teacher.md).")
 @click.option("--run-key", default=None, metavar="PREFIX",
               help="Only the runs whose key starts with this.")
 @click.option("--expert-config", default=None, metavar="EXPERT.json",
@@ -80,15 +89,18 @@ def demos_collect(terrains: tuple[str, ...], more_terrains: tuple[str, ...], n: 
 @click.option("--seed", type=SEED, default=0, show_default=True,
               help="Seed of an imperfect expert's labels.")
 @json_option
-def demos_correct(run_paths: tuple[str, ...], output: str, margin: float, per_run: int,
-                  run_key: str | None, expert_config: str | None, seed: int,
-                  as_json: bool) -> None:
-    """The expert's corrections of logged runs (walk-many --log, a reproduction's store), as
-    the reproduction's correction rounds make them, added to a demonstration store."""
-    config = load_expert(expert_config) if expert_config else walking_expert(
-        FootstepConfig().lead)
-    done = correct_stored_runs(run_paths, output, SyntheticExpert(config), margin, per_run, seed,
-                               key_prefix=run_key)
+def demos_correct(run_paths: tuple[str, ...], output: str, margin: float,
+                  per_run: int | None, every_step: bool, teacher: str, run_key: str | None,
+                  expert_config: str | None, seed: int, as_json: bool) -> None:
+    """The teacher's corrections of logged runs (walk-many --log, a reproduction's store), as
+    the reproduction's correction rounds make them, added to a demonstration store with its
+    verdict on every candidate of each corrected step."""
+    footstep = FootstepConfig()
+    config = load_expert(expert_config) if expert_config else walking_expert(footstep.lead)
+    judge = TEACHERS.get(teacher).expert(config, footstep.bias_weight, footstep.lead)
+    done = correct_stored_runs(run_paths, output, judge, margin,
+                               per_run if per_run is not None else (None if every_step else 6),
+                               seed, key_prefix=run_key, every_step=every_step)
     emit(as_json, done.as_dict(),
          f"added {done.added} corrections to {done.store}: {done.runs} "
          f"{_plural(done.runs, 'run')}, {done.steps} steps, {done.above_margin} short of the "
@@ -103,9 +115,9 @@ def demos_info(store_path: str, as_json: bool) -> None:
     inventory = store_inventory(store_path)
     summary = inventory.summary
     agreement = None
-    if summary["labels"]["by_labeler"]:  # people's labels against the expert and each other
-        with DemoStore(store_path, read_only=True) as store:
-            agreement = labels_agreement(store, SyntheticExpert(default_expert()), DEFAULT_MARGIN)
+    with DemoStore(store_path, read_only=True) as store:  # people's labels and "never here"
+        if summary["labels"]["by_labeler"] or store.mark_counts():  # marks against the expert
+            agreement = store_agreement(store, SyntheticExpert(default_expert()), DEFAULT_MARGIN)
     lines = [(f"{store_path}: {summary['demonstrations']} demonstrations on "
               f"{summary['terrains']} {_plural(summary['terrains'], 'terrain')} "
               f"({summary['format']} v{summary['schema_version']})")]

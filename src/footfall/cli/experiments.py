@@ -14,6 +14,7 @@ from footfall.cli.choices import (
     LEARNER,
     NO_BUDGET,
     SEED,
+    SUPERVISION,
     TEACHER,
     RegistryChoice,
 )
@@ -241,6 +242,9 @@ def learner_options(f):
                      help="Who corrects the runs and walks as the reference line [default: "
                           "the reproduction's, docs/learning/teacher.md]: expert, guarded or "
                           "accepted.")(f)
+    f = click.option("--supervision", type=SUPERVISION, default=None,
+                     help="What the learners read of a correction [default: the reproduction's, "
+                          "docs/learning/student.md]: choice, refusals or graded.")(f)
     f = click.option("--template-budget", type=BUDGET, default=None,
                      help="A leg group's function reads at most this share of its "
                           "demonstrations' number of templates, or 'none' [default: 0.5].")(f)
@@ -253,11 +257,13 @@ def learner_options(f):
 
 def _reproduce_config(seed: int, quick: bool, test_kinds: str | None,
                       learner: str | None = None, folds: str | None = None,
-                      template_budget: float | str | None = None, teacher: str | None = None):
+                      template_budget: float | str | None = None, teacher: str | None = None,
+                      supervision: str | None = None):
     """The reproduction's settings for ``seed``: the default or quick ones, with other kinds,
-    learner, folds, template budget or teacher."""
+    learner, folds, template budget, teacher or supervision."""
     config = ReproduceConfig.quick(seed) if quick else ReproduceConfig(seed=seed)
-    changes: dict = {"learner": learner, "folds": folds, "teacher": teacher}
+    changes: dict = {"learner": learner, "folds": folds, "teacher": teacher,
+                     "supervision": supervision}
     if test_kinds is not None:
         changes["test_kinds"] = tuple(k.strip() for k in test_kinds.split(","))
     changes = {k: v for k, v in changes.items() if v is not None}
@@ -283,11 +289,12 @@ def _table2_line(name: str, row: dict) -> str:
 @executor_options
 @json_option
 def reproduce(out: str, seed: int, quick: bool, test_kinds: str | None, learner: str | None,
-              folds: str | None, template_budget: float | str | None, teacher: str | None,
-              processes: int | None, executor_name: str, ray_address: str | None,
-              as_json: bool) -> None:
+              folds: str | None, template_budget: float | str | None,
+              supervision: str | None, teacher: str | None, processes: int | None,
+              executor_name: str, ray_address: str | None, as_json: bool) -> None:
     """The paper's walking experiment end to end: corrections, learning, Tables I and II."""
-    config = _reproduce_config(seed, quick, test_kinds, learner, folds, template_budget, teacher)
+    config = _reproduce_config(seed, quick, test_kinds, learner, folds, template_budget, teacher,
+                               supervision)
     with opened_executor(executor_name, processes, ray_address) as executor:
         results = run_reproduction(Path(out), config, log=progress_log(as_json),
                                    executor=executor)
@@ -320,14 +327,15 @@ def reproduce(out: str, seed: int, quick: bool, test_kinds: str | None, learner:
 @json_option
 def study(first_seed: int, more_seeds: tuple[int, ...], out: str, quick: bool,
           test_kinds: str | None, learner: str | None, folds: str | None,
-          template_budget: float | str | None, teacher: str | None, processes: int | None,
-          executor_name: str, ray_address: str | None, as_json: bool) -> None:
+          template_budget: float | str | None, supervision: str | None, teacher: str | None,
+          processes: int | None, executor_name: str, ray_address: str | None,
+          as_json: bool) -> None:
     """Several whole reproductions and a verdict on each of the paper's orderings."""
     seeds = [first_seed, *more_seeds]
 
     def config_for(seed: int):
         return _reproduce_config(seed, quick, test_kinds, learner, folds, template_budget,
-                                 teacher)
+                                 teacher, supervision)
 
     config_for(0)  # bad settings: one line before anything is walked
     with opened_executor(executor_name, processes, ray_address) as executor:

@@ -9,7 +9,16 @@ from pathlib import Path
 
 import click
 
-from footfall.cli.choices import BUDGET, FEATURE_SET, LEARNER, NO_BUDGET, SEED, SELECTION, Finite
+from footfall.cli.choices import (
+    BUDGET,
+    FEATURE_SET,
+    LEARNER,
+    NO_BUDGET,
+    SEED,
+    SELECTION,
+    SUPERVISION,
+    Finite,
+)
 from footfall.cli.output import emit, json_option, progress_log
 from footfall.core.errors import FootfallError
 from footfall.core.files import writable_path
@@ -75,6 +84,11 @@ def model_output(path: str) -> Path:
               help="Each leg group's function reads at most this share of its "
                    "demonstrations' number of templates (fitted again on those its learner "
                    "relied on most), or 'none'.")
+@click.option("--supervision", type=SUPERVISION, default="choice",
+              show_default=True,
+              help="What a demonstration tells the learner: the teacher's choice (the paper's), "
+                   "its choice and the candidates it refused ('never here'), or every "
+                   "candidate graded by the teacher's values (where it gave them).")
 @click.option("--source", multiple=True, help=SOURCE_HELP)
 @click.option("--trials", multiple=True, metavar="RUNS.sqlite",
               help="Also learn from the robot's own runs in this store (repeatable): every "
@@ -89,8 +103,8 @@ def model_output(path: str) -> Path:
 @json_option
 def learn(store_path: str, feature_set: str, learner: str, library_size: int,
           training_candidates: int, bandwidth_rms: tuple[float, float, float] | None, cv: int,
-          folds: str, selection: str, template_budget: float | str, source: tuple[str, ...],
-          trials: tuple[str, ...],
+          folds: str, selection: str, template_budget: float | str, supervision: str,
+          source: tuple[str, ...], trials: tuple[str, ...],
           trial_pairs: int, seed: int, output: str, as_json: bool) -> None:
     """Learn front- and hind-leg foothold ranking functions from demonstrations, from the
     robot's own trials, or from both."""
@@ -106,7 +120,8 @@ def learn(store_path: str, feature_set: str, learner: str, library_size: int,
                                bandwidth_rms=bandwidth_rms, cv=cv, seed=seed,
                                selection=selection, folds=folds,
                                template_budget=(None if template_budget == NO_BUDGET
-                                                else template_budget))
+                                                else template_budget),
+                               supervision=supervision)
     tried = (f" and {learned.trial_footholds} footholds of its own runs"
              if learned.trial_footholds else "")
     lines = [f"wrote {learned.model}: {feature_set}/{learner} from {learned.demonstrations} "

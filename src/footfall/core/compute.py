@@ -1,5 +1,5 @@
-"""What this process may compute on: the one place that counts usable cores and free memory,
-and starts worker processes."""
+"""What this process may compute on: the one place that counts usable cores and starts worker
+processes."""
 
 from __future__ import annotations
 
@@ -15,28 +15,6 @@ def usable_cores() -> int:
     if hasattr(os, "sched_getaffinity"):
         return max(1, len(os.sched_getaffinity(0)))
     return max(1, os.cpu_count() or 1)
-
-
-def available_memory() -> int | None:
-    """Bytes of memory the machine can give new work without swapping (Linux's MemAvailable),
-    or None where it cannot be read."""
-    try:
-        with open("/proc/meminfo", encoding="ascii") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    return None
-
-
-def jobs_that_fit(jobs: int, each: int, available: int | None, spare: float = 0.25) -> int:
-    """How many of ``jobs`` tasks, each needing ``each`` bytes, may run at once in ``available``
-    bytes while ``spare`` of them stays free: at least 1, at most ``jobs`` (all of them where
-    the memory is unknown)."""
-    if available is None or each <= 0:
-        return max(1, jobs)
-    return max(1, min(jobs, int(available * (1.0 - spare)) // each))
 
 
 @contextmanager

@@ -22,7 +22,8 @@ from typing import Any
 from footfall.core.errors import FootfallError
 from footfall.data import rows, schema
 from footfall.data.connection import decode_text, one_line, read_only_uri
-from footfall.data.label import LABEL_COLUMNS, checked_label
+from footfall.data.demonstration import checked_verdict
+from footfall.data.label import LABEL_COLUMNS, MARK_COLUMNS, checked_label, checked_mark
 
 SHOWN_PROBLEMS = 20  # problems listed in a one-line-each report; the rest are counted
 
@@ -142,6 +143,7 @@ def _check_rows(con: sqlite3.Connection, report: StoreReport, version: int) -> N
                 report.problems.append(f"meta row {key!r}: {column} is not text")
     hashes: set[Any] = set()
     demo_ids: set[Any] = set()
+    sound: dict[Any, Any] = {}  # demonstration id -> the demonstration, where its row is sound
     sources: list[tuple[Any, Any]] = []  # (demonstration id, source)
     with _sqlite_errors(report, "table terrains"):
         for row in con.execute(f"SELECT {rows.TERRAIN_COLUMNS} FROM terrains ORDER BY rowid"):
@@ -153,7 +155,9 @@ def _check_rows(con: sqlite3.Connection, report: StoreReport, version: int) -> N
                                "ORDER BY id"):
             report.demonstrations += 1
             demo_ids.add(row[0])
-            if _row(report, "demonstrations", repr(row[0]), rows.demonstration, row) is not None:
+            demo = _row(report, "demonstrations", repr(row[0]), rows.demonstration, row)
+            if demo is not None:
+                sound[row[0]] = demo
                 _reference(report, "demonstrations", row[0], row[1], hashes)
                 sources.append((row[0], row[11]))
     steps: dict[tuple[Any, Any], int | None] = {}
@@ -163,6 +167,53 @@ def _check_rows(con: sqlite3.Connection, report: StoreReport, version: int) -> N
         _check_sources(report, sources, steps, keys)
     if version >= 3:
         _check_labels(con, report, steps, demo_ids)
+    if version >= 5:
+        _check_verdicts(con, report, demo_ids, sound)
+        _check_marks(con, report, steps)
+
+
+def _check_verdicts(con: sqlite3.Connection, report: StoreReport, demo_ids: set[Any],
+                    sound: dict[Any, Any]) -> None:
+    """The teachers' verdicts: each row sound, of a stored demonstration, one value and one
+    refusal per candidate, the chosen candidate not refused."""
+    with _sqlite_errors(report, "table verdicts"):
+        for row in con.execute(f"SELECT {rows.VERDICT_COLUMNS} FROM verdicts "
+                               "ORDER BY demonstration_id"):
+            found = _row(report, "verdicts", repr(row[0]), rows.verdict, row)
+            if found is None:
+                continue
+            demo_id, values, refused = found
+            if demo_id not in demo_ids:
+                report.problems.append(f"verdicts row {demo_id!r}: demonstration {demo_id} is "
+                                       f"not in the store")
+            elif demo_id in sound:
+                d = sound[demo_id]
+                try:
+                    checked_verdict(values, refused, d.n_candidates, d.chosen)
+                except FootfallError as exc:
+                    report.problems.append(f"verdicts row {demo_id!r}: {exc}")
+
+
+def _check_marks(con: sqlite3.Connection, report: StoreReport,
+                 steps: dict[tuple[Any, Any], int | None]) -> None:
+    """People's "never here" marks: each row sound, on a stored run step, on a candidate of its
+    F, never the candidate its labeler's own label of the step names."""
+    with _sqlite_errors(report, "table marks"):
+        labelled = set(con.execute("SELECT run_id, k, labeler, chosen FROM labels"))
+        for row in con.execute(f"SELECT {MARK_COLUMNS} FROM marks ORDER BY id"):
+            mark = _row(report, "marks", repr(row[0]), checked_mark, row)
+            if mark is None:
+                continue
+            step = (mark.run_id, mark.k)
+            if step not in steps:
+                report.problems.append(f"marks row {mark.id}: run {mark.run_id} has no step "
+                                       f"{mark.k} in the store")
+            elif steps[step] is not None and not mark.candidate < steps[step]:
+                report.problems.append(f"marks row {mark.id}: candidate {mark.candidate} is not "
+                                       f"one of its step's {steps[step]} candidates")
+            if (*step, mark.labeler, mark.candidate) in labelled:
+                report.problems.append(f"marks row {mark.id}: candidate {mark.candidate} is its "
+                                       f"labeler's own label of the step")
 
 
 def _run_step_of(source: str) -> tuple[str, str, str] | None:

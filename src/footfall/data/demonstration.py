@@ -42,6 +42,12 @@ class Demonstration:
         JSON-serialisable settings of the expert that chose (a private copy is kept).
     id : int or None
         Row id in a :class:`DemoStore` (creation order); None until stored.
+    values : array of shape (n,) or None
+        The teacher's verdict on every candidate: its value of each [its value units, higher
+        better], finite; None where it gave no values (a person's label).
+    refused : array of shape (n,) of bool, or None
+        The candidates the teacher refuses outright ("never here": a veto, a person's mark);
+        never the chosen one. None: it said nothing of the others.
     """
 
     terrain_hash: str
@@ -51,6 +57,8 @@ class Demonstration:
     source: str = "walker"
     expert: dict = field(default_factory=dict)
     id: int | None = None
+    values: np.ndarray | None = None  # (n,) the teacher's value of each candidate [its units]
+    refused: np.ndarray | None = None  # (n,) bool: refused outright ("never here")
 
     def __post_init__(self) -> None:
         if not isinstance(self.terrain_hash, str) or not _HASH_RE.match(self.terrain_hash):
@@ -78,9 +86,15 @@ class Demonstration:
         if self.id is not None and (isinstance(self.id, bool)
                                     or not isinstance(self.id, numbers.Integral)):
             raise FootfallError(f"id must be an integer or None, got {self.id!r}")
+        values, refused = checked_verdict(self.values, self.refused, cand.shape[0], int(chosen))
         set_fields(self, candidates=cand, chosen=int(chosen),
                    expert=checked_json(self.expert, "expert settings"),
-                   id=None if self.id is None else int(self.id))
+                   id=None if self.id is None else int(self.id), values=values, refused=refused)
+
+    @property
+    def has_verdict(self) -> bool:
+        """Whether the teacher said more than its choice (values or refusals)."""
+        return self.values is not None or self.refused is not None
 
     @property
     def swing_leg(self) -> str:
@@ -101,6 +115,42 @@ class Demonstration:
         """The demonstration's identity: :func:`decision_hash` on its terrain. Two with the same
         hash are the same demonstration, whatever their id, source or expert settings."""
         return decision_hash(self.state, self.candidates, self.chosen, self.terrain_hash)
+
+
+def checked_verdict(values: object, refused: object, n: int, chosen: int
+                    ) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """A teacher's verdict on ``n`` candidates as read-only arrays: ``values`` (n,) finite
+    [value units], ``refused`` (n,) bool without the ``chosen`` one; None stays None.
+
+    Raises
+    ------
+    FootfallError
+        For a wrong shape, a non-finite value, a refusal that is not 0 / 1, or the chosen
+        candidate refused.
+    """
+    out_values = out_refused = None
+    if values is not None:
+        try:
+            out_values = np.array(values, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise FootfallError("the teacher's values must be numbers") from None
+        if out_values.shape != (n,) or not np.isfinite(out_values).all():
+            raise FootfallError(f"the teacher's values must be {n} finite numbers, one per "
+                                f"candidate, got shape {out_values.shape}")
+        out_values.setflags(write=False)
+    if refused is not None:
+        try:
+            raw = np.array(refused, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise FootfallError("the refused candidates must be a mask of 0 / 1") from None
+        if raw.shape != (n,) or not np.isin(raw, (0.0, 1.0)).all():
+            raise FootfallError(f"the refused candidates must be a mask of {n} values 0 / 1, "
+                                f"one per candidate")
+        out_refused = raw.astype(bool)
+        if out_refused[chosen]:
+            raise FootfallError(f"the chosen candidate {chosen} is refused")
+        out_refused.setflags(write=False)
+    return out_values, out_refused
 
 
 def decision_hash(state: RobotState, candidates: np.ndarray, chosen: int,

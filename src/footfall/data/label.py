@@ -1,7 +1,8 @@
 """A person's label of a run step (paper §II-B): the foothold they think is the best greedy
-choice among the step's candidate set F, or their verdict that the robot's choice was fine.
-Stored by :class:`footfall.data.store.DemoStore` (:mod:`footfall.data.label_queries`), made by
-the teaching interface (:mod:`footfall.teach`).
+choice among the step's candidate set F, or their verdict that the robot's choice was fine;
+and a person's "never here" mark on one candidate of a step's F (a candidate they refuse
+outright). Stored by :class:`footfall.data.store.DemoStore` (:mod:`footfall.data.label_queries`,
+:mod:`footfall.data.mark_queries`), made by the teaching interface (:mod:`footfall.teach`).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ MAX_REQUEST = 64  # [characters] the longest request id
 _NAME_RE = re.compile(r"^[\w][\w .@+-]*$")  # letters, digits, _ and a few separators
 _REQUEST_RE = re.compile(r"^[A-Za-z0-9_-]+$")
 LABEL_COLUMNS = "id, run_id, k, labeler, verdict, chosen, demonstration_id, created, request"
+MARK_COLUMNS = "id, run_id, k, labeler, candidate, created, request"
 
 
 @dataclass(frozen=True)
@@ -39,6 +41,23 @@ class Label:
 
     def to_dict(self) -> dict[str, Any]:
         """The label as plain JSON types."""
+        return dict(self.__dict__)
+
+
+@dataclass(frozen=True)
+class Mark:
+    """One stored "never here" mark: a person refuses one candidate of a run step's F outright."""
+
+    id: int  # row id (creation order)
+    run_id: int  # the marked run
+    k: int  # the marked step of that run
+    labeler: str  # who marked
+    candidate: int  # index in the step's F of the refused candidate
+    created: float  # [s] Unix time the mark was stored
+    request: str | None  # the client's request id, if it gave one
+
+    def to_dict(self) -> dict[str, Any]:
+        """The mark as plain JSON types."""
         return dict(self.__dict__)
 
 
@@ -84,3 +103,14 @@ def checked_label(row: tuple) -> Label:
                  check_labeler(labeler), verdict, rows.integer(chosen, "chosen"),
                  None if demo is None else rows.integer(demo, "demonstration_id"),
                  rows.real(created, "created"), check_request(request))
+
+
+def checked_mark(row: tuple) -> Mark:
+    """A mark from its row (MARK_COLUMNS), every field checked."""
+    id_, run_id, k, labeler, candidate, created, request = row
+    candidate = rows.integer(candidate, "candidate")
+    if candidate < 0:
+        raise FootfallError(f"candidate {candidate} is negative")
+    return Mark(rows.integer(id_, "id"), rows.integer(run_id, "run_id"), rows.integer(k, "k"),
+                check_labeler(labeler), candidate, rows.real(created, "created"),
+                check_request(request))

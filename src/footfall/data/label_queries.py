@@ -16,7 +16,9 @@ which is kept aside in ``replaced_labels``: undoing the new label restores
 it, so a labeler's undo walks back through their history of that step);
 two labelers who disagree on a step both keep theirs. A label may carry
 the client's request id: a request sent again (a retry after a lost answer)
-returns the label it made the first time instead of adding another.
+returns the label it made the first time instead of adding another. A labeler's label never
+names a candidate they marked "never here" on the step (:mod:`footfall.data.mark_queries`): they
+undo the mark first.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from collections.abc import Callable
 from typing import Any
 
 from footfall.core.errors import FootfallError, NotFound
-from footfall.data import rows
+from footfall.data import rows, schema
 from footfall.data.demonstration import Demonstration
 from footfall.data.label import (
     HUMAN_SOURCE,
@@ -46,7 +48,8 @@ from footfall.data.run_queries import RunQueries
 
 
 class LabelConflict(FootfallError):
-    """A request id already used for another label."""
+    """A request id already used for another label, or a label of a candidate its labeler
+    marked "never here"."""
 
 
 class LabelQueries(RunQueries):
@@ -82,7 +85,7 @@ class LabelQueries(RunQueries):
         NotFound
             For a run or step that is not in the store.
         LabelConflict
-            For a request id already used by a different label.
+            For a request id used by another label, or a candidate the labeler marked "never here".
         FootfallError
             For a bad labeler name, verdict or index; nothing is written then.
         """
@@ -90,8 +93,7 @@ class LabelQueries(RunQueries):
         labeler, request = check_labeler(labeler), check_request(request)
         if verdict not in VERDICTS:
             raise FootfallError(f"a verdict is one of {', '.join(VERDICTS)}, got {verdict!r}")
-        if chosen is not None:
-            chosen = check_index(chosen, "a candidate index")
+        chosen = None if chosen is None else check_index(chosen, "a candidate index")
         if verdict == "foothold" and chosen is None:
             raise FootfallError("a foothold label needs the index of the candidate chosen")
         when = time.time() if created is None else float(created)
@@ -124,6 +126,7 @@ class LabelQueries(RunQueries):
                                   "AND labeler = ?", (run_id, k, labeler)).fetchone()
             if current is not None and (current[4], current[5]) == (verdict, chosen):
                 return _label(current), False  # the same verdict again: nothing changes
+            _refuse_marked(con, run_id, k, labeler, chosen, verdict)
             if current is not None:
                 self._delete_labels(con, "id = ?", (current[0],))
             new_id = self._insert_label(con, step, (None, run_id, k, labeler, verdict, chosen,
@@ -156,6 +159,9 @@ class LabelQueries(RunQueries):
         ------
         NotFound
             For a label that is not stored (or is another labeler's).
+        LabelConflict
+            When the label it would restore names a candidate the labeler has since marked
+            "never here" (they undo the mark first).
         """
         label_id = check_index(label_id, "a label id")
         labeler = None if labeler is None else check_labeler(labeler)
@@ -173,6 +179,7 @@ class LabelQueries(RunQueries):
                                   "FROM replaced_labels WHERE replaced_by = ?",
                                   (label_id,)).fetchone()
                 if old is not None:
+                    _refuse_marked(con, old[1], old[2], old[3], old[5], old[4], undo=True)
                     con.execute("DELETE FROM replaced_labels WHERE id = ?", (old[0],))
                     step = self._step(con, old[1], old[2])
                     self._insert_label(con, step, (*old[:6], None, old[6], old[7]))
@@ -282,6 +289,23 @@ class LabelQueries(RunQueries):
         con.execute(f"DELETE FROM labels WHERE {where}", params)
         con.execute("DELETE FROM demonstrations WHERE id IN (SELECT value FROM json_each(?))",
                     (json.dumps(demos),))
+
+
+def _refuse_marked(con: sqlite3.Connection, run_id: int, k: int, labeler: str, chosen: int,
+                   verdict: str, undo: bool = False) -> None:
+    """Refuse (LabelConflict) a label of a candidate ``labeler`` marked "never here" on the
+    step (``undo``: the label an undo would restore), in the caller's transaction."""
+    if not schema.has_table(con, "marks") or con.execute(
+            "SELECT 1 FROM marks WHERE run_id = ? AND k = ? AND labeler = ? AND candidate = ?",
+            (run_id, k, labeler, chosen)).fetchone() is None:
+        return
+    what = f"candidate {chosen}" if verdict == "foothold" else \
+        f"the robot's choice (candidate {chosen})"
+    if undo:
+        raise LabelConflict(f"undoing this label would bring back {labeler}'s label of {what}, "
+                            f"which they marked 'never here' on this step: undo that mark first")
+    raise LabelConflict(f"{labeler} marked {what} 'never here' on this step: undo that mark "
+                        f"first")
 
 
 def _label(row: tuple) -> Label:

@@ -15,8 +15,10 @@ from pathlib import Path
 from footfall.core.errors import FootfallError
 
 FORMAT = "footfall.demostore"
-SCHEMA_VERSION = 4  # 1: terrains and demonstrations; 2: + runs and run_steps; 3: + labels;
-# 4: + replaced labels (undo history) and the expert's judgements of runs (the teaching page)
+SCHEMA_VERSION = 5  # 1: terrains and demonstrations; 2: + runs and run_steps; 3: + labels;
+# 4: + replaced labels (undo history) and the expert's judgements of runs (the teaching page);
+# 5: + the teacher's verdicts on the other candidates of a demonstration, people's "never here"
+# marks on the candidates of run steps
 SUFFIXES = (".sqlite", ".sqlite3", ".db")  # the file names of a store footfall writes
 STATE_LAYOUT = ("feet LF, RF, LH, RH x y z [m] (12), body position x y z [m] (3), "
                 "body roll pitch yaw [rad] (3), goal x y [m] (2)")
@@ -143,11 +145,42 @@ CREATE TABLE judgements (
 )""",
 )
 
+VERDICT_TABLES = (  # schema version 5: what a teacher said of the candidates it did not choose
+    """
+CREATE TABLE verdicts (
+    demonstration_id INTEGER PRIMARY KEY REFERENCES demonstrations(id),
+    teacher_values BLOB,               -- (n,) the teacher's value of each candidate of F [its
+                                       -- value units, higher better]; NULL: it gave none
+    values_shape TEXT,
+    values_dtype TEXT,
+    refused BLOB,                      -- (n,) 1 where the teacher refuses the candidate outright
+                                       -- ("never here"), else 0; NULL: it said nothing of them
+    refused_shape TEXT,
+    refused_dtype TEXT
+)""",
+)
+
+MARK_TABLES = (  # schema version 5: people's "never here" marks on run steps' candidates
+    """
+CREATE TABLE marks (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,  -- creation order, never reused
+    run_id INTEGER NOT NULL REFERENCES runs(id),
+    k INTEGER NOT NULL,                -- the marked step of the run
+    labeler TEXT NOT NULL,             -- who marked (a name the labeler gave)
+    candidate INTEGER NOT NULL,        -- index in the step's F of the candidate refused outright
+    created REAL NOT NULL,             -- [s] Unix time the mark was stored
+    request TEXT UNIQUE,               -- the client's id of the request: a retry is not doubled
+    UNIQUE (run_id, k, labeler, candidate),  -- one mark per labeler and candidate of a step
+    FOREIGN KEY (run_id, k) REFERENCES run_steps(run_id, k)
+)""",
+)
+
 
 # ---------------------------------------------------------------- a new store
 def create(con: sqlite3.Connection, created_by: str) -> None:
     """Create every table of the current schema and its ``meta`` rows (inside the caller's write)."""
-    for statement in DEMONSTRATION_TABLES + RUN_LOG_TABLES + LABEL_TABLES + REVIEW_TABLES:
+    for statement in (DEMONSTRATION_TABLES + RUN_LOG_TABLES + LABEL_TABLES + REVIEW_TABLES
+                      + VERDICT_TABLES + MARK_TABLES):
         con.execute(statement)
     con.executemany("INSERT INTO meta (key, value) VALUES (?, ?)",
                     [("format", FORMAT), ("schema_version", str(SCHEMA_VERSION)),
@@ -177,9 +210,19 @@ def _add_review(con: sqlite3.Connection) -> None:
             con.execute(statement)
 
 
+def _add_verdicts(con: sqlite3.Connection) -> None:
+    """Version 4 -> 5: the verdicts and marks tables; every other table is untouched."""
+    if not has_table(con, "verdicts"):
+        for statement in VERDICT_TABLES:
+            con.execute(statement)
+    if not has_table(con, "marks"):
+        for statement in MARK_TABLES:
+            con.execute(statement)
+
+
 # version v -> the step that makes a version-v store a version-(v + 1) store
 MIGRATIONS: dict[int, Callable[[sqlite3.Connection], None]] = {1: _add_run_log, 2: _add_labels,
-                                                               3: _add_review}
+                                                               3: _add_review, 4: _add_verdicts}
 
 
 def migrate(con: sqlite3.Connection, version: int) -> None:
@@ -272,7 +315,8 @@ def check_pages(con: sqlite3.Connection, path: Path) -> None:
 def _tables(version: int) -> tuple[str, ...]:
     """The CREATE statements of a version-``version`` store."""
     return (DEMONSTRATION_TABLES + (RUN_LOG_TABLES if version >= 2 else ())
-            + (LABEL_TABLES if version >= 3 else ()) + (REVIEW_TABLES if version >= 4 else ()))
+            + (LABEL_TABLES if version >= 3 else ()) + (REVIEW_TABLES if version >= 4 else ())
+            + (VERDICT_TABLES + MARK_TABLES if version >= 5 else ()))
 
 
 def _objects(con: sqlite3.Connection) -> dict[tuple[str, str], tuple]:

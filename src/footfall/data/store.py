@@ -10,8 +10,9 @@ same file keeps the terrains and the run logs of the simulated robot
 file's schema, version and migrations (:mod:`~footfall.data.schema`), the array
 codec (:mod:`~footfall.data.codec`), the connection and its transactions
 (:mod:`~footfall.data.connection`), the terrain and run-log queries
-(:mod:`~footfall.data.terrain_queries`, :mod:`~footfall.data.run_queries`) and people's labels
-of run steps (:mod:`~footfall.data.label_queries`).
+(:mod:`~footfall.data.terrain_queries`, :mod:`~footfall.data.run_queries`), people's labels
+of run steps (:mod:`~footfall.data.label_queries`) and their "never here" marks
+(:mod:`~footfall.data.mark_queries`).
 """
 
 from __future__ import annotations
@@ -19,7 +20,10 @@ from __future__ import annotations
 import json
 import sqlite3
 from collections.abc import Iterable, Sequence
+from dataclasses import replace
 from typing import Any
+
+import numpy as np
 
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
@@ -29,6 +33,7 @@ from footfall.data.connection import DEFAULT_BUSY_TIMEOUT
 from footfall.data.demonstration import Demonstration, as_demonstrations
 from footfall.data.judgement_queries import JudgementQueries
 from footfall.data.label_queries import LabelQueries
+from footfall.data.mark_queries import MarkQueries
 from footfall.data.runlog import RunRecord, RunStep
 from footfall.data.schema import FORMAT, SCHEMA_VERSION, STATE_LAYOUT
 from footfall.data.terrain_queries import TerrainQueries
@@ -37,7 +42,7 @@ __all__ = ["DEFAULT_BUSY_TIMEOUT", "FORMAT", "SCHEMA_VERSION", "STATE_LAYOUT", "
            "Demonstration", "RunRecord", "RunStep"]
 
 
-class DemoStore(LabelQueries, JudgementQueries, TerrainQueries):
+class DemoStore(MarkQueries, LabelQueries, JudgementQueries, TerrainQueries):
     """An SQLite file of terrains and demonstrations, safe to share between processes.
 
     Use as a context manager. Every write is one transaction (``BEGIN
@@ -118,7 +123,17 @@ class DemoStore(LabelQueries, JudgementQueries, TerrainQueries):
             "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
             (demo.terrain_hash, demo.swing_leg, *state, *cand, demo.n_candidates, demo.chosen,
              demo.source, json.dumps(demo.expert, sort_keys=True)))
-        return int(cur.lastrowid)
+        demo_id = int(cur.lastrowid)
+        if demo.has_verdict:
+            self._insert_verdict(con, demo_id, demo)
+        return demo_id
+
+    def _insert_verdict(self, con: sqlite3.Connection, demo_id: int, demo: Demonstration) -> None:
+        none = (None, None, None)
+        values = none if demo.values is None else codec.encode(demo.values)
+        refused = none if demo.refused is None else codec.encode(demo.refused)
+        con.execute(f"INSERT INTO verdicts ({rows.VERDICT_COLUMNS}) VALUES (?, ?, ?, ?, ?, ?, ?)",
+                    (demo_id, *values, *refused))
 
     def demonstrations(self, ids: Sequence[int] | None = None, terrain_hash: str | None = None,
                        source_prefix: str | Sequence[str] | None = None) -> list[Demonstration]:
@@ -153,7 +168,10 @@ class DemoStore(LabelQueries, JudgementQueries, TerrainQueries):
                 found = self._connection.execute(
                     columns + " WHERE id IN (SELECT value FROM json_each(?))" + extra,
                     [json.dumps(wanted), *params]).fetchall()
-        demos = [self._row_to_demo(row) for row in found]
+        verdicts = self._verdicts([row[0] for row in found])
+        marked = self._marked_candidates([row[0] for row in found])  # a person's "never here"
+        demos = [self._row_to_demo(row, verdicts.get(row[0]), marked.get(row[0]))
+                 for row in found]
         if ids is None:
             return demos
         by_id = {d.id: d for d in demos}
@@ -163,10 +181,36 @@ class DemoStore(LabelQueries, JudgementQueries, TerrainQueries):
                                 + (" (or does not match the filters)" if where else ""))
         return [by_id[i] for i in wanted]
 
-    def _row_to_demo(self, row: tuple) -> Demonstration:
-        """A demonstration from its row (:func:`footfall.data.rows.demonstration`)."""
+    def _verdicts(self, ids: list) -> dict:
+        """{demonstration id: (values, refused)} of the demonstrations ``ids`` that have one."""
+        if not ids or self.schema_version < 5:
+            return {}
+        with self._errors():
+            found = self._connection.execute(
+                f"SELECT {rows.VERDICT_COLUMNS} FROM verdicts WHERE demonstration_id IN "
+                f"(SELECT value FROM json_each(?))", [json.dumps(ids)]).fetchall()
+        out = {}
+        for row in found:
+            try:
+                demo_id, values, refused = rows.verdict(row)
+            except FootfallError as exc:
+                raise FootfallError(f"{self.path}: the verdict of demonstration {row[0]!r} is "
+                                    f"corrupt ({exc})") from None
+            out[demo_id] = (values, refused)
+        return out
+
+    def _row_to_demo(self, row: tuple, verdict: tuple | None = None,
+                     marked: list[int] | None = None) -> Demonstration:
+        """A demonstration from its row (:func:`footfall.data.rows.demonstration`) with its
+        teacher's ``verdict`` (values, refused), if it has one, and the candidates its labeler
+        marked "never here" on its step (``marked``: indices into F) among the refused."""
         try:
-            return rows.demonstration(row)
+            demo = rows.demonstration(row)
+            if verdict is not None:
+                demo = replace(demo, values=verdict[0], refused=verdict[1])
+            if marked:
+                demo = replace(demo, refused=_with_marks(demo, marked))
+            return demo
         except FootfallError as exc:
             raise FootfallError(f"{self.path}: demonstration {row[0]!r} is corrupt ({exc})") \
                 from None
@@ -220,6 +264,18 @@ class DemoStore(LabelQueries, JudgementQueries, TerrainQueries):
                                                       "max": int(cmax)},
                 "first_id": first, "last_id": last, "runs": n_runs,
                 "labels": self.label_counts()}
+
+
+def _with_marks(demo: Demonstration, marked: list[int]) -> np.ndarray:
+    """The demonstration's refused candidates (n,) bool united with those ``marked``."""
+    n = demo.n_candidates
+    outside = [c for c in marked if not 0 <= c < n]
+    if outside:
+        raise FootfallError(f"its labeler's mark on candidate {outside[0]} is outside its {n} "
+                            f"candidates")
+    refused = np.zeros(n, dtype=bool) if demo.refused is None else demo.refused.copy()
+    refused[marked] = True
+    return refused
 
 
 def _where(terrain_hash: str | None, source_prefix: str | Sequence[str] | None

@@ -10,6 +10,7 @@ import base64
 import html
 import json
 import re
+import statistics
 from pathlib import Path
 from typing import Callable
 
@@ -119,7 +120,7 @@ def _markdown(results: dict, figs: list[tuple[str, str]]) -> str:
     sections = (_intro(results), _demonstration_rounds(results), _table1(results),
                 _calibration(results), _table2(results), _pooled(results), _per_board(results),
                 _pairs(results), _sweep(results), _ranking(results), _verdict(results),
-                _pictures(figs))
+                _gap(results), _pictures(figs))
     return "\n".join(line for section in sections for line in section)
 
 
@@ -355,6 +356,29 @@ def _verdict(results: dict) -> list[str]:
     for k, v in judged.items():
         lines.append(f"| {NAMES[k]} | {v['steps']} | {v['mean']:.2f} | {v['median']:.2f} | "
                      f"{v['p90']:.2f} | {_pct(v['above_margin'])} | {_pct(v['severe'])} |")
+    return lines + [""]
+
+
+def _gap(results: dict) -> list[str]:
+    gap = results.get("imitation_gap")
+    if not gap:
+        return []
+    lines = ["## The imitation gap: test runs a learned function failed and the teacher crossed",
+             "", "Same board, same run seed. The teacher judges every step of the learned "
+             "function's run: an *imitation error* where, before the failure, the robot stood on "
+             "a foothold the teacher refuses or values short of its best by more than the "
+             "margin; *accepted throughout* where the teacher accepted every foothold it chose. "
+             "*Parted*: the median step at which its foothold first was not the teacher's "
+             "choice.", "",
+             "| method | paired runs | only it crossed | only the teacher crossed | imitation "
+             "errors (refused) | accepted throughout | parted at step (median) |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
+    for fs, g in gap.items():
+        parted = [r["parted"] for r in g["runs"] if r["parted"] is not None]
+        lines.append(f"| {NAMES[fs]} | {g['pairs']} | {g['student_only']} | {g['teacher_only']} "
+                     f"| {g['by_cause']['imitation error']} ({g['refused']}) | "
+                     f"{g['by_cause']['accepted throughout']} | "
+                     f"{statistics.median(parted) if parted else '-'} |")
     return lines + [""]
 
 

@@ -62,6 +62,7 @@ from footfall.core.robot import LITTLEDOG
 from footfall.data.store import DemoStore
 from footfall.experiments.difficulty import calibration_held
 from footfall.experiments.executors import Executor, LocalPool
+from footfall.experiments.imitation import imitation_gap
 from footfall.experiments.report import write_report
 from footfall.experiments.reproduce_learning import learn_functions, learn_saved
 from footfall.experiments.runs import RunJob, Runner
@@ -87,6 +88,7 @@ from footfall.learning.evaluation import expert_values, rank_scores
 from footfall.learning.learner import LEARNERS, get_learner
 from footfall.learning.model import LEG_GROUPS
 from footfall.learning.ranker import SELECTIONS
+from footfall.learning.supervision import SUPERVISIONS
 from footfall.learning.train import FOLDS, check_budget
 from footfall.sim.episode import WalkConfig
 from footfall.terrain import KINDS
@@ -168,6 +170,16 @@ class ReproduceConfig(Params):
     corrections_per_run: int | None = param(
         6, range=at_least(1), doc="the expert labels the worst this many steps of a run whose "
                                   "shortfall exceeds the margin (None: all of them)")
+    every_step: bool = param(
+        False, doc="the teacher labels every step of the robot's runs, not only those short of "
+                   "its best by more than the margin (DAgger: the student's own states); "
+                   "corrections_per_run still bounds them")
+    round_runs: int = param(1, range=at_least(1),
+                            doc="runs on each training board in every correction round")
+    supervision: str = param(
+        "choice", check=lambda v: v in SUPERVISIONS, must="a registered supervision kind",
+        doc="what the learners read of a correction (learning.supervision): the teacher's "
+            "choice (the paper's), its refusals too, or every candidate graded by its values")
     margin: float = param(REPRODUCTION_MARGIN, unit="value", range=at_least(0),
                           doc="shortfall against the expert's best that counts (the walking "
                               "expert's unit: 1 cm off the gait-nominal foothold)")
@@ -286,10 +298,12 @@ def correction_rounds(ws: Workspace, runner: Runner) -> Corrections:
     rounds: list[dict] = []
     short: list[str] = []
     for r in range(config.rounds + config.extra_rounds):
-        jobs = [RunJob(f"correct/r{r}/{name}", str(ws.paths[name]), model_path, seed, config.walk,
-                     True, config.margin, config.corrections_per_run, config.expert,
-                     inspect_seed=inspect, teacher=config.teacher)
-                for name, (seed, inspect) in zip(train, correction_seeds(config, r))]
+        jobs = [RunJob(f"correct/r{r}/{name}" + (f"/s{k}" if k else ""), str(ws.paths[name]),
+                       model_path, seed, config.walk, True, config.margin,
+                       config.corrections_per_run, config.expert, inspect_seed=inspect,
+                       teacher=config.teacher, every_step=config.every_step)
+                for name, runs in zip(train, correction_seeds(config, r))
+                for k, (seed, inspect) in enumerate(runs)]
         runner.run(jobs, f"round {r} runs")
         demos = _corrections(runner.store, r + 1)
         runs = [runner.store.runs(key_prefix=j.key)[0] for j in jobs]
@@ -386,6 +400,8 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig | None = No
         # expert's verdict on every choice the robot made in the test-board runs.
         results["ranking"] = _ranking(ws, store, functions.models, log)
         results["choices"] = _choice_quality(store, ws.by_hash, config, evaluation.boards, log)
+        results["imitation_gap"] = _imitation_gap(store, ws.by_hash, config, evaluation.boards,
+                                                  log)
         results["seconds_this_session"] = time.perf_counter() - started
     write_report(ws.out, results, ws.maps, functions.models, config, log)
     return results
@@ -434,6 +450,27 @@ def _choice_quality(store: DemoStore, maps: dict[str, HeightMap], config: Reprod
                           p90=float(np.percentile(sf, 90)),
                           above_margin=float(np.mean(sf > config.margin)),
                           severe=float(np.mean(sf > SEVERE_SHORTFALL)))
+    return out
+
+
+def _imitation_gap(store: DemoStore, maps: dict[str, HeightMap], config: ReproduceConfig,
+                   test: list[str], log: Callable[[str], None]) -> dict:
+    """Per learned function, the test-board runs it failed and the teacher crossed (same board
+    and seed), each judged by the teacher step by step (:mod:`footfall.experiments.imitation`)."""
+    step = config.walk.footstep
+    teacher = TEACHERS.get(config.teacher).expert(config.expert, step.bias_weight, step.lead)
+    log("the teacher's verdict on the learned functions' failed test-board runs")
+    out = {}
+    for fs in PAPER_FEATURE_SETS:
+        pairs = []
+        for board in test:
+            teacher_runs = {r["key"].rsplit("/", 1)[1]: r
+                            for r in _runs_by_key(store, f"eval/{board}/expert/")}
+            for row in _runs_by_key(store, f"eval/{board}/{fs}/"):
+                other = teacher_runs.get(row["key"].rsplit("/", 1)[1])
+                if other is not None:
+                    pairs.append((store.run(row["id"]), store.run(other["id"])))
+        out[fs] = imitation_gap(pairs, maps, teacher, config.margin)
     return out
 
 

@@ -48,6 +48,8 @@ def _key(ws: Workspace, demos: list, feature_set: str, rms: float | None) -> tup
         settings.update(learner=config.learner, folds=config.folds)
     if config.template_budget is not None:
         settings.update(template_budget=config.template_budget)
+    if config.supervision != "choice":  # keys of the paper's supervision stay
+        settings.update(supervision=config.supervision)
     return _training_key(demos, feature_set, settings), seed
 
 
@@ -83,7 +85,7 @@ def learn_saved(ws: Workspace, name: str, demos: list, feature_set: str, rms: fl
                         bandwidth_rms=None if rms is None else (rms,) * 3, cv=config.cv,
                         seed=seed, selection=config.selection, folds=config.folds,
                         template_budget=config.template_budget,
-                        log=lambda s: log("    " + s))
+                        supervision=config.supervision, log=lambda s: log("    " + s))
     model = replace(model, info={**model.info, "training_key": key,
                                  "sources": [d.source for d in demos]})
     model.save(path)

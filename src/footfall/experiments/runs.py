@@ -66,6 +66,8 @@ class RunJob:
     judge: bool = False  # the teacher chooses every foothold itself (model unused)
     inspect_seed: int = 0  # the expert's randomness while it inspects the run
     teacher: str = "expert"  # who judges and corrects (footfall.expert.teachers.TEACHERS)
+    every_step: bool = False  # the teacher labels every step (DAgger), not only those short
+    # of its best by more than ``margin`` (``cap`` still bounds them)
 
 
 def reward_source(model_path: str | os.PathLike | None, hmap: HeightMap):
@@ -103,8 +105,9 @@ def execute(job: RunJob) -> RunOutput:
         demos = []
         if job.correct:
             expert = teacher.expert(job.expert, footstep.bias_weight, footstep.lead)
-            found = inspect_run(record, hmap, expert, job.margin, rng=job.inspect_seed)
-            found = worst_corrections(found, job.margin, job.cap)
+            found = inspect_run(record, hmap, expert, job.margin, rng=job.inspect_seed,
+                                every_step=job.every_step)
+            found = worst_corrections(found, job.margin, job.cap, job.every_step)
             demos = corrections_to_demonstrations(record, job.key, found, expert)
     return record, demos
 

@@ -95,11 +95,13 @@ def _kinds_at(config: ReproduceConfig, difficulty: float) -> Spec:
     return tuple((kind, float(difficulty)) for kind in config.test_kinds)
 
 
-def correction_seeds(config: ReproduceConfig, r: int) -> list[tuple[int, int]]:
-    """Round ``r``'s (run seed, inspection seed) on each training board."""
+def correction_seeds(config: ReproduceConfig, r: int) -> list[list[tuple[int, int]]]:
+    """Round ``r``'s (run seed, inspection seed) of each run on each training board (the first
+    run of a board keeps the seeds a round of one run a board always had)."""
     streams = seed_streams(config)
-    return [(streams.seed_for("correction runs", r, i), streams.seed_for("inspection", r, i))
-            for i in range(len(config.train_boards))]
+    return [[(streams.seed_for("correction runs", r, i, *([k] if k else [])),
+              streams.seed_for("inspection", r, i, *([k] if k else [])))
+             for k in range(config.round_runs)] for i in range(len(config.train_boards))]
 
 
 def calibration_seeds(config: ReproduceConfig, level: int, board: int) -> list[int]:
@@ -134,8 +136,10 @@ def planned_seeds(config: ReproduceConfig) -> dict[str, list[int]]:
             + [seed for j in levels for _, seed in calibration_boards(config, j, extra).values()]
             + [seed for j in levels for _, seed in confirmation_boards(config, j, confirm).values()]
             + [seed for _, seed in test_boards(config, 0.0).values()],
-            "correction runs": [a for r in rounds for a, _ in correction_seeds(config, r)],
-            "inspection": [b for r in rounds for _, b in correction_seeds(config, r)],
+            "correction runs": [a for r in rounds for board in correction_seeds(config, r)
+                                for a, _ in board],
+            "inspection": [b for r in rounds for board in correction_seeds(config, r)
+                           for _, b in board],
             "calibration runs": [s for j in levels for i in range(most_calibration_boards(config))
                                  for s in calibration_seeds(config, j, i)],
             "confirmation runs": [s for j in levels for i in confirm

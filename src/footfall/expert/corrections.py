@@ -24,7 +24,7 @@ from footfall.core.heightmap import HeightMap
 from footfall.data.runlog import RunRecord
 from footfall.data.schema import SUFFIXES
 from footfall.data.store import Demonstration, DemoStore
-from footfall.expert.protocol import Expert, expert_settings
+from footfall.expert.protocol import Expert, expert_settings, teacher_verdict
 
 DEFAULT_MARGIN = 1.0  # [value units; 1 unit = 1 cm of progress for the synthetic expert] a choice
 # this much worse than the expert's best is corrected: about the value spread of footholds a few
@@ -44,6 +44,8 @@ class Correction:
     best: int  # index in F of the expert's (noiseless) best
     shortfall: float  # [value units] expert value of its best minus of the robot's choice (>= 0)
     label: int | None  # index in F the expert demonstrates (None: not corrected)
+    values: np.ndarray | None = None  # (n,) the teacher's value of every candidate [value units]
+    refused: np.ndarray | None = None  # (n,) bool: the candidates it refuses outright
 
 
 def source_of(run_key: str, k: int) -> str:
@@ -73,33 +75,45 @@ def step_verdicts(run: RunRecord, hmap: HeightMap, expert: Expert) -> tuple[np.n
 
 
 def inspect_run(run: RunRecord, hmap: HeightMap, expert: Expert, margin: float = DEFAULT_MARGIN,
-                rng: np.random.Generator | int = 0) -> list[Correction]:
+                rng: np.random.Generator | int = 0, every_step: bool = False) -> list[Correction]:
     """The expert's verdict on every step of ``run`` (on the map ``hmap`` the planner saw).
 
-    A step is corrected when ``max(values) - values[chosen] > margin``;
+    A step is corrected when ``max(values) - values[chosen] > margin``, or,
+    with ``every_step``, always (the teacher labels every state the robot
+    visited, its choice where the robot chose as it would: the DAgger labels);
     its label is ``expert.choose`` among the step's candidates (the noiseless
-    best for a perfect expert; an imperfect one may pick another). ``rng``
-    draws the imperfection, step by step in order, so the same run and seed
-    give the same labels.
+    best for a perfect expert; an imperfect one may pick another). Every
+    verdict keeps the teacher's values of the step's candidates and those it
+    refuses (:func:`~footfall.expert.protocol.teacher_verdict`). ``rng`` draws
+    the imperfection, step by step in order, so the same run and seed give the
+    same labels.
     """
     if not (isinstance(margin, (int, float)) and math.isfinite(margin) and margin >= 0):
         raise FootfallError(f"the correction margin must be a number >= 0, got {margin!r}")
-    best, shortfall = step_verdicts(run, hmap, expert)
+    if not isinstance(run, RunRecord):
+        raise FootfallError(f"inspecting a run needs a RunRecord, got {type(run).__name__}")
+    if hmap.content_hash() != run.terrain_hash:
+        raise FootfallError("the run was logged on another terrain than the map given")
     rng = np.random.default_rng(rng)
     out = []
-    for step, b, sf in zip(run.steps, best, shortfall):  # labels: only the corrected steps
+    for step in run.steps:  # steps of one run (dozens), each vectorised over F
+        values, refused = teacher_verdict(expert, hmap, step.state, step.candidates)
+        best = int(np.argmax(values))
+        sf = float(values[best] - values[step.chosen])
         label = None
-        if sf > margin and step.candidates.shape[0] >= 2:
+        if (every_step or sf > margin) and step.candidates.shape[0] >= 2:
             label = int(expert.choose(hmap, step.state, step.candidates, rng))
-        out.append(Correction(step.k, step.chosen, int(b), float(sf), label))
+        out.append(Correction(step.k, step.chosen, best, sf, label, values, refused))
     return out
 
 
-def worst_corrections(corrections: list[Correction], margin: float, cap: int | None
-                      ) -> list[Correction]:
-    """The corrections the expert labels: every shortfall above ``margin`` (value units), or the
-    worst ``cap`` of them (ties: the earlier step); the others keep their verdict, unlabelled."""
-    chosen = [c for c in corrections if c.label is not None and c.shortfall > margin]
+def worst_corrections(corrections: list[Correction], margin: float, cap: int | None,
+                      every_step: bool = False) -> list[Correction]:
+    """The corrections the expert labels: every shortfall above ``margin`` (value units) --
+    with ``every_step``, every labelled step -- or the worst ``cap`` of them (ties: the earlier
+    step); the others keep their verdict, unlabelled."""
+    chosen = [c for c in corrections
+              if c.label is not None and (every_step or c.shortfall > margin)]
     if cap is not None and len(chosen) > cap:
         chosen = sorted(chosen, key=lambda c: (-c.shortfall, c.k))[:cap]
     keep = {c.k for c in chosen}
@@ -108,12 +122,35 @@ def worst_corrections(corrections: list[Correction], margin: float, cap: int | N
 
 def corrections_to_demonstrations(run: RunRecord, run_key: str, corrections: list[Correction],
                                   expert: Expert) -> list[Demonstration]:
-    """One demonstration per corrected step, sourced ``run:<run_key>:step:<k>``."""
+    """One demonstration per corrected step, sourced ``run:<run_key>:step:<k>``, with the
+    teacher's verdict on the step's other candidates (its values, its refusals)."""
     settings = expert_settings(expert)
     steps = {s.k: s for s in run.steps}
-    return [Demonstration(run.terrain_hash, steps[c.k].state, steps[c.k].candidates, c.label,
-                          source=source_of(run_key, c.k), expert=settings)
-            for c in corrections if c.label is not None]
+    out = []
+    for c in corrections:
+        if c.label is None:
+            continue
+        values, refused = _stored_verdict(c)
+        out.append(Demonstration(run.terrain_hash, steps[c.k].state, steps[c.k].candidates,
+                                 c.label, source=source_of(run_key, c.k), expert=settings,
+                                 values=values, refused=refused))
+    return out
+
+
+def _stored_verdict(c: Correction) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """A labelled step's verdict as a demonstration keeps it: a candidate the teacher valued
+    -inf (no foothold) refused and valued at its lowest finite value; the labelled candidate
+    never refused (an imperfect teacher may label a foothold its own veto refuses: its label
+    is its word)."""
+    if c.values is None or c.refused is None:
+        return c.values, c.refused
+    values = np.asarray(c.values, dtype=np.float64)
+    finite = np.isfinite(values)
+    refused = np.asarray(c.refused, dtype=bool) | ~finite
+    if not finite.all():
+        values = np.where(finite, values, values[finite].min(initial=0.0))
+    refused[c.label] = False
+    return values, refused
 
 
 @dataclass(frozen=True)
@@ -128,6 +165,7 @@ class StoredCorrections:
     margin: float  # [value units]
     per_run: int | None  # labels a run at most (None: every step above the margin)
     seed: int
+    every_step: bool = False  # every step labelled, not only those above the margin
 
     def as_dict(self) -> dict:
         """Plain data for JSON, in field order."""
@@ -136,10 +174,12 @@ class StoredCorrections:
 
 def correct_stored_runs(run_paths: Sequence[str | os.PathLike], out: str | os.PathLike,
                         expert: Expert, margin: float, per_run: int | None, seed: int,
-                        key_prefix: str | None = None) -> StoredCorrections:
+                        key_prefix: str | None = None, every_step: bool = False
+                        ) -> StoredCorrections:
     """The expert's corrections of the run logs in ``run_paths``, added to the store ``out``
     (created if missing) in one transaction, as the reproduction's correction rounds make
-    them: each run's steps judged, the worst ``per_run`` above ``margin`` labelled.
+    them: each run's steps judged, the worst ``per_run`` above ``margin`` labelled (with
+    ``every_step``, the worst ``per_run`` of all steps: DAgger's labels).
 
     The labels of run ``i`` (in store and creation order) draw their imperfection from
     ``numpy.random.default_rng([seed, i])``: the same stores and seed give the same store.
@@ -158,10 +198,11 @@ def correct_stored_runs(run_paths: Sequence[str | os.PathLike], out: str | os.Pa
                 if run.terrain_hash not in terrains:
                     terrains[run.terrain_hash] = store.terrain(run.terrain_hash)
                 found = inspect_run(run, terrains[run.terrain_hash], expert, margin,
-                                    rng=np.random.default_rng([seed, runs]))
+                                    rng=np.random.default_rng([seed, runs]),
+                                    every_step=every_step)
                 steps += len(found)
-                above += sum(c.label is not None for c in found)
-                found = worst_corrections(found, margin, per_run)
+                above += sum(c.shortfall > margin for c in found)
+                found = worst_corrections(found, margin, per_run, every_step)
                 demos += corrections_to_demonstrations(run, head["key"] or f"{path}#{head['id']}",
                                                        found, expert)
                 runs += 1
@@ -171,4 +212,4 @@ def correct_stored_runs(run_paths: Sequence[str | os.PathLike], out: str | os.Pa
     with DemoStore(target, create=True) as store:
         store.add_demonstrations(demos, terrains=[h for k, h in terrains.items() if k in used])
     return StoredCorrections(str(target), runs, steps, above, len(demos), float(margin), per_run,
-                             seed)
+                             seed, every_step)

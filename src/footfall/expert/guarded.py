@@ -176,6 +176,16 @@ class GuardedExpert:
         bias = path_bias_weight(scorer, self.path_bias) * np.hypot(*(f[:, :2] - target).T)
         return self.rate * (scorer.values(c) - bias)
 
+    def verdict(self, hmap: HeightMap, state: RobotState, candidates: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`values` (n,) and the candidates the expert vetoes (n,) bool: those it values
+        short of its best by more than ``threshold``."""
+        values = self.values(hmap, state, candidates)
+        if values.shape[0] == 0:
+            return values, np.zeros(0, dtype=bool)
+        expert = np.asarray(self.expert.values(hmap, state, candidates), dtype=np.float64)
+        return values, vetoed(expert, self.threshold) > 0
+
     def choose(self, hmap: HeightMap, state: RobotState, candidates: np.ndarray,
                rng: np.random.Generator) -> int:
         """Index of the best candidate (``rng`` unused: the teacher is noiseless)."""

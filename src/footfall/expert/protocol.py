@@ -29,6 +29,30 @@ class Expert(Protocol):
         """Noiseless value of each candidate, shape (n,), higher is better."""
 
 
+REFUSED_SHORTFALL = 10.0  # [value units] an expert without a veto of its own refuses a candidate
+# this far below its best: the severe shortfall of footfall.expert.corrections
+
+
+def teacher_verdict(expert: Any, hmap: HeightMap, state: RobotState, candidates: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """A teacher's verdict on every candidate (n, 3) [m]: its values (n,) [value units] and the
+    candidates it refuses outright (n,) bool -- its own ``verdict`` if it has one (a veto),
+    else those valued more than :data:`REFUSED_SHORTFALL` below its best. Never the best."""
+    own = getattr(expert, "verdict", None)
+    if callable(own):
+        values, refused = own(hmap, state, candidates)
+        values = np.asarray(values, dtype=np.float64)
+        refused = np.asarray(refused, dtype=bool)
+    else:
+        values = np.asarray(expert.values(hmap, state, candidates), dtype=np.float64)
+        refused = values.max(initial=-np.inf) - values > REFUSED_SHORTFALL
+    n = len(candidates)
+    if values.shape != (n,) or refused.shape != (n,):
+        raise FootfallError(f"the teacher's verdict has shapes {values.shape} and "
+                            f"{refused.shape} for {n} candidates")
+    return values, refused
+
+
 def values_each(expert: Any, hmap: HeightMap, states: Sequence[RobotState],
                 candidates: np.ndarray) -> np.ndarray:
     """An expert's values of the same candidates (n, 3) [m] in each of ``states`` (one heading

@@ -19,8 +19,7 @@ tests check that they give LightGBM's own predictions.
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numba
@@ -28,11 +27,10 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
-from footfall.core.compute import available_memory, jobs_that_fit, usable_cores
 from footfall.core.errors import FootfallError
 from footfall.core.validate import require_float_array
 from footfall.features.family import FeatureFamily
-from footfall.learning.function import MAX_WEIGHT, ColumnFunction, own_arrays
+from footfall.learning.function import MAX_WEIGHT, VETO_PENALTY, ColumnFunction, own_arrays
 from footfall.learning.learner import Learner, register_learner
 from footfall.learning.ranker import (
     PathPoint,
@@ -227,12 +225,12 @@ class BoostedRanker(BaseEstimator):
         with two threads on a busy two-core machine, 0.09 s with one; 100
         demonstrations of 100 candidates, 62 s against 18 s). The trees are
         the same whatever the number.
-    fold_jobs : int or None
-        Cross-validation folds trained at once, each in a thread of its own
-        (LightGBM releases Python's lock while it trains): the folds are
-        independent, so the trees and the selection are the same whatever
-        the number. None: the cores this process may use, fewer where the free
-        memory does not hold that many copies of the candidates' rows.
+
+    The cross-validation folds are trained one after another, never in threads at once:
+    LightGBM's ranking objectives keep their gain and discount tables in static members
+    (``DCGCalculator``) that every new booster re-initialises, so two lambdarank boosters made
+    in two threads race on them (measured: a segmentation fault in ``lib_lightgbm`` while a
+    hind-leg function learned its folds two at a time).
 
     Attributes
     ----------
@@ -245,8 +243,7 @@ class BoostedRanker(BaseEstimator):
     def __init__(self, objective: str = "lambdarank", trees: tuple[int, ...] = TREE_PATH,
                  num_leaves: int = 7, learning_rate: float = 0.05, min_data_in_leaf: int = 50,
                  feature_fraction: float = 0.5, lambda_l2: float = 1.0, cv: int = 5,
-                 selection: str = "1se", random_state: int = 0, n_jobs: int = 1,
-                 fold_jobs: int | None = None):
+                 selection: str = "1se", random_state: int = 0, n_jobs: int = 1):
         self.objective = objective
         self.trees = trees
         self.num_leaves = num_leaves
@@ -258,7 +255,6 @@ class BoostedRanker(BaseEstimator):
         self.selection = selection
         self.random_state = random_state
         self.n_jobs = n_jobs
-        self.fold_jobs = fold_jobs
 
     def _params(self) -> dict:
         return {"objective": self.objective, "num_leaves": int(self.num_leaves),
@@ -298,8 +294,6 @@ class BoostedRanker(BaseEstimator):
             raise FootfallError("cv needs at least 2 folds")
         if int(self.n_jobs) < 1:
             raise FootfallError(f"n_jobs must be at least 1 thread, got {self.n_jobs}")
-        if self.fold_jobs is not None and int(self.fold_jobs) < 1:
-            raise FootfallError(f"fold_jobs must be at least 1, got {self.fold_jobs}")
         if np.any(np.diff(groups) < 0):  # LightGBM reads queries as contiguous runs (stack's
             order = np.argsort(groups, kind="stable")  # are: no copy of X then)
             X, y, groups = X[order], y[order], groups[order]
@@ -314,15 +308,7 @@ class BoostedRanker(BaseEstimator):
             return [pairwise_error(booster.predict(X[test], num_iteration=int(t)), y[test],
                                    groups[test]) for t in trees]
 
-        # a fold's rows are copied until LightGBM has binned them: as many at once as the cores
-        # and the free memory allow (1 600 demonstrations of 4 800 columns: 5 GB a copy)
-        jobs = min(len(folds), int(self.fold_jobs) if self.fold_jobs is not None else
-                   jobs_that_fit(usable_cores(), X.nbytes, available_memory()))
-        if jobs > 1:
-            with ThreadPoolExecutor(max_workers=jobs) as pool:
-                errors = np.array(list(pool.map(fold_errors, folds)))
-        else:
-            errors = np.array([fold_errors(f) for f in folds])
+        errors = np.array([fold_errors(f) for f in folds])  # one at a time: see the class
         self.path_ = [PathPoint(float(t), float(errors[:, j].mean()), float(errors[:, j].std()),
                                 float("nan"), float(t)) for j, t in enumerate(trees)]
         best = select_on_path(errors.mean(axis=0), errors.std(axis=0), len(folds),
@@ -349,25 +335,48 @@ class BoostedFunction(ColumnFunction):
     families: tuple[FeatureFamily, ...]
     forest: Forest
     info: dict = field(default_factory=dict)  # trees, cv error, path, the families' facts
+    veto: Forest | None = None  # a learned veto: trees of the log-odds that the teacher refuses
+    # a candidate outright (footfall.learning.veto); > 0 refused: VETO_PENALTY taken
 
     def __post_init__(self) -> None:
-        if self.forest.feature.size and self.forest.feature.max(initial=-1) >= self.n_columns:
-            raise FootfallError("a boosted tree reads a column its families do not have")
+        for forest in (self.forest, self.veto):
+            if forest is not None and forest.feature.size and \
+                    forest.feature.max(initial=-1) >= self.n_columns:
+                raise FootfallError("a boosted tree reads a column its families do not have")
 
     def predict(self, X: np.ndarray) -> np.ndarray:
-        """The sum of the trees' leaf values, (n, d) -> (n,)."""
-        return self.forest.predict(X)
+        """The sum of the trees' leaf values, (n, d) -> (n,), less VETO_PENALTY where the veto
+        refuses a candidate (its log-odds above 0)."""
+        value = self.forest.predict(X)
+        if self.veto is None:
+            return value
+        return value - VETO_PENALTY * (self.veto.predict(X) > 0.0)
+
+    def without_veto(self) -> BoostedFunction:
+        """The ranker alone (itself without a veto)."""
+        return self if self.veto is None else replace(self, veto=None)
 
     def arrays(self) -> dict[str, np.ndarray]:
-        """``boosted.feature``, ``.threshold``, ``.left``, ``.right``, ``.value``, ``.roots``."""
-        return {f"boosted.{k}": v for k, v in self.forest.arrays().items()}
+        """``boosted.feature``, ``.threshold``, ``.left``, ``.right``, ``.value``, ``.roots``;
+        with a veto, its forest's as ``boosted.veto.*``."""
+        out = {f"boosted.{k}": v for k, v in self.forest.arrays().items()}
+        if self.veto is not None:
+            out.update({f"boosted.veto.{k}": v for k, v in self.veto.arrays().items()})
+        return out
 
     @classmethod
     def from_arrays(cls, families: tuple[FeatureFamily, ...], arrays: dict[str, np.ndarray],
                     info: dict, prefix: str = "") -> BoostedFunction:
-        mine = own_arrays(arrays, f"{prefix}boosted.", FOREST_ARRAYS)
         d = sum(len(f.columns()) for f in families)
-        return cls(tuple(families), Forest.from_arrays(mine, d, f"{prefix}boosted."), info)
+        veto_prefix = f"{prefix}boosted.veto."
+        veto = None
+        if any(k.startswith(veto_prefix) for k in arrays):
+            veto = Forest.from_arrays(own_arrays({k: v for k, v in arrays.items()
+                                                  if k.startswith(veto_prefix)},
+                                                 veto_prefix, FOREST_ARRAYS), d, veto_prefix)
+        mine = own_arrays({k: v for k, v in arrays.items() if not k.startswith(veto_prefix)},
+                          f"{prefix}boosted.", FOREST_ARRAYS)
+        return cls(tuple(families), Forest.from_arrays(mine, d, f"{prefix}boosted."), info, veto)
 
 
 @dataclass(frozen=True)
@@ -381,6 +390,7 @@ class BoostedLearner(Learner):
     ranks_columns: bool = True
     order_only: bool = True  # a split reads a column's order: an RBF bandwidth re-maps nothing
     objective: str = "lambdarank"
+    vetoes: bool = True  # its function can carry a learned veto (footfall.learning.veto)
 
     def fit(self, X, y, groups, *, Cs=10, cv: int = 5, selection: str = "1se",
             units=None) -> BoostedRanker:
@@ -388,9 +398,13 @@ class BoostedLearner(Learner):
         return BoostedRanker(self.objective, cv=cv, selection=selection).fit(X, y, groups, units)
 
     def function(self, fitted: BoostedRanker, families: tuple[FeatureFamily, ...],
-                 n_demonstrations: int) -> BoostedFunction:
-        """Per family the columns a tree reads (a template library keeps those templates)."""
+                 n_demonstrations: int, veto: Forest | None = None) -> BoostedFunction:
+        """Per family the columns a tree reads (a template library keeps those templates);
+        with a ``veto`` over the same columns (:func:`footfall.learning.veto.fit_veto`), the
+        columns either reads."""
         used = fitted.forest_.used_columns(fitted.n_features_in_)
+        if veto is not None:
+            used |= veto.used_columns(fitted.n_features_in_)
         kept, masks, info = [], [], {}
         start = 0
         for family in families:
@@ -404,8 +418,9 @@ class BoostedLearner(Learner):
                      "path": [vars(p) for p in fitted.path_],
                      "n_demonstrations": n_demonstrations, "objective": self.objective,
                      "n_nonzero": int(np.count_nonzero(used))})
-        return BoostedFunction(tuple(kept), fitted.forest_.renumbered(np.concatenate(masks)),
-                               info)
+        keep = np.concatenate(masks)
+        return BoostedFunction(tuple(kept), fitted.forest_.renumbered(keep), info,
+                               None if veto is None else veto.renumbered(keep))
 
     def importance(self, fitted: BoostedRanker) -> np.ndarray:
         """Each column's total split gain in the trees (LightGBM's "gain" importance)."""

@@ -66,6 +66,16 @@ class Example:
     unit: str = ""  # its fold unit (a run, a board): folds never split one; "" = its own
     parts: tuple[Example, ...] = ()  # a comparison across decisions: its rows are these
     # examples' rows in order (each prepared in its own state); ``prepared`` is then empty
+    levels: np.ndarray | None = None  # (n,) relevance level of each row (the chosen one alone
+    # at the top: footfall.learning.supervision); None: a choice, 1 for the chosen row, 0 else
+    refused: np.ndarray | None = None  # (n,) bool: rows the teacher refused outright (None:
+    # it said nothing of them)
+
+    def relevance(self) -> np.ndarray:
+        """(n,) int: each row's relevance level (a choice: 1 for the chosen row, 0 else)."""
+        if self.levels is None:
+            return np.eye(1, self.n, self.chosen, dtype=int)[0]
+        return np.asarray(self.levels, dtype=int)
 
 
 def stack_units(examples: Sequence[Example]) -> np.ndarray | None:
@@ -80,8 +90,11 @@ def stack_units(examples: Sequence[Example]) -> np.ndarray | None:
 
 def make_example(hmap: HeightMap, state: RobotState, candidates: np.ndarray, chosen: int,
                  families: Sequence[FeatureFamily], config: FeatureConfig,
-                 rows: np.ndarray | None = None, robot: RobotDescription = LITTLEDOG) -> Example:
-    """What every family keeps of (a subset ``rows`` of) a demonstration's candidates."""
+                 rows: np.ndarray | None = None, robot: RobotDescription = LITTLEDOG,
+                 levels: np.ndarray | None = None, refused: np.ndarray | None = None) -> Example:
+    """What every family keeps of (a subset ``rows`` of) a demonstration's candidates, with the
+    relevance ``levels`` (n_all,) of all its candidates if graded (None: a choice) and the
+    teacher's refusals (n_all,) bool if it gave them."""
     rows = np.arange(candidates.shape[0]) if rows is None else np.asarray(rows)
     if not 0 <= chosen < candidates.shape[0] or chosen not in rows:
         raise FootfallError("the chosen candidate must be among the rows")
@@ -90,7 +103,9 @@ def make_example(hmap: HeightMap, state: RobotState, candidates: np.ndarray, cho
         raise FootfallError("a candidate has too little terrain data for its features")
     return Example(tuple(f.prepare(c) for f in families), int(rows.size),
                    int(np.flatnonzero(rows == chosen)[0]), robot.leg(state.swing_leg).front, rows,
-                   decision_hash(state, candidates, chosen))
+                   decision_hash(state, candidates, chosen),
+                   levels=None if levels is None else np.asarray(levels, dtype=int)[rows],
+                   refused=None if refused is None else np.asarray(refused, dtype=bool)[rows])
 
 
 def training_rows(n: int, chosen: int, k: int, rng: np.random.Generator) -> np.ndarray:
@@ -125,7 +140,8 @@ def column_names(families: Sequence[FeatureFamily]) -> tuple[str, ...]:
 
 def stack(examples: Sequence[Example], families: Sequence[FeatureFamily]
           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Stacked X (N, d), y (N,) (1 = chosen) and groups (N,) of distinct examples.
+    """Stacked X (N, d), y (N,) (relevance levels: 1 = chosen, 0 = other for a choice) and
+    groups (N,) of distinct examples.
 
     The groups number the demonstrations: the units of the pairwise
     transform (one chosen row each) and of the cross-validation folds. A
@@ -146,7 +162,7 @@ def stack(examples: Sequence[Example], families: Sequence[FeatureFamily]
         X[start:start + e.n] = block
         start += e.n
     del first
-    y = np.concatenate([np.eye(1, e.n, e.chosen, dtype=int)[0] for e in examples])
+    y = np.concatenate([e.relevance() for e in examples])
     groups = np.concatenate([np.full(e.n, k) for k, e in enumerate(examples)])
     return X, y, groups
 

@@ -163,6 +163,10 @@ def own_arrays(arrays: dict[str, np.ndarray], prefix: str, names: tuple[str, ...
     return {n: arrays[key] for key, n in wanted.items()}
 
 
+VETO_PENALTY = 1.0e3  # [value] taken from a candidate a learned veto refuses: far more than a
+# ranker's values spread over a candidate set (the teacher's own veto takes as much)
+
+
 class ColumnFunction(RankingFunction):
     """A ranking function that predicts a value from the families' columns side by side (not
     w^T x): a kernel or boosted ranker. Subclasses implement :meth:`predict`."""
@@ -170,6 +174,11 @@ class ColumnFunction(RankingFunction):
     @abstractmethod
     def predict(self, X: np.ndarray) -> np.ndarray:
         """Values (n,) of candidates with features X (n, d) (finite; higher: preferred)."""
+
+    def without_veto(self) -> ColumnFunction:
+        """The function without a learned veto of the candidates a teacher refuses (itself if it
+        has none): what a planner's path bias is scaled to (:attr:`ColumnScorer.spread_basis`)."""
+        return self
 
     def scorer(self, config: FeatureConfig, name: str = "learned") -> ColumnScorer:
         """The function as a :class:`ColumnScorer`."""
@@ -201,6 +210,12 @@ class ColumnScorer(FootholdScorer):
     def family_names(self) -> tuple[str, ...]:
         """Every family of the function (a non-linear function reads all its columns)."""
         return tuple(f.name for f in self.function.families)
+
+    @property
+    def spread_basis(self) -> FootholdScorer:
+        """The function without its veto, if it has one (a veto's penalty is not a spread)."""
+        plain = self.function.without_veto()
+        return self if plain is self.function else ColumnScorer(plain, self.config, self.name)
 
     @property
     def has_state_part(self) -> bool:

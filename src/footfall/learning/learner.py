@@ -37,7 +37,8 @@ class Learner(ABC):
     order of its values (regression trees), so that a family's hyperparameter
     which re-maps a column monotonically -- an RBF bandwidth -- changes nothing
     it could learn and is not searched for it
-    (:meth:`FeatureFamily.tune <footfall.features.family.FeatureFamily.tune>`).
+    (:meth:`FeatureFamily.tune <footfall.features.family.FeatureFamily.tune>`); ``vetoes``:
+    whether :meth:`function` takes a learned veto (``veto=``, :mod:`footfall.learning.veto`).
     """
 
     name: str
@@ -45,6 +46,7 @@ class Learner(ABC):
     function_type: type[RankingFunction]
     ranks_columns: bool = False  # its importance() ranks the columns (a template budget works)
     order_only: bool = False  # it reads each column's order only: monotone re-maps are not tuned
+    vetoes: bool = False  # its function can carry a learned veto (footfall.learning.veto)
 
     @abstractmethod
     def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray, *, Cs: Any = 10,
@@ -56,7 +58,10 @@ class Learner(ABC):
         X : array of shape (n_candidates, n_features)
             Features of the candidates of all demonstrations, stacked.
         y : array of shape (n_candidates,)
-            1 for the chosen candidate of its demonstration, 0 for the others.
+            Relevance levels, whole numbers: 1 for the chosen candidate of its
+            demonstration and 0 for the others, or graded by a teacher's verdict
+            (:mod:`footfall.learning.supervision`), the chosen candidate alone at its
+            demonstration's highest level.
         groups : array of shape (n_candidates,)
             The demonstration each candidate belongs to (cross-validation
             folds never split one).

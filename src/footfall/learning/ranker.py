@@ -29,6 +29,12 @@ from footfall.core.errors import FootfallError
 from footfall.features.family import FeatureFamily
 from footfall.learning.function import LinearFunction, RankingFunction
 from footfall.learning.learner import Learner, get_learner, register_learner
+from footfall.learning.levels import (  # noqa: F401 (pairwise_error: every learner's measure)
+    _check_demonstrations,
+    chosen_rows,
+    level_pairs,
+    pairwise_error,
+)
 from footfall.learning.screening import screened_l1_fit
 
 SELECTIONS = ("1se", "min")  # lambda: one-standard-error rule, or the smallest CV error
@@ -131,25 +137,27 @@ BUILTIN_LEARNERS = ("l1", "l2", "svm")  # the three the offline experiment compa
 
 def pairwise_transform(X: np.ndarray, y: np.ndarray, groups: np.ndarray,
                        mirrored: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Pairwise difference vectors of demonstrations (paper Eq. 3).
+    """Pairwise difference vectors of demonstrations (paper Eq. 3), between relevance levels.
 
     Parameters
     ----------
     X : array of shape (n_candidates, n_features)
         Features of the candidates of all demonstrations, stacked.
     y : array of shape (n_candidates,)
-        1 for the chosen candidate of its demonstration, 0 for the others.
+        Each candidate's relevance level, a whole number in [0, MAX_LEVEL]: the chosen
+        candidate alone at its demonstration's highest level (a choice: 1 for it, 0 for the
+        others; graded supervision: more levels, :mod:`footfall.learning.supervision`).
     groups : array of shape (n_candidates,)
         The demonstration each candidate belongs to.
     mirrored : bool
-        Also emit -(x_c - x_i) with label -1 for every pair.
+        Also emit -(x_b - x_w) with label -1 for every pair.
 
     Returns
     -------
     pairs : array of shape (n_pairs, n_features)
-        x_c - x_i for every other candidate i of each demonstration (then,
-        if ``mirrored``, their negatives), demonstrations in order of first
-        appearance.
+        x_b - x_w for every pair of :func:`level_pairs` (for a choice: x_c - x_i for every
+        other candidate i of each demonstration), demonstrations in the order of their
+        ``groups`` values (then, if ``mirrored``, their negatives).
     labels : array of shape (n_pairs,) of +1 / -1
     pair_groups : array of shape (n_pairs,), the demonstration of each pair
     """
@@ -157,39 +165,15 @@ def pairwise_transform(X: np.ndarray, y: np.ndarray, groups: np.ndarray,
     y = np.asarray(y)
     groups = np.asarray(groups)
     _check_demonstrations(X, y, groups)
-    chosen = np.flatnonzero(y == 1)
-    # Index of each candidate's demonstration's chosen row.
-    uniq, inverse = np.unique(groups, return_inverse=True)
-    chosen_of_group = np.empty(uniq.size, dtype=np.intp)
-    chosen_of_group[inverse[chosen]] = chosen
-    others = np.flatnonzero(y != 1)
-    order = np.argsort(inverse[others], kind="stable")
-    others = others[order]
-    pairs = X[chosen_of_group[inverse[others]]] - X[others]
-    pair_groups = groups[others]
+    better, worse = level_pairs(y, groups)
+    pairs = X[better] - X[worse]
+    pair_groups = groups[worse]
     labels = np.ones(pairs.shape[0])
     if mirrored:
         pairs = np.concatenate([pairs, -pairs])
         labels = np.concatenate([labels, -labels])
         pair_groups = np.concatenate([pair_groups, pair_groups])
     return pairs, labels, pair_groups
-
-
-def _check_demonstrations(X: np.ndarray, y: np.ndarray, groups: np.ndarray) -> None:
-    if X.ndim != 2 or y.shape != (X.shape[0],) or groups.shape != (X.shape[0],):
-        raise FootfallError("need X (n, d), y (n,) and groups (n,) of the same length")
-    if not np.isfinite(X).all():
-        raise FootfallError("features contain NaN or infinite values")
-    if not np.isin(y, (0, 1)).all():
-        raise FootfallError("y must be 1 for the chosen candidate and 0 for the others")
-    uniq, inverse = np.unique(groups, return_inverse=True)
-    n_chosen = np.bincount(inverse, weights=(y == 1), minlength=uniq.size)
-    n_all = np.bincount(inverse, minlength=uniq.size)
-    if np.any(n_chosen != 1):
-        bad = uniq[np.flatnonzero(n_chosen != 1)[0]]
-        raise FootfallError(f"demonstration {bad} must have exactly one chosen candidate")
-    if np.any(n_all < 2):
-        raise FootfallError("every demonstration needs at least two candidates")
 
 
 def grouped_folds(pair_groups: np.ndarray, n_splits: int, units: np.ndarray | None = None
@@ -225,16 +209,6 @@ def units_of(groups: np.ndarray, units: np.ndarray | None, of: np.ndarray) -> np
     if np.any(units != unit_of_group[np.searchsorted(uniq, groups)]):
         raise FootfallError("the rows of one demonstration must share one fold unit")
     return unit_of_group[np.searchsorted(uniq, np.asarray(of))]
-
-
-def pairwise_error(scores: np.ndarray, y: np.ndarray, groups: np.ndarray) -> float:
-    """The share of (chosen, other) pairs of demonstrations that ``scores`` does not order
-    strictly right (a tie is an error): the linear learners' held-out error, for any scorer."""
-    uniq, inverse = np.unique(groups, return_inverse=True)
-    chosen_score = np.empty(uniq.size)
-    chosen = y == 1
-    chosen_score[inverse[chosen]] = scores[chosen]
-    return float(np.mean(scores[~chosen] >= chosen_score[inverse[~chosen]]))
 
 
 def select_on_path(errors: np.ndarray, stds: np.ndarray, n_folds: int, selection: str) -> int:
@@ -475,5 +449,5 @@ class FootholdRanker(BaseEstimator):
         uniq, inverse = np.unique(groups, return_inverse=True)
         best = np.full(uniq.size, -np.inf)
         np.maximum.at(best, inverse, r)
-        chosen = y == 1
+        chosen = chosen_rows(y, groups)
         return float(np.mean(r[chosen] >= best[inverse[chosen]]))

@@ -36,6 +36,7 @@ from footfall.learning.dataset import (
     Example,
     check_feature_set,
     create_families,
+    distinct_examples,
     make_example,
     pair_example,
     stack,
@@ -45,7 +46,9 @@ from footfall.learning.dataset import (
 from footfall.learning.function import RankingFunction, check_function
 from footfall.learning.learner import Learner, get_learner
 from footfall.learning.model import LEG_GROUPS, FootholdModel
+from footfall.learning.supervision import Supervision, get_supervision
 from footfall.learning.trials import DEFAULT_PAIRS, TrialFoothold, trial_footholds, trial_pairs
+from footfall.learning.veto import Veto, fit_veto
 
 
 @dataclass(frozen=True)
@@ -59,12 +62,22 @@ class TrainingDemo:
     chosen: int
     source: str = ""  # the demonstration's source ("run:<key>:step:<k>", "walker:train", ...)
     terrain: str = ""  # its terrain's content hash ("" : computed from hmap when needed)
+    values: np.ndarray | None = None  # (n,) the teacher's value of each candidate [its units]
+    refused: np.ndarray | None = None  # (n,) bool: candidates the teacher refused outright
 
     @classmethod
     def of(cls, demo: Demonstration, hmap: HeightMap) -> TrainingDemo:
-        """A stored demonstration on its terrain ``hmap``."""
+        """A stored demonstration on its terrain ``hmap``, with its teacher's verdict."""
         return cls(hmap, demo.state, demo.candidates, demo.chosen, demo.source,
-                   demo.terrain_hash)
+                   demo.terrain_hash, demo.values, demo.refused)
+
+    def levels(self, supervision: Supervision) -> np.ndarray | None:
+        """(n,) relevance levels of the candidates by ``supervision``; None for a choice
+        (the paper's one-hot levels, made where they are needed)."""
+        if supervision.name == "choice":
+            return None
+        return supervision.levels(self.candidates.shape[0], self.chosen, self.values,
+                                  self.refused)
 
 
 FOLDS = ("demonstration", "run", "board")
@@ -218,6 +231,64 @@ def _trial_examples(trials: Sequence[TrialFoothold], families: tuple[FeatureFami
             for g, b in index]
 
 
+def _fit_veto(examples: list[Example], families: tuple[FeatureFamily, ...], cv: int,
+              selection: str, seed: int, log: Callable[[str], None]) -> Veto:
+    """The veto (:mod:`footfall.learning.veto`) of the examples whose teacher gave refusals,
+    on the families' columns, with their fold units."""
+    told = distinct_examples([e for e in examples if e.refused is not None])
+    if not told:
+        raise FootfallError("a veto is learned from the teacher's refusals; no demonstration "
+                            "carries them")
+    X, _, groups = stack(told, families)
+    refused = np.concatenate([e.refused for e in told])
+    units = stack_units(told)
+    veto = fit_veto(X, refused, groups, cv=cv, selection=selection, units=units, seed=seed)
+    log(f"  veto: {veto.trees} trees, cv error {veto.cv_error:.4f} "
+        f"({100 * veto.refused_share:.0f} % of {refused.size} candidates refused)")
+    return veto
+
+
+def _demo_examples(demos: Sequence[TrainingDemo], families: tuple[FeatureFamily, ...],
+                   config: FeatureConfig, robot: RobotDescription, kind: Supervision,
+                   veto: bool, training_candidates: int, folds: str,
+                   rng: np.random.Generator) -> list[Example]:
+    """Each demonstration's chosen candidate and up to ``training_candidates`` others, with
+    their levels by ``kind`` (and the teacher's refusals for a ``veto``), one at a time: each
+    is vectorised over its candidates."""
+    examples = []
+    for d in demos:
+        rows = training_rows(d.candidates.shape[0], d.chosen, training_candidates, rng)
+        example = make_example(d.hmap, d.state, d.candidates, d.chosen, families, config, rows,
+                               robot, d.levels(kind), d.refused if veto else None)
+        examples.append(replace(example, unit=fold_unit(d, folds)))
+    return examples
+
+
+def _learn_group(group: str, examples: list[Example], families: tuple[FeatureFamily, ...],
+                 learner: Learner, Cs, cv: int, selection: str, budget: float | None,
+                 veto: bool, seed: int, scales: int, log: Callable[[str], None]
+                 ) -> RankingFunction:
+    """One leg group's ranking function: its hyperparameters tuned, fitted, kept to the
+    template budget, with a learned veto if asked for."""
+    chosen = [e for e in examples if e.front == (group == "front")]
+    if len(chosen) < cv:
+        raise FootfallError(f"{group} legs have {len(chosen)} demonstrations; "
+                            f"{cv}-fold cross-validation needs at least {cv}")
+    log(f"{group} legs: {len(chosen)} demonstrations and comparisons")
+    tuned = _tune(chosen, families, learner, Cs, cv, log)
+    fitted = _fit(chosen, tuned, learner, Cs, cv, selection)
+    fitted, tuned = _within_budget(fitted, chosen, tuned, learner, Cs, cv, selection, budget,
+                                   log)
+    if veto:
+        vetoed = _fit_veto(chosen, tuned, cv, selection, seed, log)
+        function = learner.function(fitted, tuned, len(chosen), veto=vetoed.forest)
+        function.info.update(vetoed.info())
+    else:
+        function = learner.function(fitted, tuned, len(chosen))
+    log(_fitted_line(function.info, fitted.cv_error_, scales))
+    return check_function(function)
+
+
 def _fitted_line(info: dict[str, Any], cv_error: float, scales: int) -> str:
     """One log line about a fitted function: its point on the path, error, columns, templates."""
     point = (f"{info['trees']} trees" if info.get("trees") is not None
@@ -234,6 +305,7 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
                 bandwidth_rms: Sequence[float] | None = None, Cs=10, cv: int = 5, seed: int = 0,
                 selection: str = "1se", family_options: dict[str, dict[str, Any]] | None = None,
                 folds: str = "demonstration", template_budget: float | None = None,
+                supervision: str = "choice", veto: bool = False,
                 log: Callable[[str], None] = lambda s: None) -> FootholdModel:
     """Learn front- and hind-leg ranking functions from demonstrations.
 
@@ -249,7 +321,11 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     cross-validation folds never split (:data:`FOLDS`). ``template_budget``: a leg
     group's function learned from n demonstrations reads at most
     floor(template_budget x n) templates (fitted again on those its learner
-    relied on most if it read more); None: no budget. ``trials`` are footholds
+    relied on most if it read more); None: no budget. ``supervision`` names how a
+    demonstration's teacher verdict becomes relevance levels of its candidates
+    (:mod:`footfall.learning.supervision`: ``choice``, the paper's; ``refusals``; ``graded``).
+    ``veto``: beside each function, learn which candidates the teacher refuses outright
+    (:mod:`footfall.learning.veto`). ``trials`` are footholds
     of the robot's own runs labelled by what followed
     (:mod:`footfall.learning.trials`): each that went wrong is ranked below
     ``trial_pairs`` that did not, of its board and leg group -- alone (no
@@ -259,6 +335,10 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     if folds not in FOLDS:
         raise FootfallError(f"unknown fold grouping {folds!r}; use one of {', '.join(FOLDS)}")
     chosen_learner = get_learner(learner)  # a registered learner, or a clear error
+    kind = get_supervision(supervision)
+    if veto and not chosen_learner.vetoes:
+        raise FootfallError(f"learner {learner!r} cannot carry a learned veto; the boosted "
+                            f"ranker (lambdarank) can")
     seed = require_int(seed, "seed", 0)
     check_count(library_size, "library_size", 3)
     check_count(training_candidates, "training_candidates", 1)
@@ -273,27 +353,13 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     families = _fit_families(create_families(feature_set, config, robot), demos, trials,
                              family_options, library_size, library_capped, bandwidth_rms,
                              config, robot, rng, log)
-    examples = []
-    for d in demos:  # one demonstration at a time: each is vectorised over its candidates
-        rows = training_rows(d.candidates.shape[0], d.chosen, training_candidates, rng)
-        example = make_example(d.hmap, d.state, d.candidates, d.chosen, families, config, rows,
-                               robot)
-        examples.append(replace(example, unit=fold_unit(d, folds)))
+    examples = _demo_examples(demos, families, config, robot, kind, veto, training_candidates,
+                              folds, rng)
     examples += _trial_examples(trials, families, config, robot, trial_pairs, folds, rng,
                                 log)
-    functions = {}
-    for group in LEG_GROUPS:
-        chosen = [e for e in examples if e.front == (group == "front")]
-        if len(chosen) < cv:
-            raise FootfallError(f"{group} legs have {len(chosen)} demonstrations; "
-                                f"{cv}-fold cross-validation needs at least {cv}")
-        log(f"{group} legs: {len(chosen)} demonstrations and comparisons")
-        tuned = _tune(chosen, families, chosen_learner, Cs, cv, log)
-        fitted = _fit(chosen, tuned, chosen_learner, Cs, cv, selection)
-        fitted, tuned = _within_budget(fitted, chosen, tuned, chosen_learner, Cs, cv, selection,
-                                       template_budget, log)
-        functions[group] = check_function(chosen_learner.function(fitted, tuned, len(chosen)))
-        log(_fitted_line(functions[group].info, fitted.cv_error_, len(config.scales)))
+    functions = {g: _learn_group(g, examples, families, chosen_learner, Cs, cv, selection,
+                                 template_budget, veto, seed, len(config.scales), log)
+                 for g in LEG_GROUPS}
     trial_info = {} if not trials else {
         "trial_footholds": len(trials), "trial_comparisons": len(examples) - len(demos),
         "trial_pairs": trial_pairs}
@@ -305,6 +371,11 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
                                "training_candidates": training_candidates,
                                "selection": selection, "folds": folds,
                                "template_budget": template_budget, **trial_info,
+                               **({} if supervision == "choice" else
+                                  {"supervision": supervision,
+                                   "with_verdict": sum(d.values is not None
+                                                       or d.refused is not None for d in demos)}),
+                               **({"veto": True} if veto else {}),
                                "seconds": time.perf_counter() - started})
 
 

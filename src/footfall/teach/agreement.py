@@ -7,6 +7,12 @@ robot's choice falls short of its best by at most the margin, otherwise its
 best candidate. A person agrees with the expert when both say "fine", or
 both name a foothold within :data:`SAME_FOOTHOLD` of each other. Two people
 agree on a step both labelled by the same rule.
+
+People's "never here" marks are compared the same way: a person's mark agrees with the
+synthetic expert when the expert also refuses that candidate (its value more than
+:data:`footfall.expert.protocol.REFUSED_SHORTFALL` below its best in the step's F:
+:func:`footfall.expert.protocol.teacher_verdict`), and with another person when they marked the
+same candidate, or one within :data:`SAME_FOOTHOLD` of it.
 """
 
 from __future__ import annotations
@@ -16,7 +22,7 @@ from collections.abc import Callable, Iterable
 
 import numpy as np
 
-from footfall.data.label import Label
+from footfall.data.label import Label, Mark
 
 SAME_FOOTHOLD = 0.01  # [m] two footholds this close (horizontally) are the same choice
 
@@ -91,6 +97,69 @@ def agreement(labels: Iterable[Label], expert: Callable[[int, int], int | None],
             "same_foothold_m": SAME_FOOTHOLD}
 
 
+def marks_agreement(marks: Iterable[Mark], refusals: Callable[[int, int], np.ndarray | None],
+                    candidates: Callable[[int, int], np.ndarray]) -> dict:
+    """Agreement figures of stored "never here" marks.
+
+    Parameters
+    ----------
+    marks : iterable of Mark
+        The stored marks (one per labeler and candidate of a step).
+    refusals : callable (run id, k) -> array (n,) of bool, or None
+        The candidates of the step's F the expert refuses (None: the step is not judged).
+    candidates : callable (run id, k) -> array (n, 3) [m]
+        The step's candidate set F.
+
+    Returns
+    -------
+    dict
+        ``with_expert``: per labeler ``{"steps", "marks", "refused", "share"}`` (steps with
+        their marks that the expert judged, their marks there, how many of those the expert
+        also refuses, and that share); ``between``: per pair ``"a | b"`` ``{"steps", "marks",
+        "shared", "share"}`` over the steps both marked: the marks either gave there, how
+        many of them the other also marked (the same candidate or one within
+        :data:`SAME_FOOTHOLD`), and that share.
+    """
+    by_step: dict[tuple[int, int], dict[str, list[int]]] = {}
+    for mark in marks:
+        by_step.setdefault((mark.run_id, mark.k), {}).setdefault(mark.labeler, []).append(
+            mark.candidate)
+    with_expert: dict[str, list[int]] = {}
+    between: dict[str, list[int]] = {}
+    for (run, k), given in sorted(by_step.items()):
+        refused = refusals(run, k)
+        if refused is not None:
+            for name, marked in given.items():
+                tally = with_expert.setdefault(name, [0, 0, 0])
+                tally[0] += 1
+                tally[1] += len(marked)
+                tally[2] += int(np.asarray(refused, dtype=bool)[marked].sum())
+        if len(given) < 2:
+            continue
+        xy = np.asarray(candidates(run, k), dtype=np.float64)[:, :2]
+        for (a, ma), (b, mb) in itertools.combinations(sorted(given.items()), 2):
+            tally = between.setdefault(f"{a} | {b}", [0, 0, 0])
+            tally[0] += 1
+            tally[1] += len(ma) + len(mb)
+            tally[2] += _also_marked(xy, ma, mb) + _also_marked(xy, mb, ma)
+    return {"with_expert": {n: _mark_shares(t, "refused") for n, t in sorted(with_expert.items())},
+            "between": {n: _mark_shares(t, "shared") for n, t in sorted(between.items())},
+            "same_foothold_m": SAME_FOOTHOLD}
+
+
+def _also_marked(xy: np.ndarray, mine: list[int], theirs: list[int]) -> int:
+    """How many of the candidates ``mine`` lie within :data:`SAME_FOOTHOLD` (horizontally, of
+    the candidates' x, y ``xy`` (n, 2) [m]) of one of ``theirs``."""
+    d = np.hypot(*(xy[mine][:, None, :] - xy[theirs][None, :, :]).transpose(2, 0, 1))
+    return int((d.min(axis=1) <= SAME_FOOTHOLD).sum())
+
+
+def _mark_shares(tally: list[int], agreeing: str) -> dict:
+    steps, marks, agree = tally
+    return {"steps": steps, "marks": marks, agreeing: agree,
+            "share": agree / marks if marks else None}
+
+
 def _shares(tally: list[int]) -> dict:
     steps, agree, exact = tally
     return {"steps": steps, "agree": agree, "share": agree / steps if steps else None,
@@ -105,4 +174,9 @@ def agreement_lines(figures: dict) -> list[str]:
              f"({share(t)})" for name, t in figures["with_expert"].items()]
     lines += [f"  {pair} agree on {t['agree']} of {t['steps']} steps ({share(t)})"
               for pair, t in figures["between"].items()]
+    marks = figures.get("marks") or {"with_expert": {}, "between": {}}
+    lines += [f"  {name}'s 'never here' marks: the synthetic expert also refuses {t['refused']} "
+              f"of {t['marks']} ({share(t)})" for name, t in marks["with_expert"].items()]
+    lines += [f"  {pair} mark the same candidates: {t['shared']} of {t['marks']} marks on "
+              f"{t['steps']} steps ({share(t)})" for pair, t in marks["between"].items()]
     return lines

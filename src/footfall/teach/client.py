@@ -104,6 +104,23 @@ class TeachClient:
         """Remove one's own label."""
         return _answer(self.http.delete(f"/api/labels/{label_id}", params={"labeler": labeler}))
 
+    def mark(self, run_id: int, k: int, labeler: str, candidate: int | None = None,
+             point: tuple[float, float] | None = None, request: str | None = None
+             ) -> dict[str, Any]:
+        """Mark a candidate (or the one nearest ``point``, x, y [m]) "never here" (a fresh
+        request id unless one is given: a retry should reuse it)."""
+        body = {"run": run_id, "step": k, "labeler": labeler,
+                "request": request or secrets.token_hex(12)}
+        if candidate is not None:
+            body["candidate"] = int(candidate)
+        if point is not None:
+            body["point"] = [float(point[0]), float(point[1])]
+        return _answer(self.http.post("/api/marks", json=body))
+
+    def unmark(self, mark_id: int, labeler: str) -> dict[str, Any]:
+        """Remove one's own "never here" mark."""
+        return _answer(self.http.delete(f"/api/marks/{mark_id}", params={"labeler": labeler}))
+
 
 def _answer(response: httpx.Response) -> Any:
     if response.is_success:

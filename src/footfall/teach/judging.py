@@ -1,6 +1,7 @@
 """The synthetic expert's judgement of a logged run, kept in the store: a run is judged once
 per store and expert (seconds the first time), then read back at once -- by every later start
-of the teaching server and by ``footfall demos info``."""
+of the teaching server and by ``footfall demos info``; and its refusals on the steps people
+marked "never here", to set their marks against."""
 
 from __future__ import annotations
 
@@ -15,8 +16,9 @@ from footfall.core.errors import FootfallError
 from footfall.data.runlog import RunRecord
 from footfall.data.store import DemoStore
 from footfall.expert.corrections import step_verdicts
+from footfall.expert.protocol import REFUSED_SHORTFALL, teacher_verdict
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
-from footfall.teach.agreement import agreement, expert_verdicts
+from footfall.teach.agreement import agreement, expert_verdicts, marks_agreement
 
 
 def default_expert() -> ExpertConfig:
@@ -61,3 +63,36 @@ def labels_agreement(store: DemoStore, expert: SyntheticExpert, margin: float) -
                 for run_id, run in runs.items()}
     return agreement(labels, lambda run, k: int(verdicts[run][k]),
                      lambda run, k: runs[run].steps[k].candidates) | {"margin": float(margin)}
+
+
+def store_agreement(store: DemoStore, expert: SyntheticExpert, margin: float,
+                    refusals: dict | None = None) -> dict:
+    """Every agreement figure of a store: its labels' (:func:`labels_agreement`) and, under
+    ``marks``, its "never here" marks' (:func:`marks_agreement_of`)."""
+    return labels_agreement(store, expert, margin) | {
+        "marks": marks_agreement_of(store, expert, refusals)}
+
+
+def marks_agreement_of(store: DemoStore, expert: SyntheticExpert,
+                       refusals: dict | None = None) -> dict:
+    """:func:`footfall.teach.agreement.marks_agreement` of a store's marks: ``expert`` judges
+    every marked step (:func:`footfall.expert.protocol.teacher_verdict`: the candidates it
+    refuses). ``refusals``, {(run id, k): (n,) bool}, keeps its verdicts between calls (the
+    same expert's: a server's)."""
+    marks = store.marks()
+    kept = {} if refusals is None else refusals
+    runs = {run_id: store.run(run_id) for run_id in sorted({m.run_id for m in marks})}
+    maps: dict = {}
+
+    def refused(run_id: int, k: int) -> np.ndarray:
+        if (run_id, k) not in kept:
+            run = runs[run_id]
+            if run.terrain_hash not in maps:
+                maps[run.terrain_hash] = store.terrain(run.terrain_hash)
+            step = run.steps[k]
+            kept[run_id, k] = teacher_verdict(expert, maps[run.terrain_hash], step.state,
+                                              step.candidates)[1]
+        return kept[run_id, k]
+
+    return marks_agreement(marks, refused, lambda run, k: runs[run].steps[k].candidates) | {
+        "refused_shortfall": REFUSED_SHORTFALL}

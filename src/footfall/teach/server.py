@@ -13,23 +13,32 @@ the API:
 ``GET  /api/session``                     the default labeler, the store
 ``GET  /api/runs``                        every run, a line each
 ``GET  /api/runs/{run}[?judge=false]``    a run's steps and the order worth a look
-``GET  /api/runs/{run}/steps/{k}``        a step: terrain, robot, F, rewards, labels
-                                          (``?judge=false``: without the expert's best)
+``GET  /api/runs/{run}/steps/{k}``        a step: terrain, robot, F, rewards, labels,
+                                          marks (``?judge=false``: without the expert's
+                                          best)
 ``GET  /api/terrains/{hash}``              a whole board, as a height-map file (.npz)
-``GET  /api/runs/{run}/steps/{k}/labels`` the step's labels now (the page polls them)
+``GET  /api/runs/{run}/steps/{k}/labels`` the step's labels and marks now: ``{labels,
+                                          marks}`` (the page polls them)
 ``POST /api/labels``                      a label: ``{run, step, verdict, candidate |
                                           point, labeler?, request?}`` (201; 200 for
                                           a repeated request or the same verdict again)
 ``DELETE /api/labels/{id}?labeler=NAME``  undo one's own label: ``{removed, restored}``
                                           (the label it had replaced comes back)
-``GET  /api/counts``                      labels by labeler, demonstrations by source
-``GET  /api/agreement``                   each labeler against the synthetic expert
-                                          and against each other
+``POST /api/marks``                       a "never here" mark: ``{run, step, candidate |
+                                          point, labeler?, request?}`` (201; 200 for a
+                                          repeated request or a candidate marked already;
+                                          409 on one's own label's candidate)
+``DELETE /api/marks/{id}?labeler=NAME``   remove one's own mark: ``{removed}``
+``GET  /api/counts``                      labels and marks by labeler, demonstrations by
+                                          source
+``GET  /api/agreement``                   each labeler's labels and marks against the
+                                          synthetic expert and against each other
 ========================================  =============================================
 
 Every bad request -- unknown run or step, a foothold not in F, malformed
-JSON, a missing or wrong token, a body over :data:`MAX_BODY` bytes -- is a
-4xx answer ``{"detail": "one line"}`` and changes nothing.
+JSON, a missing or wrong token, a body over :data:`MAX_BODY` bytes, a mark
+on one's own label -- is a 4xx answer ``{"detail": "one line"}`` and changes
+nothing.
 """
 
 from __future__ import annotations
@@ -53,6 +62,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from footfall.core.errors import FootfallError, NotFound, one_line
 from footfall.data.label_queries import LabelConflict
+from footfall.data.mark_queries import MarkConflict
 from footfall.teach.service import TeachService
 
 MAX_BODY = 16 * 1024  # [bytes] the largest request body accepted (a label is ~200 bytes)
@@ -78,24 +88,24 @@ class LabelRequest(BaseModel):
     request: StrictStr | None = None  # the client's id of this request (a retry is not doubled)
 
 
+class MarkRequest(BaseModel):
+    """A "never here" mark as the page (or a script) posts it."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    run: Annotated[StrictInt, Field(ge=0, le=MAX_ID)]  # the run's id
+    step: Annotated[StrictInt, Field(ge=0, le=MAX_ID)]  # the step number k
+    candidate: Annotated[StrictInt, Field(ge=0, le=MAX_ID)] | None = None  # index in the step's F
+    point: Annotated[list[StrictFloat | StrictInt], Field(min_length=2, max_length=2)] | None \
+        = None  # [m] x, y on the terrain: the nearest candidate of F (within SNAP_RADIUS)
+    labeler: StrictStr | None = None  # who marks (default: the server's --labeler)
+    request: StrictStr | None = None  # the client's id of this request (a retry is not doubled)
+
+
 def create_app(service: TeachService, token: str) -> Guard:
     """The ASGI application serving ``service`` to holders of ``token`` (behind :class:`Guard`)."""
     app = FastAPI(title="footfall teach", docs_url=None, redoc_url=None, openapi_url=None)
-
-    @app.exception_handler(StarletteHTTPException)
-    async def _http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
-        return _error(exc.status_code, str(exc.detail))
-
-    @app.exception_handler(RequestValidationError)
-    async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
-        line = _validation_line(exc)
-        return _error(400 if line.startswith("malformed") else 422, line)
-
-    @app.exception_handler(FootfallError)
-    async def _footfall(request: Request, exc: FootfallError) -> JSONResponse:
-        status = 404 if isinstance(exc, NotFound) else 409 if isinstance(exc, LabelConflict) \
-            else 422
-        return _error(status, str(exc))
+    _answer_errors(app)
 
     @app.get("/", include_in_schema=False)
     def page(token_query: Annotated[str | None, Query(alias="token")] = None) -> Response:
@@ -126,7 +136,7 @@ def create_app(service: TeachService, token: str) -> Guard:
         return service.step(run_id, k, judge)
 
     @app.get("/api/runs/{run_id}/steps/{k}/labels")
-    def step_labels(run_id: Id, k: Id) -> list[dict[str, Any]]:
+    def step_labels(run_id: Id, k: Id) -> dict[str, list[dict[str, Any]]]:
         return service.step_labels(run_id, k)
 
     @app.get("/api/agreement")
@@ -148,12 +158,42 @@ def create_app(service: TeachService, token: str) -> Guard:
     def undo(label_id: Id, labeler: str | None = None) -> dict[str, Any]:
         return service.undo(label_id, labeler)
 
+    @app.post("/api/marks")
+    def mark(body: MarkRequest) -> JSONResponse:
+        stored, new = service.mark(body.run, body.step, body.labeler, body.candidate, body.point,
+                                   body.request)
+        return JSONResponse(stored, status_code=201 if new else 200)
+
+    @app.delete("/api/marks/{mark_id}")
+    def unmark(mark_id: Id, labeler: str | None = None) -> dict[str, Any]:
+        return service.unmark(mark_id, labeler)
+
     @app.get("/api/counts")
     def counts() -> dict[str, Any]:
         return service.counts()
 
     app.mount("/static", StaticFiles(directory=str(STATIC)), name="static")
     return Guard(app, token)
+
+
+def _answer_errors(app: FastAPI) -> None:
+    """Every error as a 4xx answer ``{"detail": "one line"}``: HTTP's own, a request that does
+    not parse (400 malformed, else 422), and footfall's (404 not found, 409 a conflict, 422)."""
+
+    @app.exception_handler(StarletteHTTPException)
+    async def _http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
+        return _error(exc.status_code, str(exc.detail))
+
+    @app.exception_handler(RequestValidationError)
+    async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
+        line = _validation_line(exc)
+        return _error(400 if line.startswith("malformed") else 422, line)
+
+    @app.exception_handler(FootfallError)
+    async def _footfall(request: Request, exc: FootfallError) -> JSONResponse:
+        status = 404 if isinstance(exc, NotFound) else \
+            409 if isinstance(exc, (LabelConflict, MarkConflict)) else 422
+        return _error(status, str(exc))
 
 
 class Guard:

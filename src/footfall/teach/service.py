@@ -1,11 +1,12 @@
 """What the teaching server knows and does, without HTTP: a store's runs and steps as the page
-shows them, and the labels people give (paper §II-B).
+shows them, the labels people give (paper §II-B) and their "never here" marks.
 
 :class:`TeachService` opens the store once per server thread (SQLite
 connections stay in their thread), keeps the synthetic expert's verdict on a
 run once it has judged it, and turns the store's errors into the kinds the
 server answers with (:class:`footfall.core.errors.NotFound` -> 404,
-:class:`~footfall.data.label_queries.LabelConflict` -> 409, any other
+:class:`~footfall.data.label_queries.LabelConflict` and
+:class:`~footfall.data.mark_queries.MarkConflict` -> 409, any other
 :class:`FootfallError` -> 422).
 """
 
@@ -29,8 +30,9 @@ from footfall.data.runlog import RunRecord
 from footfall.data.store import DemoStore
 from footfall.expert.corrections import DEFAULT_MARGIN
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert
-from footfall.teach.judging import default_expert, expert_key, judged_run, labels_agreement
+from footfall.teach.judging import default_expert, expert_key, judged_run, store_agreement
 from footfall.teach.review import (
+    SNAP_RADIUS,
     nearest_candidate,
     review_order,
     robot_pose,
@@ -39,6 +41,7 @@ from footfall.teach.review import (
 )
 
 JUDGED_RUNS = 32  # runs whose expert verdicts the service keeps in memory (and all in the store)
+REFUSED_STEPS = 4096  # marked steps whose expert refusals the service keeps in memory
 
 
 class TeachService:
@@ -66,6 +69,7 @@ class TeachService:
         self._expert_key = expert_key(self._expert)
         self._expert_lock = threading.Lock()  # the expert keeps a cache: one judgement at a time
         self._judged: OrderedDict[int, tuple[np.ndarray, np.ndarray]] = OrderedDict()
+        self._refusals: dict[tuple[int, int], np.ndarray] = {}  # the expert's, per marked step
         self._local = threading.local()
         self._opened: list[DemoStore] = []
         self._opened_lock = threading.Lock()
@@ -146,8 +150,9 @@ class TeachService:
 
     def step(self, run_id: int, k: int, judge: bool = True) -> dict[str, Any]:
         """Everything the page draws of step ``k``: the terrain around it, the robot, F with the
-        robot's rewards, its choice, what followed, the expert's best and the labels given; and
-        the planner's state vector (``RobotState.to_vector``: feet, body position, roll pitch
+        robot's rewards, its choice, what followed, the expert's best, the labels and "never
+        here" marks given and the distance [m] a point snaps to a candidate within; and the
+        planner's state vector (``RobotState.to_vector``: feet, body position, roll pitch
         yaw, goal) and the board's hash, for a scripted labeler (``judge=False``: without the
         expert's verdict, which costs a fraction of a second a step)."""
         run = self._run(run_id)
@@ -168,6 +173,8 @@ class TeachService:
             "reason": run.result.get("reason"), "failure": failure(run.result),
             "expert_best": best, "shortfall": shortfall,
             "labels": [label.to_dict() for label in self.store().labels(run_id=run.id, k=k)],
+            "marks": [mark.to_dict() for mark in self.store().marks(run_id=run.id, k=k)],
+            "snap_m": SNAP_RADIUS,
         }, nonfinite="null")
 
     def terrain_file(self, terrain_hash: str) -> bytes:
@@ -215,21 +222,55 @@ class TeachService:
         return {"removed": removed.to_dict(),
                 "restored": None if restored is None else restored.to_dict()}
 
-    def step_labels(self, run_id: int, k: int) -> list[dict[str, Any]]:
-        """The labels of step ``k`` of a run now (the page polls them: others label too)."""
-        return [label.to_dict() for label in self.store().step_labels(run_id, k)]
+    def step_labels(self, run_id: int, k: int) -> dict[str, list[dict[str, Any]]]:
+        """The labels and marks of step ``k`` of a run now (the page polls them: others label
+        too): ``{"labels": [...], "marks": [...]}``."""
+        store = self.store()
+        labels = store.step_labels(run_id, k)  # NotFound for an unknown run or step
+        return {"labels": [label.to_dict() for label in labels],
+                "marks": [mark.to_dict() for mark in store.marks(run_id=run_id, k=k)]}
+
+    # -------------------------------------------------------------------- marks
+    def mark(self, run_id: int, k: int, labeler: str | None, candidate: int | None = None,
+             point: list[float] | None = None, request: str | None = None
+             ) -> tuple[dict[str, Any], bool]:
+        """Mark a candidate of step ``k``'s F "never here"; a ``point`` (x, y [m]) marks the
+        nearest candidate within the labels' snapping distance. Returns the mark and whether it
+        was new (False: a repeated request, or a candidate already marked)."""
+        name = labeler if labeler is not None else self.labeler
+        if name is None:
+            raise FootfallError("who is marking? give a labeler name")
+        if candidate is None:
+            if point is None:
+                raise FootfallError("a mark needs a candidate index or a point")
+            step = self._step(self._run(run_id), k)
+            candidate = nearest_candidate(step.candidates, np.asarray(point))
+            if candidate is None:
+                raise FootfallError("no candidate of F lies near that point")
+        mark, new = self.store().add_mark(run_id, k, name, candidate, request)
+        return mark.to_dict(), new
+
+    def unmark(self, mark_id: int, labeler: str | None) -> dict[str, Any]:
+        """Remove one of ``labeler``'s marks: ``{"removed": mark}``."""
+        name = labeler if labeler is not None else self.labeler
+        if name is None:
+            raise FootfallError("whose mark? give a labeler name")
+        return {"removed": self.store().remove_mark(mark_id, name).to_dict()}
 
     def agreement(self, margin: float = DEFAULT_MARGIN) -> dict[str, Any]:
-        """How often each labeler agrees with the synthetic expert and with each other labeler
-        (:func:`footfall.teach.judging.labels_agreement`)."""
+        """How often each labeler agrees with the synthetic expert and with each other labeler,
+        in labels and in marks (:func:`footfall.teach.judging.store_agreement`)."""
         with self._expert_lock:
-            return labels_agreement(self.store(), self._expert, margin)
+            if len(self._refusals) > REFUSED_STEPS:
+                self._refusals.clear()
+            return store_agreement(self.store(), self._expert, margin, self._refusals)
 
     def counts(self) -> dict[str, Any]:
-        """Labels by labeler, disagreements, and demonstrations by source."""
-        summary = self.store().summary()
-        return {"labels": summary["labels"], "by_source": summary["by_source"],
-                "runs": summary["runs"]}
+        """Labels by labeler, disagreements, marks by labeler, and demonstrations by source."""
+        store = self.store()
+        summary = store.summary()
+        return {"labels": summary["labels"], "marks": store.mark_counts(),
+                "by_source": summary["by_source"], "runs": summary["runs"]}
 
     # ------------------------------------------------------------------ helpers
     def _run(self, run_id: int) -> RunRecord:

@@ -1,12 +1,13 @@
 """The fuzz target of files that look valid but lie: well-formed containers of wrong meaning.
 
 A board whose module records lie off its map, whose resolution disagrees with its records, or
-that was moved far from its frame's origin; a store whose labels, sources or step counts name
-what is not there; a model that cannot tell candidates apart, whose templates are not the
-patches of the terrains it claims, or that names its terrains by no hash at all (one that
-names terrains not in the store is ranked, and not said to be trained on them); a command whose output is one of its inputs. Each lie must
-be refused in one line -- or, where it is honest after all (no shift, the same resolution), be
-accepted -- and a refused command must leave its input as it was.
+that was moved far from its frame's origin; a store whose labels, "never here" marks, sources or
+step counts name what is not there; a model that cannot tell candidates apart, whose templates
+are not the patches of the terrains it claims, or that names its terrains by no hash at all (one
+that names terrains not in the store is ranked, and not said to be trained on them); a command
+whose output is one of its inputs. Each lie must be refused in one line -- or, where it is
+honest after all (no shift, the same resolution), be accepted -- and a refused command must
+leave its input as it was.
 """
 
 from __future__ import annotations
@@ -38,7 +39,7 @@ lying_cases = st.one_of(
     st.tuples(st.just("records"), st.sampled_from(_SHIFTS)),
     st.tuples(st.just("resolution"), st.sampled_from((1.0, 0.5, 2.0, 1.001))),
     st.tuples(st.just("moved"), st.sampled_from(_SHIFTS + (-2e3, 999.0))),
-    st.tuples(st.just("store"), st.sampled_from(("chosen", "source", "n_steps"))),
+    st.tuples(st.just("store"), st.sampled_from(("chosen", "mark", "source", "n_steps"))),
     st.tuples(st.just("model"), st.sampled_from(("zero", "edited", "nowhere", "malformed"))),
     st.tuples(st.just("output"), st.sampled_from(("same", "hardlink", "symlink"))),
 )
@@ -68,15 +69,20 @@ def _board(bases: Bases, path: Path, kind: str, amount: float) -> bool:
 
 
 def _store(bases: Bases, path: Path, kind: str) -> None:
-    """A copy of the base store with a reference to nothing (its run's first step labelled
-    with a candidate it does not have, a demonstration from a run it does not hold, a run
-    whose step count is not its steps')."""
+    """A copy of the base store with a reference to nothing (its run's first step labelled,
+    or marked "never here", on a candidate it does not have, a demonstration from a run it
+    does not hold, a run whose step count is not its steps')."""
     shutil.copyfile(bases.store, path)
+    with DemoStore(path):  # a base store of an older footfall gains the newer tables
+        pass
     con = sqlite3.connect(path, isolation_level=None)
     try:
         if kind == "chosen":  # a person's "fine" beyond the step's candidates
             con.execute("INSERT INTO labels (run_id, k, labeler, verdict, chosen, created) "
                         "SELECT run_id, k, 'fuzz', 'fine', 99999, 0 FROM run_steps LIMIT 1")
+        elif kind == "mark":  # a person's "never here" beyond the step's candidates
+            con.execute("INSERT INTO marks (run_id, k, labeler, candidate, created) "
+                        "SELECT run_id, k, 'fuzz', 99999, 0 FROM run_steps LIMIT 1")
         elif kind == "source":
             con.execute("UPDATE demonstrations SET source = 'run:999:step:3' WHERE id = "
                         "(SELECT min(id) FROM demonstrations)")

@@ -11,7 +11,6 @@ is timed too (the tests check it against LightGBM's own predictions).
 
 from __future__ import annotations
 
-import os
 import time
 
 import numpy as np
@@ -68,7 +67,6 @@ def bench_rankers(n_demos: int = 100, library_size: int = 1000, repeats: int = 3
             "templates_kept": model.templates_kept()["front"]["kept"],
             "trees": f.info.get("trees")}
         if name == "lambdarank":
-            out["lambdarank_one_core"] = _one_core_learning(training, library_size, seed, model)
             # the forest alone, on the valid candidates' features
             c = Candidates.of_state(board, state, footholds, model.config)
             X = np.hstack([fam.compute(c) for fam in f.families])[c.patches.valid]
@@ -81,27 +79,6 @@ def bench_rankers(n_demos: int = 100, library_size: int = 1000, repeats: int = 3
     return out
 
 
-def _one_core_learning(training: list, library_size: int, seed: int, model) -> dict | None:
-    """The boosted ranker learned again with this process held to one core (its folds then
-    trained one after another): seconds, and whether its trees are the same. None where the
-    process's cores cannot be set or it has only one."""
-    if not hasattr(os, "sched_getaffinity") or len(os.sched_getaffinity(0)) < 2:
-        return None
-    cores = os.sched_getaffinity(0)
-    os.sched_setaffinity(0, {min(cores)})
-    try:
-        t0 = time.perf_counter()
-        alone = learn_model(training, "both", "lambdarank", library_size=library_size,
-                            bandwidth_rms=(0.004,) * 3, seed=seed)
-        seconds = time.perf_counter() - t0
-    finally:
-        os.sched_setaffinity(0, cores)
-    same = all(np.array_equal(a, b) for group in ("front", "hind") for a, b in zip(
-        model.functions[group].forest.arrays().values(),
-        alone.functions[group].forest.arrays().values()))
-    return {"learn_seconds": seconds, "cores": 1, "same_trees": bool(same)}
-
-
 def format_rankers(r: dict) -> str:
     """Human-readable summary of :func:`bench_rankers`."""
     lines = [f"rankers: {r['demonstrations']} demonstrations, library {r['library_size']}, "
@@ -111,12 +88,5 @@ def format_rankers(r: dict) -> str:
                      f"{v['score_seconds']:6.2f} s ({v['score_vs_linear']:.2f} x linear), "
                      f"templates kept {v['templates_kept']}"
                      + (f", {v['trees']} trees" if v["trees"] else ""))
-    one = r.get("lambdarank_one_core")
-    if one:
-        ours = r["learners"]["lambdarank"]["learn_seconds"]
-        lines.append(f"  lambdarank on one core (folds one after another): learn "
-                     f"{one['learn_seconds']:.1f} s -> folds at once x"
-                     f"{one['learn_seconds'] / ours:.2f}; same trees: "
-                     f"{'yes' if one['same_trees'] else 'NO'}")
     lines.append(f"  forest alone on {r['forest_rows']} rows: {r['forest_seconds']:.3f} s")
     return "\n".join(lines)

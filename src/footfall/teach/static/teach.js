@@ -1,9 +1,13 @@
-// footfall teach: label the foothold the robot should have chosen (paper §II-B, Fig. 3a).
-// World frame: x forward, y left, z up, metres. The server snaps a click to the nearest
-// candidate of F; every label is stored at once. A run opens at its first step straight away
-// (the synthetic expert judges its steps in the background); steps are fetched ahead.
+// footfall teach: label the foothold the robot should have chosen (paper §II-B, Fig. 3a), and
+// mark the candidates it must never take (X). World frame: x forward, y left, z up, metres. The
+// server snaps a click to the nearest candidate of F; every label and mark is stored at once.
+// A run opens at its first step straight away (the synthetic expert judges its steps in the
+// background); steps are fetched ahead.
 import { ServerDown, api, onBusy, onLink, requestId } from "./api.js";
+import { agreementText, countsText } from "./figures.js";
 import { TOP_SIZE, stepMarks } from "./marks.js";
+import { Pointer } from "./pointer.js";
+import { fillRuns } from "./runslist.js";
 import { TopView } from "./topview.js";
 import { createView3D } from "./view3d.js";
 
@@ -12,10 +16,9 @@ const POLL = 2000;        // [ms] between looks for others' labels of the shown 
 const REFRESH = 3;        // polls between refreshes of the counts, runs and agreement
 const NARROW = 1100;      // [CSS px] below this the runs list folds away once a run is open
 const HISTORY = 12;       // my last labels listed
-const WIDE = [1, 2, 3, 7]; // the runs list's columns left out beside an open run (key, board,
-                           // reward, labels: in each row's tooltip)
 const state = { runs: [], run: null, order: [], pos: 0, shownPos: -1, step: null, nav: 0,
-                runSeq: 0, cache: new Map(), judging: false, history: [], timings: [] };
+                runSeq: 0, cache: new Map(), judging: false, history: [], timings: [],
+                actions: new Map() };  // "run:k" -> my actions on that step, newest last (U)
 
 // ------------------------------------------------------------------ status
 function say(text, error = false) {
@@ -55,44 +58,9 @@ function timed(what, start, then = null) {  // [ms] from start to the next paint
 }
 
 // ------------------------------------------------------------------ runs list
-// The runs list; a refresh updates the rows in place (a row replaced under the pointer between
-// a press and its release would swallow the click), adding rows for new runs.
 async function loadRuns(quiet = false) {
   state.runs = await api("/api/runs", { quiet });
-  const body = $("runs").querySelector("tbody");
-  const rows = new Map([...body.children].map((tr) => [Number(tr.dataset.run), tr]));
-  const name = me();
-  for (const r of state.runs) {
-    let tr = rows.get(r.id);
-    if (!tr) {
-      tr = document.createElement("tr");
-      tr.dataset.run = r.id;
-      for (let i = 0; i < 9; i++) {
-        const td = document.createElement("td");
-        if (i >= 1 && i <= 4) td.className = "text";
-        if (WIDE.includes(i)) td.classList.add("wide");
-        tr.append(td);
-      }
-      tr.addEventListener("click", () => openRun(r.id));
-      body.append(tr);
-    }
-    rows.delete(r.id);
-    const mine = (r.labelled_by || {})[name] || 0;
-    const cells = [r.id, r.key ?? "", r.board, r.chooser, r.success ? "crossed" : r.failure,
-      r.slip_mean_mm == null ? "-" : r.slip_mean_mm.toFixed(1), r.steps, r.labels,
-      name ? `${mine} / ${r.steps}` : "-"];
-    tr.title = `${r.key ?? ""} · ${r.board} · ${r.chooser}`;
-    cells.forEach((c, i) => {
-      const td = tr.children[i];
-      if (td.textContent !== String(c)) td.textContent = c;
-      if (i === 4) {
-        td.classList.toggle("fail", !r.success);
-        td.title = !r.success && r.reason && r.reason !== r.failure ?
-          `the run ended: ${r.reason}` : "";
-      }
-    });
-  }
-  for (const gone of rows.values()) gone.remove();  // (a store's runs are never removed)
+  fillRuns($("runs").querySelector("tbody"), state.runs, me(), openRun);
   if (state.run) markRun(state.run.id);
 }
 
@@ -102,23 +70,11 @@ function markRun(id) {
 }
 
 async function refreshCounts(quiet = false) {
-  const c = await api("/api/counts", { quiet });
-  const names = Object.entries(c.labels.by_labeler)
-    .map(([n, v]) => `${n}: ${v.foothold} foothold${v.foothold === 1 ? "" : "s"}, ` +
-      `${v.fine} fine`).join("; ");
-  $("counts").textContent = `labels: ${names || "none yet"}` +
-    (c.labels.disagreements ? `; labelers disagree on ${c.labels.disagreements} ` +
-      `step${c.labels.disagreements === 1 ? "" : "s"}` : "");
+  $("counts").textContent = countsText(await api("/api/counts", { quiet }));
 }
 
 async function refreshAgreement(quiet = true) {
-  const a = await api("/api/agreement", { quiet });
-  const pct = (t) => t.share === null ? "-" : `${Math.round(100 * t.share)} %`;
-  const lines = Object.entries(a.with_expert).map(([n, t]) =>
-    `${n} agrees with the synthetic expert on ${t.agree} of ${t.steps} steps (${pct(t)})`);
-  for (const [pair, t] of Object.entries(a.between))
-    lines.push(`${pair} agree on ${t.agree} of ${t.steps} steps (${pct(t)})`);
-  $("agreement").textContent = lines.length ? lines.join("\n") : "no labels yet";
+  $("agreement").textContent = agreementText(await api("/api/agreement", { quiet }));
 }
 
 function setRunsOpen(open) {
@@ -251,12 +207,15 @@ function drawStep(newStep) {
   }
 }
 
-function drawLabels() {  // the labels text, the undo button, my progress in this run
-  const s = state.step, name = me();
-  $("labels").textContent = s.labels.length ? "labels: " + s.labels.map((l) =>
+function drawLabels() {  // the labels and marks text, the undo button, my progress in this run
+  const s = state.step, name = me(), never = new Map();
+  for (const m of s.marks) never.set(m.labeler, [...(never.get(m.labeler) || []), m.candidate]);
+  $("labels").textContent = (s.labels.length ? "labels: " + s.labels.map((l) =>
     `${l.labeler}: ${l.verdict === "fine" ? "fine" : "candidate " + l.chosen}`).join("; ") :
-    "no labels yet";
-  $("undo").disabled = !s.labels.some((l) => l.labeler === name);
+    "no labels yet") + (never.size ? " · never here: " + [...never].map(([n, c]) =>
+    `${n}: ${c.join(", ")}`).join("; ") : "");
+  $("undo").disabled = !s.labels.some((l) => l.labeler === name) &&
+    !s.marks.some((m) => m.labeler === name) && !actionsOf(s).length;
   const done = state.run.steps.filter((x) => (x.labelers || []).includes(name)).length;
   $("queue").textContent = name ? `${done} of ${state.run.steps.length} steps labelled by ${name}`
     : "give your name to label";
@@ -293,6 +252,7 @@ async function label(body) {
                                   : `saved: candidate ${stored.chosen}`);
     timed("label", start);
     remember(step, stored);
+    actionsOf(step).push({ kind: "label" });
     refreshSoon();
   } catch (e) { fail(e); }
 }
@@ -312,9 +272,9 @@ async function undo() {
   } catch (e) { fail(e); }
 }
 
-function remember(step, label, undone = false) {  // my history of labels, newest first
-  state.history.unshift({ run: step.run, k: step.k, what: undone ?
-    (label ? `undone, back to ${describe(label)}` : "undone") : describe(label) });
+function remember(step, label, undone = false, what = null) {  // my history, newest first
+  state.history.unshift({ run: step.run, k: step.k, what: what ?? (undone ?
+    (label ? `undone, back to ${describe(label)}` : "undone") : describe(label)) });
   state.history.length = Math.min(state.history.length, HISTORY);
   const list = $("history");
   list.replaceChildren(...state.history.map((h) => {
@@ -351,6 +311,84 @@ function refreshSoon() {  // counts, runs and agreement, once the labeller pause
   }, 400);
 }
 
+// ------------------------------------------------------------- "never here" marks
+function actionsOf(step) {  // my actions on a step this page took, newest last
+  const key = `${step.run}:${step.k}`;
+  if (!state.actions.has(key)) state.actions.set(key, []);
+  return state.actions.get(key);
+}
+
+function myMark(step, candidate) {
+  return step.marks.find((m) => m.labeler === me() && m.candidate === candidate);
+}
+
+function redrawMarks(step) {
+  if (state.step !== step) return;
+  drawLabels(); top.setMarks(marksNow()); view3d.setMarks(marksNow());
+}
+
+// X: the candidate under the pointer marked "never here", or my mark on it removed.
+function markHere() {
+  const name = askName();
+  if (!name) { say("a mark needs your name", true); return; }
+  const i = pointer.candidate(state.step);
+  if (i === null) { say("no candidate near the pointer: point at one and press X", true); return; }
+  return myMark(state.step, i) ? unmark(state.step, i) : mark(state.step, i);
+}
+
+async function mark(step, candidate, undoing = false) {
+  try {
+    const stored = await api("/api/marks", { method: "POST", body: JSON.stringify(
+      { run: step.run, step: step.k, candidate, labeler: me(), request: requestId() }) });
+    step.marks = [...step.marks.filter((m) => m.id !== stored.id), stored];
+    if (!undoing) actionsOf(step).push({ kind: "mark", candidate });
+    redrawMarks(step);
+    const what = undoing ? `mark back: never candidate ${candidate}` :
+      `never here: candidate ${candidate}`;
+    say(what);
+    remember(step, null, false, what);
+    refreshSoon();
+  } catch (e) { fail(e); }
+}
+
+async function unmark(step, candidate, undoing = false) {
+  const mine = myMark(step, candidate);
+  if (!mine) return;
+  try {
+    await api(`/api/marks/${mine.id}?labeler=${encodeURIComponent(me())}`, { method: "DELETE" });
+    step.marks = step.marks.filter((m) => m.id !== mine.id);
+    if (!undoing) actionsOf(step).push({ kind: "unmark", candidate });
+    redrawMarks(step);
+    const what = `${undoing ? "mark undone" : "mark removed"}: candidate ${candidate}`;
+    say(what);
+    remember(step, null, false, what);
+    refreshSoon();
+  } catch (e) { fail(e); }
+}
+
+// U: my last action on the step undone -- a label (my earlier one comes back), a mark (removed)
+// or a mark's removal (marked again). The page's own record of them first; without one (a
+// reload, another page), the newer of my label and my newest mark.
+function undoLast() {
+  const step = state.step, name = me();
+  if (!step) return;
+  const done = actionsOf(step);
+  while (done.length) {
+    const last = done.pop();
+    if (last.kind === "label" && step.labels.some((l) => l.labeler === name)) return undo();
+    if (last.kind === "mark" && myMark(step, last.candidate))
+      return unmark(step, last.candidate, true);
+    if (last.kind === "unmark" && !myMark(step, last.candidate))
+      return mark(step, last.candidate, true);
+  }
+  const label = step.labels.find((l) => l.labeler === name);
+  const marks = step.marks.filter((m) => m.labeler === name);
+  const newest = marks.reduce((a, m) => (!a || m.created >= a.created ? m : a), null);
+  if (newest && (!label || newest.created > label.created))
+    return unmark(step, newest.candidate, true);
+  if (label) return undo();
+}
+
 // ------------------------------------------------------------------ live updates
 let ticks = 0;
 async function poll() {
@@ -359,11 +397,13 @@ async function poll() {
   try {
     const step = state.step;
     if (step) {
-      const labels = await api(`/api/runs/${step.run}/steps/${step.k}/labels`, { quiet: true });
-      if (state.step === step && JSON.stringify(labels) !== JSON.stringify(step.labels)) {
-        step.labels = labels;
+      const now = await api(`/api/runs/${step.run}/steps/${step.k}/labels`, { quiet: true });
+      if (state.step === step && JSON.stringify(now) !==
+          JSON.stringify({ labels: step.labels, marks: step.marks })) {
+        step.labels = now.labels;
+        step.marks = now.marks;
         const info = runStep(step.k);
-        if (info) info.labelers = labels.map((l) => l.labeler);
+        if (info) info.labelers = now.labels.map((l) => l.labeler);
         drawLabels();
         top.setMarks(marksNow());
         view3d.setMarks(marksNow());
@@ -379,6 +419,7 @@ async function poll() {
 // ------------------------------------------------------------------ the views
 const top = new TopView($("top"), (x, y) => label({ verdict: "foothold", point: [x, y] }));
 const view3d = createView3D($("view3d"), (what) => label({ verdict: "foothold", ...what }));
+const pointer = new Pointer($("top"), $("view3d"), top, view3d);
 
 function resetViews() { top.reset(); view3d.reset(); }
 
@@ -395,7 +436,7 @@ $("next").addEventListener("click", () => showStep(state.pos + 1));
 $("skip").addEventListener("click", () => showStep(state.pos + 1));
 $("unlabelled").addEventListener("click", nextUnlabelled);
 $("fine").addEventListener("click", () => label({ verdict: "fine" }));
-$("undo").addEventListener("click", undo);
+$("undo").addEventListener("click", undoLast);
 $("reset-view").addEventListener("click", resetViews);
 $("runs-toggle").addEventListener("click", () =>
   setRunsOpen(document.body.classList.contains("runs-closed")));
@@ -413,7 +454,8 @@ document.addEventListener("keydown", (e) => {
   if (e.key === "?") { e.preventDefault(); $("help").open ? $("help").close() : $("help").showModal(); return; }
   if (!state.step || $("help").open) return;
   const keys = { ArrowLeft: () => showStep(state.pos - 1), ArrowRight: () => showStep(state.pos + 1),
-    f: () => label({ verdict: "fine" }), s: () => showStep(state.pos + 1), u: undo,
+    f: () => label({ verdict: "fine" }), s: () => showStep(state.pos + 1), u: undoLast,
+    x: markHere, X: markHere,
     n: nextUnlabelled, r: resetViews, "+": () => top.zoomAbout(1.25, top.view.cx, top.view.cy),
     "-": () => top.zoomAbout(0.8, top.view.cx, top.view.cy) };
   if (keys[e.key]) { e.preventDefault(); keys[e.key](); }

@@ -1,7 +1,7 @@
 // footfall teach: the top view of a step. World frame x forward (right on screen), y left (up
 // on screen), metres. The terrain is painted once per step into an image (one pixel a
 // sample); zoom (wheel, + and -) and pan (drag) only redraw that image and the marks.
-import { COLOURS, TOP_SIZE, rewardColours } from "./marks.js";
+import { COLOURS, NEVER_INNER, TOP_SIZE, rewardColours } from "./marks.js";
 
 const MARGIN = 0.02;   // [m] shown around the candidate set at zoom 1
 const MAX_ZOOM = 12;
@@ -141,6 +141,7 @@ export class TopView {
     const p = this.step.candidates[m.index], q = this.cssOf(p[0], p[1]), r = TOP_SIZE[m.kind];
     g.lineWidth = 2.5;
     g.strokeStyle = COLOURS[m.kind];
+    if (m.kind === "never_mine" || m.kind === "never_other") { this.cross(g, q, m, r); return; }
     if (m.kind === "expert") {  // a filled diamond, innermost
       g.beginPath();
       g.moveTo(q.x, q.y - r); g.lineTo(q.x + r, q.y); g.lineTo(q.x, q.y + r); g.lineTo(q.x - r, q.y);
@@ -152,6 +153,26 @@ export class TopView {
     if (m.kind === "other" && m.count > 1) {
       g.fillStyle = COLOURS.other; g.font = "bold 11px system-ui, sans-serif";
       g.fillText(String(m.count), q.x + r + 2, q.y - r);
+    }
+  }
+
+  cross(g, q, m, r) {  // "never here": four arms outside every other mark, mine x, others' +
+    const turn = m.kind === "never_mine" ? Math.PI / 4 : 0, width = m.kind === "never_mine" ? 3 : 2.5;
+    g.beginPath();
+    for (let a = 0; a < 4; a++) {
+      const c = Math.cos(turn + a * Math.PI / 2), s = Math.sin(turn + a * Math.PI / 2);
+      g.moveTo(q.x + NEVER_INNER * c, q.y + NEVER_INNER * s);
+      g.lineTo(q.x + r * c, q.y + r * s);
+    }
+    g.lineCap = "round";
+    g.strokeStyle = "#ffffff"; g.lineWidth = width + 2.5; g.stroke();  // a halo: seen on any ground
+    g.strokeStyle = COLOURS[m.kind]; g.lineWidth = width; g.stroke();
+    g.lineCap = "butt";
+    if (m.kind === "never_other" && m.count > 1) {
+      const x = q.x - r - 6, y = q.y - r + 6;
+      g.font = "bold 11px system-ui, sans-serif"; g.lineWidth = 3; g.strokeStyle = "#ffffff";
+      g.strokeText(String(m.count), x, y);
+      g.fillStyle = COLOURS.never_other; g.fillText(String(m.count), x, y);
     }
   }
 }

@@ -1,6 +1,7 @@
 // footfall teach: the 3D view of a step (three.js). World frame x forward, y left, z up,
 // metres. The terrain and the robot are built once per step; the marks are pins over their
-// candidates, stacked one above the other so that none hides another. Drag orbits, the wheel
+// candidates ("never here" marks are crosses), stacked one above the other so that none hides
+// another. Drag orbits, the wheel
 // zooms; the camera stays above the ground, and reset() frames the step again.
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/OrbitControls.js";
@@ -19,7 +20,7 @@ export function createView3D(box, onLabel) {
   } catch (e) {
     box.textContent = "The 3D view needs WebGL, which this browser lacks; the top view works.";
     return { ok: false, setStep() {}, setMarks() {}, reset() {}, screenOf() { return null; },
-             camera() { return null; }, ground() { return null; } };
+             camera() { return null; }, ground() { return null; }, pick() { return null; } };
   }
   renderer.setPixelRatio(window.devicePixelRatio);
   box.append(renderer.domElement);
@@ -155,6 +156,19 @@ export function createView3D(box, onLabel) {
     return g;
   }
 
+  function cross(p, kind, lift) {  // "never here": two flat bars crossed over the candidate
+    const group = new THREE.Group(), mine = kind === "never_mine";
+    const size = mine ? 0.016 : 0.014, bar = mine ? 0.003 : 0.0024;
+    for (const angle of mine ? [Math.PI / 4, -Math.PI / 4] : [0, Math.PI / 2]) {
+      const m = new THREE.Mesh(new THREE.BoxGeometry(size, bar, bar),
+                               new THREE.MeshLambertMaterial({ color: COLOURS[kind] }));
+      m.rotation.z = angle;
+      group.add(m);
+    }
+    group.position.set(p[0], p[1], p[2] + 2 * CANDIDATE + lift);
+    return group;
+  }
+
   function candidateMesh(s) {  // F as one instanced mesh: one draw call for every candidate
     const colours = rewardColours(s.rewards);
     const mesh = new THREE.InstancedMesh(new THREE.SphereGeometry(CANDIDATE, 10, 8),
@@ -200,9 +214,10 @@ export function createView3D(box, onLabel) {
       const p = step.candidates[m.index];
       const level = levels.get(m.index) || 0;
       for (let n = 0; n < m.count; n++) {
-        const lift = PIN_GAP * (level + n);
-        const pin = sphere(p, m.kind === "mine" ? 0.0045 : 0.0038, COLOURS[m.kind], lift);
-        pin.userData.index = m.index;
+        const lift = PIN_GAP * (level + n), never = m.kind.startsWith("never");
+        const pin = never ? cross(p, m.kind, lift) :
+          sphere(p, m.kind === "mine" ? 0.0045 : 0.0038, COLOURS[m.kind], lift);
+        pin.traverse((o) => { o.userData.index = m.index; });
         marks.add(pin);
       }
       levels.set(m.index, level + m.count);
@@ -219,22 +234,29 @@ export function createView3D(box, onLabel) {
     render();
   }
 
+  // What is under the client point (x, y) [CSS px]: {candidate} (a candidate or a mark on one),
+  // {point} (x, y [m] on the terrain), or null (the sky, or no step yet).
   const ray = new THREE.Raycaster(), ndc = new THREE.Vector2();
+  function pick(x, y) {
+    if (!terrain) return null;
+    const rect = renderer.domElement.getBoundingClientRect();
+    ndc.set(((x - rect.left) / rect.width) * 2 - 1, -((y - rect.top) / rect.height) * 2 + 1);
+    ray.setFromCamera(ndc, camera);
+    const hit = ray.intersectObjects([candidates, ...(marks ? marks.children : []), terrain],
+                                     true)[0];
+    if (!hit) return null;
+    if (hit.object === candidates) return { candidate: hit.instanceId };
+    if (hit.object.userData.index !== undefined) return { candidate: hit.object.userData.index };
+    return { point: [hit.point.x, hit.point.y] };
+  }
+
   let down = null;
   renderer.domElement.addEventListener("pointerdown", (e) => { down = [e.clientX, e.clientY]; });
   renderer.domElement.addEventListener("pointerup", (e) => {
     if (!down || Math.hypot(e.clientX - down[0], e.clientY - down[1]) > DRAG || !terrain) return;
     down = null;
-    const rect = renderer.domElement.getBoundingClientRect();
-    ndc.set(((e.clientX - rect.left) / rect.width) * 2 - 1,
-            -((e.clientY - rect.top) / rect.height) * 2 + 1);
-    ray.setFromCamera(ndc, camera);
-    const hit = ray.intersectObjects([candidates, ...(marks ? marks.children : []), terrain],
-                                     false)[0];
-    if (!hit) return;
-    if (hit.object === candidates) onLabel({ candidate: hit.instanceId });
-    else if (hit.object.userData.index !== undefined) onLabel({ candidate: hit.object.userData.index });
-    else onLabel({ point: [hit.point.x, hit.point.y] });
+    const what = pick(e.clientX, e.clientY);
+    if (what) onLabel(what);
   });
 
   function screenOf(i) {  // CSS pixels of candidate i within the view (for tests)
@@ -248,5 +270,5 @@ export function createView3D(box, onLabel) {
   }
 
   return { ok: true, setStep, setMarks, reset, screenOf, camera: cameraNow, ground: groundAt,
-           home: () => home };
+           home: () => home, pick };
 }

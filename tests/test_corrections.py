@@ -101,7 +101,8 @@ class VetoExpert(TableExpert):
     """The table expert with a veto: it refuses every candidate below x = 0.315 m."""
 
     def verdict(self, hmap, state, candidates):
-        return self.values(hmap, state, candidates), np.asarray(candidates)[:, 0] < 0.315
+        values = self.values(hmap, state, candidates)
+        return values, np.asarray(candidates)[:, 0] < 0.315, values - 100.0  # judged: its own
 
 
 def test_every_step_is_labelled_for_dagger_with_the_teachers_verdict():
@@ -116,6 +117,7 @@ def test_every_step_is_labelled_for_dagger_with_the_teachers_verdict():
     assert len(demos) == 5 and all(d.chosen == 4 for d in demos)  # where it chose as the teacher
     np.testing.assert_allclose(demos[1].values, [30, 31, 32, 33, 34])
     assert demos[1].refused.tolist() == [True, True, False, False, False]
+    np.testing.assert_allclose(demos[1].judged, [-70, -69, -68, -67, -66])
     # without a veto of its own, a teacher refuses what it values more than 10 below its best
     plain = inspect_run(run, hm, TableExpert(), margin=1.5, every_step=True)
     assert not any(v.refused.any() for v in plain)

@@ -139,3 +139,59 @@ def test_a_model_with_a_veto_scores_refused_candidates_down_and_round_trips(tmp_
     assert d.refused[down].mean() > 0.5
     with pytest.raises(FootfallError, match="cannot carry a learned veto"):
         learn_model(demos, "terrain", "l1", cv=3, veto=True)
+
+
+def test_a_relative_veto_refuses_what_lies_far_below_the_best_of_its_own_set(tmp_path):
+    from footfall.features.family import Candidates
+    from footfall.learning.function import VETO_PENALTY
+    from footfall.learning.model import FootholdModel
+
+    demos = []
+    for d in lowest_foothold_demos():  # the teacher's judge: minus the height [mm]; it refuses
+        judged = -1000.0 * d.candidates[:, 2]  # what lies more than 10 mm above the lowest
+        demos.append(TrainingDemo(d.hmap, d.state, d.candidates, d.chosen, values=judged,
+                                  refused=judged.max() - judged > 10.0, judged=judged))
+    model = learn_model(demos, "terrain+pose", "lambdarank", cv=3, training_candidates=40,
+                        seed=7, supervision="graded", veto=True)
+    f = model.functions["front"]
+    # the margin is the largest shortfall the teacher accepted among the training rows
+    assert f.veto_margin is not None and 0.0 < f.veto_margin <= 10.0
+    model.save(tmp_path / "relative.npz")
+    back = FootholdModel.load(tmp_path / "relative.npz")
+    assert back.functions["front"].veto_margin == f.veto_margin
+    d = demos[1]
+    scorer = back.reward_for(d.state.swing_leg)
+    function = scorer.function
+    c = Candidates.of_state(d.hmap, d.state, d.candidates, model.config)
+    judged = function.veto.predict(np.hstack([c.columns(fam) for fam in function.families]))
+    refused = scorer.values(c) < scorer.spread_basis.values(c) - VETO_PENALTY / 2
+    np.testing.assert_array_equal(refused, judged.max() - judged > function.veto_margin)
+    assert refused.any()
+    # relative to its own set: the candidates it refused, scored without the others, keep
+    # their best standing
+    alone = scorer.values(Candidates.of_state(d.hmap, d.state, d.candidates[refused],
+                                              model.config))
+    assert alone.max() > -VETO_PENALTY / 2
+
+
+def test_a_veto_is_learned_on_the_columns_the_ranker_kept_within_its_template_budget():
+    """A budget fits the ranker again on the templates it relied on most; the veto is fitted
+    on those same columns, and the function reads what either reads."""
+    demos = _with_verdicts(lowest_foothold_demos())
+    demos = [TrainingDemo(d.hmap, d.state, d.candidates, d.chosen, values=d.values,
+                          refused=d.refused, judged=d.values) for d in demos]
+    model = learn_model(demos, "both", "lambdarank", cv=3, training_candidates=30, seed=7,
+                        library_size=30, supervision="graded", veto=True, template_budget=0.2)
+    from footfall.features.family import Candidates
+
+    for f in model.functions.values():
+        assert f.veto is not None and f.veto_margin is not None
+        used = f.forest.used_columns(f.n_columns) | f.veto.used_columns(f.n_columns)
+        widths = [len(fam.columns()) for fam in f.families]
+        k = [fam.name for fam in f.families].index("templates")
+        start = sum(widths[:k])
+        assert used[start:start + widths[k]].all()  # every kept template is read by one of them
+    d = demos[2]
+    scorer = model.reward_for(d.state.swing_leg)
+    values = scorer.values(Candidates.of_state(d.hmap, d.state, d.candidates, model.config))
+    assert np.isfinite(values).all() and np.ptp(values) > 0

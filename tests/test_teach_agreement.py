@@ -59,7 +59,7 @@ def _mark_run(client, expert, run_id):
         s = client.step(run_id, k, judge=False)
         board = board or client.terrain(s["terrain_hash"])
         state = RobotState.from_vector(np.array(s["state"]), s["leg"])
-        _, refused = teacher_verdict(expert, board, state, np.array(s["candidates"]))
+        _, refused, _ = teacher_verdict(expert, board, state, np.array(s["candidates"]))
         own = {label["labeler"]: label["chosen"] for label in s["labels"]}
         for i in np.flatnonzero(refused):
             if i != own["careful"]:

@@ -160,3 +160,33 @@ def test_the_command_walks_boards_of_the_difficulty_asked_into_their_own_folder(
         for _, s, _ in SuiteConfig(suite="training", kinds=("ridges",)).board_specs().values()}
     code, _, err = run(capsys, "benchmark-terrain", "--difficulty", "1.5")
     assert code == 2 and "1.5" in err and "Traceback" not in err
+
+
+def test_a_learned_function_walks_as_a_chooser_paired_with_the_hand_tuned_reward(walked,
+                                                                               tmp_path):
+    """A model chooser walks the same boards and seeds under ``model:NAME``, is paired with the
+    hand-tuned reward, and its name keeps to its file in the folder."""
+    from test_learners import lowest_foothold_demos
+
+    from footfall.learning.train import learn_model
+
+    out, _ = walked
+    model = learn_model(lowest_foothold_demos(), "terrain", "l1", cv=3, Cs=3, seed=1)
+    model.save(tmp_path / "m.npz")
+    with_model = replace(TINY, models=(("m", str(tmp_path / "m.npz")),),
+                         who=("expert", "hand", "model:m"))
+    summary = run_suite(out, with_model, processes=1, log=lambda s: None)
+    with DemoStore(out / STORE_NAME) as store:
+        keys = {r["key"] for r in store.runs()}
+    mine = sorted(k.split("/", 1)[1] for k in keys if k.startswith("model:m/"))
+    assert mine == sorted(k.split("/", 1)[1] for k in keys if k.startswith("hand/"))
+    paired = summary["paired_models"]["model:m"]
+    assert paired["all"]["pairs"] == 2 * TINY.boards * TINY.runs
+    assert "Paired, m against the hand-tuned reward" in suite_markdown(summary)
+    other = learn_model(lowest_foothold_demos(), "terrain", "l1", cv=3, Cs=3, seed=2)
+    other.save(tmp_path / "other.npz")
+    with pytest.raises(FootfallError, match="another model named 'm'"):
+        run_suite(out, replace(with_model, models=(("m", str(tmp_path / "other.npz")),)),
+                  processes=1, log=lambda s: None)
+    with pytest.raises(FootfallError, match="'model:NAME' of a model given"):
+        replace(TINY, who=("hand", "model:x"))

@@ -408,6 +408,9 @@ def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], hard: bo
               help="A kind of the suite to walk (repeatable) [default: all of them].")
 @click.option("--who", "who", multiple=True, type=click.Choice(["expert", "hand"]),
               help="Who chooses the footholds (repeatable) [default: both].")
+@click.option("--model", "models", multiple=True, metavar="NAME=MODEL.npz",
+              help="A learned function walked as a chooser too, named NAME (repeatable); "
+                   "paired with the hand-tuned reward.")
 @click.option("--boards", type=click.IntRange(min=1), default=None,
               help="Boards per kind [default: 2].")
 @click.option("--first-board", "first_board", type=click.IntRange(min=0), default=None,
@@ -428,15 +431,18 @@ def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], hard: bo
 @executor_options
 @json_option
 def benchmark_terrain(suite: str, out: str | None, kinds: tuple[str, ...], who: tuple[str, ...],
-                      boards: int | None, first_board: int | None, runs: int | None,
+                      models: tuple[str, ...], boards: int | None, first_board: int | None, runs: int | None,
                       difficulty: float | None, variant: str, against: str | None,
                       quick: bool, processes: int | None, executor_name: str,
                       ray_address: str | None, as_json: bool) -> None:
     """A terrain suite: the expert and the hand-tuned reward on every kind, success with
     Wilson intervals, slip and the failure taxonomy per kind."""
     config = SuiteConfig.quick(suite) if quick else SuiteConfig(suite=suite)
-    changes: dict = {}
-    for key, value in (("kinds", kinds or None), ("who", tuple(dict.fromkeys(who)) or None),
+    named = tuple(_model_option(m) for m in models)
+    changes: dict = {"models": named} if named else {}
+    who = tuple(dict.fromkeys(who or config.who)) + tuple(f"model:{n}" for n, _ in named) \
+        if named else tuple(dict.fromkeys(who))
+    for key, value in (("kinds", kinds or None), ("who", who or None),
                        ("boards", boards), ("first_board", first_board), ("runs", runs),
                        ("difficulty", difficulty), ("variant", variant)):
         if value is not None:
@@ -454,6 +460,14 @@ def benchmark_terrain(suite: str, out: str | None, kinds: tuple[str, ...], who: 
         summary = {**summary, "against": {"folder": str(against), "paired": comparison}}
         text += "\n" + comparison_markdown(comparison, str(against))
     emit(as_json, summary, text + f"wrote {folder / 'suite.md'}")
+
+
+def _model_option(text: str) -> tuple[str, str]:
+    """``NAME=MODEL.npz`` as (name, path); one line for anything else."""
+    name, sep, path = text.partition("=")
+    if not sep or not name or not path or "/" in name:
+        raise FootfallError(f"--model takes NAME=MODEL.npz (a name without '/'), got {text!r}")
+    return name, path
 
 
 @click.command()

@@ -89,6 +89,11 @@ def model_output(path: str) -> Path:
               help="What a demonstration tells the learner: the teacher's choice (the paper's), "
                    "its choice and the candidates it refused ('never here'), or every "
                    "candidate graded by the teacher's values (where it gave them).")
+@click.option("--veto", is_flag=True,
+              help="Beside each function, learn which candidates the teacher refuses outright "
+                   "(relative to the best of a candidate set where the demonstrations carry the "
+                   "values the teacher's veto judges by, else from the refusals alone) and "
+                   "take a penalty from them when scoring (lambdarank only).")
 @click.option("--source", multiple=True, help=SOURCE_HELP)
 @click.option("--trials", multiple=True, metavar="RUNS.sqlite",
               help="Also learn from the robot's own runs in this store (repeatable): every "
@@ -104,7 +109,7 @@ def model_output(path: str) -> Path:
 def learn(store_path: str, feature_set: str, learner: str, library_size: int,
           training_candidates: int, bandwidth_rms: tuple[float, float, float] | None, cv: int,
           folds: str, selection: str, template_budget: float | str, supervision: str,
-          source: tuple[str, ...], trials: tuple[str, ...],
+          veto: bool, source: tuple[str, ...], trials: tuple[str, ...],
           trial_pairs: int, seed: int, output: str, as_json: bool) -> None:
     """Learn front- and hind-leg foothold ranking functions from demonstrations, from the
     robot's own trials, or from both."""
@@ -121,7 +126,7 @@ def learn(store_path: str, feature_set: str, learner: str, library_size: int,
                                selection=selection, folds=folds,
                                template_budget=(None if template_budget == NO_BUDGET
                                                 else template_budget),
-                               supervision=supervision)
+                               supervision=supervision, veto=veto)
     tried = (f" and {learned.trial_footholds} footholds of its own runs"
              if learned.trial_footholds else "")
     lines = [f"wrote {learned.model}: {feature_set}/{learner} from {learned.demonstrations} "

@@ -22,7 +22,7 @@ from typing import Any
 from footfall.core.errors import FootfallError
 from footfall.data import rows, schema
 from footfall.data.connection import decode_text, one_line, read_only_uri
-from footfall.data.demonstration import checked_verdict
+from footfall.data.demonstration import checked_values, checked_verdict
 from footfall.data.label import LABEL_COLUMNS, MARK_COLUMNS, checked_label, checked_mark
 
 SHOWN_PROBLEMS = 20  # problems listed in a one-line-each report; the rest are counted
@@ -182,7 +182,7 @@ def _check_verdicts(con: sqlite3.Connection, report: StoreReport, demo_ids: set[
             found = _row(report, "verdicts", repr(row[0]), rows.verdict, row)
             if found is None:
                 continue
-            demo_id, values, refused = found
+            demo_id, values, refused, judged = found
             if demo_id not in demo_ids:
                 report.problems.append(f"verdicts row {demo_id!r}: demonstration {demo_id} is "
                                        f"not in the store")
@@ -190,6 +190,7 @@ def _check_verdicts(con: sqlite3.Connection, report: StoreReport, demo_ids: set[
                 d = sound[demo_id]
                 try:
                     checked_verdict(values, refused, d.n_candidates, d.chosen)
+                    checked_values(judged, d.n_candidates, "the judged values")
                 except FootfallError as exc:
                     report.problems.append(f"verdicts row {demo_id!r}: {exc}")
 

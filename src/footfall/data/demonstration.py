@@ -48,6 +48,11 @@ class Demonstration:
     refused : array of shape (n,) of bool, or None
         The candidates the teacher refuses outright ("never here": a veto, a person's mark);
         never the chosen one. None: it said nothing of the others.
+    judged : array of shape (n,) or None
+        The values its refusals are relative to [value units, higher better], finite: a
+        candidate is refused where it is more than the teacher's margin below the best of them
+        (the synthetic expert's values behind the guarded teacher's veto; a teacher without a
+        separate judge, its own values). None: not given (a person's marks).
     """
 
     terrain_hash: str
@@ -59,6 +64,7 @@ class Demonstration:
     id: int | None = None
     values: np.ndarray | None = None  # (n,) the teacher's value of each candidate [its units]
     refused: np.ndarray | None = None  # (n,) bool: refused outright ("never here")
+    judged: np.ndarray | None = None  # (n,) [value units] what the refusals are relative to
 
     def __post_init__(self) -> None:
         if not isinstance(self.terrain_hash, str) or not _HASH_RE.match(self.terrain_hash):
@@ -87,14 +93,16 @@ class Demonstration:
                                     or not isinstance(self.id, numbers.Integral)):
             raise FootfallError(f"id must be an integer or None, got {self.id!r}")
         values, refused = checked_verdict(self.values, self.refused, cand.shape[0], int(chosen))
+        judged = checked_values(self.judged, cand.shape[0], "the judged values")
         set_fields(self, candidates=cand, chosen=int(chosen),
                    expert=checked_json(self.expert, "expert settings"),
-                   id=None if self.id is None else int(self.id), values=values, refused=refused)
+                   id=None if self.id is None else int(self.id), values=values, refused=refused,
+                   judged=judged)
 
     @property
     def has_verdict(self) -> bool:
-        """Whether the teacher said more than its choice (values or refusals)."""
-        return self.values is not None or self.refused is not None
+        """Whether the teacher said more than its choice (values, refusals, judged values)."""
+        return self.values is not None or self.refused is not None or self.judged is not None
 
     @property
     def swing_leg(self) -> str:
@@ -128,16 +136,7 @@ def checked_verdict(values: object, refused: object, n: int, chosen: int
         For a wrong shape, a non-finite value, a refusal that is not 0 / 1, or the chosen
         candidate refused.
     """
-    out_values = out_refused = None
-    if values is not None:
-        try:
-            out_values = np.array(values, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise FootfallError("the teacher's values must be numbers") from None
-        if out_values.shape != (n,) or not np.isfinite(out_values).all():
-            raise FootfallError(f"the teacher's values must be {n} finite numbers, one per "
-                                f"candidate, got shape {out_values.shape}")
-        out_values.setflags(write=False)
+    out_values, out_refused = checked_values(values, n, "the teacher's values"), None
     if refused is not None:
         try:
             raw = np.array(refused, dtype=np.float64)
@@ -151,6 +150,28 @@ def checked_verdict(values: object, refused: object, n: int, chosen: int
             raise FootfallError(f"the chosen candidate {chosen} is refused")
         out_refused.setflags(write=False)
     return out_values, out_refused
+
+
+def checked_values(values: object, n: int, what: str) -> np.ndarray | None:
+    """``values`` as a read-only (n,) float64 array of finite numbers [value units], one per
+    candidate; None stays None.
+
+    Raises
+    ------
+    FootfallError
+        Naming ``what``, for a wrong shape or a value that is not a finite number.
+    """
+    if values is None:
+        return None
+    try:
+        out = np.array(values, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise FootfallError(f"{what} must be numbers") from None
+    if out.shape != (n,) or not np.isfinite(out).all():
+        raise FootfallError(f"{what} must be {n} finite numbers, one per candidate, got shape "
+                            f"{out.shape}")
+    out.setflags(write=False)
+    return out
 
 
 def decision_hash(state: RobotState, candidates: np.ndarray, chosen: int,

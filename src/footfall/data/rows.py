@@ -31,7 +31,7 @@ DEMONSTRATION_COLUMNS = ("id, terrain_hash, swing_leg, state, state_shape, state
                          "candidates, candidates_shape, candidates_dtype, n_candidates, chosen, "
                          "source, expert")
 VERDICT_COLUMNS = ("demonstration_id, teacher_values, values_shape, values_dtype, refused, "
-                   "refused_shape, refused_dtype")
+                   "refused_shape, refused_dtype, judged, judged_shape, judged_dtype")
 TERRAIN_COLUMNS = "hash, heights, shape, dtype, resolution, origin_x, origin_y, frame, metadata"
 RUN_COLUMNS = "id, key, terrain_hash, seed, settings, result, n_steps"
 STEP_COLUMNS = ("k, swing_leg, state, state_shape, state_dtype, candidates, candidates_shape, "
@@ -127,14 +127,15 @@ def demonstration(row: tuple) -> Demonstration:
                          json_object(expert, "expert"), integer(id_, "id"))
 
 
-def verdict(row: tuple) -> tuple[int, np.ndarray | None, np.ndarray | None]:
-    """A demonstration's id and its teacher's values (n,) and refusals (n,) (each None where
-    NULL) from its ``verdicts`` row (VERDICT_COLUMNS); checked against the demonstration when
-    the two are joined (:meth:`Demonstration.__post_init__`)."""
-    id_, v, v_s, v_d, r, r_s, r_d = row
+def verdict(row: tuple) -> tuple[int, np.ndarray | None, np.ndarray | None, np.ndarray | None]:
+    """A demonstration's id and its teacher's values (n,), refusals (n,) and judged values (n,)
+    (each None where NULL) from its ``verdicts`` row (VERDICT_COLUMNS); checked against the
+    demonstration when the two are joined (:meth:`Demonstration.__post_init__`)."""
+    id_, v, v_s, v_d, r, r_s, r_d, j, j_s, j_d = row
     values = None if v is None else array(v, v_s, v_d, "teacher_values")
     refused = None if r is None else array(r, r_s, r_d, "refused")
-    return integer(id_, "demonstration_id"), values, refused
+    judged = None if j is None else array(j, j_s, j_d, "judged")
+    return integer(id_, "demonstration_id"), values, refused, judged
 
 
 def terrain(row: tuple) -> HeightMap:

@@ -156,7 +156,12 @@ CREATE TABLE verdicts (
     refused BLOB,                      -- (n,) 1 where the teacher refuses the candidate outright
                                        -- ("never here"), else 0; NULL: it said nothing of them
     refused_shape TEXT,
-    refused_dtype TEXT
+    refused_dtype TEXT,
+    judged BLOB,                       -- (n,) the values the refusals are relative to [value
+                                       -- units]: refused where more than the teacher's margin
+                                       -- below their best; NULL: not given
+    judged_shape TEXT,
+    judged_dtype TEXT
 )""",
 )
 

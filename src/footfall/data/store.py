@@ -132,8 +132,9 @@ class DemoStore(MarkQueries, LabelQueries, JudgementQueries, TerrainQueries):
         none = (None, None, None)
         values = none if demo.values is None else codec.encode(demo.values)
         refused = none if demo.refused is None else codec.encode(demo.refused)
-        con.execute(f"INSERT INTO verdicts ({rows.VERDICT_COLUMNS}) VALUES (?, ?, ?, ?, ?, ?, ?)",
-                    (demo_id, *values, *refused))
+        judged = none if demo.judged is None else codec.encode(demo.judged)
+        con.execute(f"INSERT INTO verdicts ({rows.VERDICT_COLUMNS}) VALUES "
+                    f"(?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", (demo_id, *values, *refused, *judged))
 
     def demonstrations(self, ids: Sequence[int] | None = None, terrain_hash: str | None = None,
                        source_prefix: str | Sequence[str] | None = None) -> list[Demonstration]:
@@ -182,7 +183,8 @@ class DemoStore(MarkQueries, LabelQueries, JudgementQueries, TerrainQueries):
         return [by_id[i] for i in wanted]
 
     def _verdicts(self, ids: list) -> dict:
-        """{demonstration id: (values, refused)} of the demonstrations ``ids`` that have one."""
+        """{demonstration id: (values, refused, judged)} of the demonstrations ``ids`` that have
+        one."""
         if not ids or self.schema_version < 5:
             return {}
         with self._errors():
@@ -192,22 +194,22 @@ class DemoStore(MarkQueries, LabelQueries, JudgementQueries, TerrainQueries):
         out = {}
         for row in found:
             try:
-                demo_id, values, refused = rows.verdict(row)
+                demo_id, *verdict = rows.verdict(row)
             except FootfallError as exc:
                 raise FootfallError(f"{self.path}: the verdict of demonstration {row[0]!r} is "
                                     f"corrupt ({exc})") from None
-            out[demo_id] = (values, refused)
+            out[demo_id] = tuple(verdict)
         return out
 
     def _row_to_demo(self, row: tuple, verdict: tuple | None = None,
                      marked: list[int] | None = None) -> Demonstration:
         """A demonstration from its row (:func:`footfall.data.rows.demonstration`) with its
-        teacher's ``verdict`` (values, refused), if it has one, and the candidates its labeler
+        teacher's ``verdict`` (values, refused, judged), if it has one, and the candidates its labeler
         marked "never here" on its step (``marked``: indices into F) among the refused."""
         try:
             demo = rows.demonstration(row)
             if verdict is not None:
-                demo = replace(demo, values=verdict[0], refused=verdict[1])
+                demo = replace(demo, values=verdict[0], refused=verdict[1], judged=verdict[2])
             if marked:
                 demo = replace(demo, refused=_with_marks(demo, marked))
             return demo

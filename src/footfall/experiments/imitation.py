@@ -56,7 +56,7 @@ def judge_gap_run(student: RunRecord, hmap: HeightMap, teacher: Expert, margin: 
     refused_there = False
     rng = np.random.default_rng(0)  # a noiseless teacher draws nothing
     for step in student.steps:  # one run's steps (dozens), each vectorised over F
-        values, refused = teacher_verdict(teacher, hmap, step.state, step.candidates)
+        values, refused, _ = teacher_verdict(teacher, hmap, step.state, step.candidates)
         short = float(np.max(values) - values[step.chosen])
         if parted is None and int(teacher.choose(hmap, step.state, step.candidates,
                                                  rng)) != step.chosen:

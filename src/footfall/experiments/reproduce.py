@@ -180,6 +180,14 @@ class ReproduceConfig(Params):
         "choice", check=lambda v: v in SUPERVISIONS, must="a registered supervision kind",
         doc="what the learners read of a correction (learning.supervision): the teacher's "
             "choice (the paper's), its refusals too, or every candidate graded by its values")
+    veto: bool = param(
+        False, doc="beside each ranking function, learn which candidates the teacher refuses "
+                   "outright (learning.veto: relative to the best of a candidate set, from the "
+                   "values its veto judges by) and take a penalty from them when walking")
+    library_capped: bool = param(
+        False, doc="the template library holds at most library_size templates however many "
+                   "corrections there are (a sample of their footholds); False: every "
+                   "corrected foothold is a template (the paper's)")
     margin: float = param(REPRODUCTION_MARGIN, unit="value", range=at_least(0),
                           doc="shortfall against the expert's best that counts (the walking "
                               "expert's unit: 1 cm off the gait-nominal foothold)")
@@ -232,6 +240,9 @@ class ReproduceConfig(Params):
             object.__setattr__(self, "expert", walking_expert(self.walk.footstep.lead))
         super().__post_init__()
         check_budget(get_learner(self.learner), self.template_budget)
+        if self.veto and not get_learner(self.learner).vetoes:
+            raise FootfallError(f"learner {self.learner!r} cannot carry a learned veto; use "
+                                f"lambdarank or veto=False")
         step = self.walk.footstep  # a teacher these settings cannot make fails here, not mid-run
         TEACHERS.get(self.teacher).expert(self.expert, step.bias_weight, step.lead)
 

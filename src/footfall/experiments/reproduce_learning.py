@@ -50,6 +50,10 @@ def _key(ws: Workspace, demos: list, feature_set: str, rms: float | None) -> tup
         settings.update(template_budget=config.template_budget)
     if config.supervision != "choice":  # keys of the paper's supervision stay
         settings.update(supervision=config.supervision)
+    if config.veto:
+        settings.update(veto=True)
+    if config.library_capped:
+        settings.update(library_capped=True)
     return _training_key(demos, feature_set, settings), seed
 
 
@@ -85,7 +89,8 @@ def learn_saved(ws: Workspace, name: str, demos: list, feature_set: str, rms: fl
                         bandwidth_rms=None if rms is None else (rms,) * 3, cv=config.cv,
                         seed=seed, selection=config.selection, folds=config.folds,
                         template_budget=config.template_budget,
-                        supervision=config.supervision, log=lambda s: log("    " + s))
+                        supervision=config.supervision, veto=config.veto,
+                        library_capped=config.library_capped, log=lambda s: log("    " + s))
     model = replace(model, info={**model.info, "training_key": key,
                                  "sources": [d.source for d in demos]})
     model.save(path)

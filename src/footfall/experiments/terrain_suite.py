@@ -23,6 +23,10 @@ stream "boards" at (kind's place in :data:`SUITES`, board), so a kind's boards
 do not depend on which other kinds are walked. Run seeds: the stream
 "evaluation runs", the same on every board and for both choosers.
 
+A suite may also walk learned functions as choosers (``models``: a name and a model file
+each; runs keyed ``model:NAME/...``), each paired with the hand-tuned reward like the expert;
+a folder keeps the model file each name stood for, and refuses another under the same name.
+
 A suite walks the default controller or one of its variants
 (:mod:`footfall.experiments.variants`: ``--variant with-friction-check``), so
 that a change is measured on the held-out kinds after the ablation judged it.
@@ -34,6 +38,7 @@ add their runs; other boards, runs, difficulty or walking settings are refused.
 
 from __future__ import annotations
 
+import hashlib
 import json
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -51,6 +56,7 @@ from footfall.experiments.executors import Executor, LocalPool
 from footfall.experiments.reproduce import reproduction_walk
 from footfall.experiments.runs import RunJob, Runner, board_files, claim_folder
 from footfall.experiments.variants import VARIANTS
+from footfall.learning.model import FootholdModel
 from footfall.expert.synthetic import walking_expert
 from footfall.sim.episode import WalkConfig
 from footfall.terrain.kinds import HELD_OUT_KINDS, TRAINING_KINDS
@@ -58,7 +64,22 @@ from footfall.terrain.kinds import HELD_OUT_KINDS, TRAINING_KINDS
 SUITES = {"held-out": HELD_OUT_KINDS, "training": TRAINING_KINDS}
 """The suites by name: their kinds, in order (a kind's place fixes its board seeds)."""
 WHO = ("expert", "hand")  # the walking expert choosing every foothold; the hand-tuned reward
+MODEL_PREFIX = "model:"  # a learned function as a chooser: "model:NAME"
 STORE_NAME = "suite.sqlite"
+MODELS_NAME = "models.json"  # a suite folder's model choosers: name -> the file's sha256
+
+
+def _choosers_ok(who: object, models: object) -> bool:
+    names = {m[0] for m in models} if isinstance(models, tuple) else set()
+    return (isinstance(who, tuple) and len(who) > 0 and len(set(who)) == len(who)
+            and all(w in WHO or (isinstance(w, str) and w.startswith(MODEL_PREFIX)
+                                 and w[len(MODEL_PREFIX):] in names) for w in who))
+
+
+def _models_ok(models: object) -> bool:
+    return isinstance(models, tuple) and all(
+        isinstance(m, tuple) and len(m) == 2 and all(isinstance(x, str) and x for x in m)
+        and "/" not in m[0] for m in models) and len({m[0] for m in models}) == len(models)
 
 
 @dataclass(frozen=True)
@@ -73,9 +94,14 @@ class SuiteConfig(Params):
         must="a tuple of distinct kinds of the suite",
         doc="the suite's kinds walked; None: all of them")
     who: tuple[str, ...] = param(WHO, check=lambda v: isinstance(v, tuple) and len(v) > 0
-                                 and set(v) <= set(WHO) and len(set(v)) == len(v),
-                                 must="a tuple of 'expert' and / or 'hand'",
+                                 and len(set(v)) == len(v),
+                                 must="a tuple of distinct choosers: 'expert', 'hand' or "
+                                      "'model:NAME' of a model in models",
                                  doc="who chooses the footholds")
+    models: tuple[tuple[str, str], ...] = param(
+        (), check=_models_ok, must="a tuple of distinct (name, model file) pairs, a name "
+                                   "without '/'",
+        doc="learned functions walked as choosers 'model:NAME' (name, model file .npz)")
     difficulty: float = param(0.7, unit="-", range=within(0, 1),
                               doc="difficulty D of every board KIND:D KIND:D")
     boards: int = param(2, range=at_least(1), doc="boards per kind")
@@ -95,6 +121,10 @@ class SuiteConfig(Params):
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        if not _choosers_ok(self.who, self.models):
+            raise FootfallError(f"who must name 'expert', 'hand' or 'model:NAME' of a model "
+                                f"given (models: {', '.join(m[0] for m in self.models) or 'none'})"
+                                f", got {self.who!r}")
         unknown = sorted(set(self.kinds or ()) - set(SUITES[self.suite]))
         if unknown:
             raise FootfallError(f"the {self.suite} suite has no kind {', '.join(unknown)}; its "
@@ -134,13 +164,37 @@ class SuiteConfig(Params):
 def suite_jobs(config: SuiteConfig, paths: dict[str, Path]) -> list[RunJob]:
     """Every run, keyed ``WHO/KIND/bB/sSEED``: the hand-tuned reward's first (cheaper)."""
     expert = VARIANTS.get(config.variant).expert(walking_expert(config.walk.footstep.lead))
+    files = dict(config.models)
     jobs = []
     for who in sorted(config.who, key=lambda w: w == "expert"):
+        model = files[who[len(MODEL_PREFIX):]] if who.startswith(MODEL_PREFIX) else None
         for name, path in paths.items():
             kind, board = name.rsplit("-", 1)
-            jobs += [RunJob(f"{who}/{kind}/{board}/s{s}", str(path), None, s, config.walked(),
+            jobs += [RunJob(f"{who}/{kind}/{board}/s{s}", str(path), model, s, config.walked(),
                             expert=expert, judge=who == "expert") for s in config.run_seeds()]
     return jobs
+
+
+def claim_models(out: Path, models: tuple[tuple[str, str], ...]) -> None:
+    """Keep in ``out`` the model file each chooser name stands for (its sha256), refusing a
+    name that stood for another file: its stored runs are that file's."""
+    path = out / MODELS_NAME
+    held = json.loads(path.read_text()) if path.exists() else {}
+    for name, file in models:
+        digest = _file_digest(file)
+        if held.get(name, digest) != digest:
+            raise FootfallError(f"{out} holds runs of another model named {name!r}; use another "
+                                f"name or --out")
+        held[name] = digest
+    if models:
+        write_text_atomic(path, json.dumps(held, indent=1, sort_keys=True))
+
+
+def _file_digest(file: str) -> str:
+    try:
+        return hashlib.sha256(Path(file).read_bytes()).hexdigest()
+    except OSError as exc:
+        raise FootfallError(f"{file}: cannot read the model ({exc.strerror})") from None
 
 
 def run_suite(out: str | Path, config: SuiteConfig | None = None,
@@ -149,7 +203,10 @@ def run_suite(out: str | Path, config: SuiteConfig | None = None,
     """Walk (or resume) the suite into ``out``; return the summary (also suite.json, suite.md)."""
     config = SuiteConfig() if config is None else config
     out = Path(out)
-    claim_folder(out, config.to_dict(), "a terrain suite", free=("kinds", "who"))
+    claim_folder(out, config.to_dict(), "a terrain suite", free=("kinds", "who", "models"))
+    for _, file in config.models:  # a bad model file: one line before anything is walked
+        FootholdModel.load(file)
+    claim_models(out, config.models)
     paths = board_files(out, config.board_specs())
     maps = {name: HeightMap.load(p) for name, p in paths.items()}
     jobs = suite_jobs(config, paths)
@@ -166,14 +223,16 @@ def run_suite(out: str | Path, config: SuiteConfig | None = None,
     return summary
 
 
-def _paired(records: dict, kinds: tuple[str, ...]) -> dict:
-    """The expert against the hand-tuned reward on the units both walked, over ``kinds``."""
+def _paired(records: dict, kinds: tuple[str, ...], who: str = "expert") -> dict:
+    """A chooser (the expert) against the hand-tuned reward on the units both walked, over
+    ``kinds``."""
     outcome = {tuple(k.split("/")): bool(r.result["success"]) for k, r in records.items()}
-    units = {u[1:] for u in outcome if u[0] == "expert" and u[1] in kinds} & \
+    units = {u[1:] for u in outcome if u[0] == who and u[1] in kinds} & \
         {u[1:] for u in outcome if u[0] == "hand" and u[1] in kinds}
-    a = sum(outcome[("expert", *u)] and not outcome[("hand", *u)] for u in units)
-    b = sum(outcome[("hand", *u)] and not outcome[("expert", *u)] for u in units)
-    return {"pairs": len(units), "expert_only": a, "hand_only": b, "p_value": mcnemar_exact(a, b)}
+    a = sum(outcome[(who, *u)] and not outcome[("hand", *u)] for u in units)
+    b = sum(outcome[("hand", *u)] and not outcome[(who, *u)] for u in units)
+    return {"pairs": len(units), f"{'expert' if who == 'expert' else 'chooser'}_only": a,
+            "hand_only": b, "p_value": mcnemar_exact(a, b)}
 
 
 def summarise_suite(config: SuiteConfig, records: dict) -> dict:
@@ -188,10 +247,16 @@ def summarise_suite(config: SuiteConfig, records: dict) -> dict:
     rows = {kind: {who: of(who, (kind,)) for who in config.who} for kind in kinds}
     pooled = {who: of(who, kinds) for who in config.who}
     paired = {}
-    if set(config.who) == set(WHO):
+    if {"expert", "hand"} <= set(config.who):
         paired = {kind: _paired(records, (kind,)) for kind in kinds}
         paired["all"] = _paired(records, kinds)
-    return {"config": config.to_dict(), "kinds": rows, "pooled": pooled, "paired": paired}
+    models = {}
+    if "hand" in config.who:  # each learned function against the hand-tuned reward
+        models = {w: {**{kind: _paired(records, (kind,), w) for kind in kinds},
+                      "all": _paired(records, kinds, w)}
+                  for w in config.who if w.startswith(MODEL_PREFIX)}
+    return {"config": config.to_dict(), "kinds": rows, "pooled": pooled, "paired": paired,
+            **({"paired_models": models} if models else {})}
 
 
 def _cell(s: dict) -> str:
@@ -249,7 +314,8 @@ def comparison_markdown(comparison: dict, label: str) -> str:
     and p."""
     names = {"expert": "expert", "hand": "hand-tuned"}
     who = list(comparison)
-    head = ["kind"] + [f"{names[w]}: this / {label}, won / lost (p)" for w in who]
+    head = ["kind"] + [f"{names.get(w, w.removeprefix(MODEL_PREFIX))}: this / {label}, won / "
+                       f"lost (p)" for w in who]
     lines = [f"Paired with {label} (the same boards and run seeds; exact McNemar):", "",
              "| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
     for kind in comparison[who[0]]:
@@ -265,7 +331,8 @@ def comparison_markdown(comparison: dict, label: str) -> str:
 def suite_markdown(summary: dict) -> str:
     """The suite's table (crossings with Wilson intervals, slip, causes) and the paired test."""
     c = summary["config"]
-    names = {"expert": "expert", "hand": "hand-tuned"}
+    names = {"expert": "expert", "hand": "hand-tuned",
+             **{f"{MODEL_PREFIX}{m[0]}": m[0] for m in c.get("models", [])}}
     head = ["kind"] + [f"{names[w]}: {what}" for w in c["who"]
                        for what in ("crossed (95 %)", "slip of crossings [mm]", "failures")]
     variant = c.get("variant", "defaults")
@@ -285,4 +352,9 @@ def suite_markdown(summary: dict) -> str:
         lines += [f"- {kind}: only the expert crossed {p['expert_only']}, only the hand-tuned "
                   f"reward {p['hand_only']} of {p['pairs']}, p = {p['p_value']:.3g}"
                   for kind, p in summary["paired"].items()]
+    for who, by_kind in summary.get("paired_models", {}).items():
+        lines += ["", f"Paired, {names[who]} against the hand-tuned reward (exact McNemar):", ""]
+        lines += [f"- {kind}: only {names[who]} crossed {p['chooser_only']}, only the "
+                  f"hand-tuned reward {p['hand_only']} of {p['pairs']}, p = {p['p_value']:.3g}"
+                  for kind, p in by_kind.items()]
     return "\n".join(lines) + "\n"

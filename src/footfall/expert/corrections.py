@@ -46,6 +46,7 @@ class Correction:
     label: int | None  # index in F the expert demonstrates (None: not corrected)
     values: np.ndarray | None = None  # (n,) the teacher's value of every candidate [value units]
     refused: np.ndarray | None = None  # (n,) bool: the candidates it refuses outright
+    judged: np.ndarray | None = None  # (n,) [value units] what its refusals are relative to
 
 
 def source_of(run_key: str, k: int) -> str:
@@ -97,13 +98,13 @@ def inspect_run(run: RunRecord, hmap: HeightMap, expert: Expert, margin: float =
     rng = np.random.default_rng(rng)
     out = []
     for step in run.steps:  # steps of one run (dozens), each vectorised over F
-        values, refused = teacher_verdict(expert, hmap, step.state, step.candidates)
+        values, refused, judged = teacher_verdict(expert, hmap, step.state, step.candidates)
         best = int(np.argmax(values))
         sf = float(values[best] - values[step.chosen])
         label = None
         if (every_step or sf > margin) and step.candidates.shape[0] >= 2:
             label = int(expert.choose(hmap, step.state, step.candidates, rng))
-        out.append(Correction(step.k, step.chosen, best, sf, label, values, refused))
+        out.append(Correction(step.k, step.chosen, best, sf, label, values, refused, judged))
     return out
 
 
@@ -130,27 +131,30 @@ def corrections_to_demonstrations(run: RunRecord, run_key: str, corrections: lis
     for c in corrections:
         if c.label is None:
             continue
-        values, refused = _stored_verdict(c)
+        values, refused, judged = _stored_verdict(c)
         out.append(Demonstration(run.terrain_hash, steps[c.k].state, steps[c.k].candidates,
                                  c.label, source=source_of(run_key, c.k), expert=settings,
-                                 values=values, refused=refused))
+                                 values=values, refused=refused, judged=judged))
     return out
 
 
-def _stored_verdict(c: Correction) -> tuple[np.ndarray | None, np.ndarray | None]:
+def _stored_verdict(c: Correction) -> tuple[np.ndarray | None, ...]:
     """A labelled step's verdict as a demonstration keeps it: a candidate the teacher valued
-    -inf (no foothold) refused and valued at its lowest finite value; the labelled candidate
-    never refused (an imperfect teacher may label a foothold its own veto refuses: its label
-    is its word)."""
+    -inf (no foothold) refused and valued at its lowest finite value (its judged value too);
+    the labelled candidate never refused (an imperfect teacher may label a foothold its own
+    veto refuses: its label is its word)."""
     if c.values is None or c.refused is None:
-        return c.values, c.refused
+        return c.values, c.refused, c.judged
     values = np.asarray(c.values, dtype=np.float64)
     finite = np.isfinite(values)
+    judged = None if c.judged is None else np.asarray(c.judged, dtype=np.float64)
+    if judged is not None:
+        finite &= np.isfinite(judged)
+        judged = np.where(finite, judged, judged[finite].min(initial=0.0))
     refused = np.asarray(c.refused, dtype=bool) | ~finite
-    if not finite.all():
-        values = np.where(finite, values, values[finite].min(initial=0.0))
+    values = np.where(finite, values, values[finite].min(initial=0.0))
     refused[c.label] = False
-    return values, refused
+    return values, refused, judged
 
 
 @dataclass(frozen=True)

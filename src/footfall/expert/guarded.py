@@ -177,14 +177,15 @@ class GuardedExpert:
         return self.rate * (scorer.values(c) - bias)
 
     def verdict(self, hmap: HeightMap, state: RobotState, candidates: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`values` (n,) and the candidates the expert vetoes (n,) bool: those it values
-        short of its best by more than ``threshold``."""
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`values` (n,), the candidates the expert vetoes (n,) bool -- those it values
+        short of its best by more than ``threshold`` -- and the expert's values (n,) [value
+        units] the veto is relative to."""
         values = self.values(hmap, state, candidates)
         if values.shape[0] == 0:
-            return values, np.zeros(0, dtype=bool)
+            return values, np.zeros(0, dtype=bool), np.zeros(0)
         expert = np.asarray(self.expert.values(hmap, state, candidates), dtype=np.float64)
-        return values, vetoed(expert, self.threshold) > 0
+        return values, vetoed(expert, self.threshold) > 0, expert
 
     def choose(self, hmap: HeightMap, state: RobotState, candidates: np.ndarray,
                rng: np.random.Generator) -> int:

@@ -34,23 +34,24 @@ REFUSED_SHORTFALL = 10.0  # [value units] an expert without a veto of its own re
 
 
 def teacher_verdict(expert: Any, hmap: HeightMap, state: RobotState, candidates: np.ndarray
-                    ) -> tuple[np.ndarray, np.ndarray]:
-    """A teacher's verdict on every candidate (n, 3) [m]: its values (n,) [value units] and the
-    candidates it refuses outright (n,) bool -- its own ``verdict`` if it has one (a veto),
-    else those valued more than :data:`REFUSED_SHORTFALL` below its best. Never the best."""
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A teacher's verdict on every candidate (n, 3) [m]: its values (n,) [value units], the
+    candidates it refuses outright (n,) bool and the values those refusals are relative to (n,)
+    [value units] -- its own ``verdict`` if it has one (a veto by a judge of its own), else its
+    values, refusing those more than :data:`REFUSED_SHORTFALL` below its best. Never the best."""
     own = getattr(expert, "verdict", None)
     if callable(own):
-        values, refused = own(hmap, state, candidates)
-        values = np.asarray(values, dtype=np.float64)
-        refused = np.asarray(refused, dtype=bool)
+        values, refused, judged = (np.asarray(a) for a in own(hmap, state, candidates))
+        values, judged = values.astype(np.float64), judged.astype(np.float64)
+        refused = refused.astype(bool)
     else:
-        values = np.asarray(expert.values(hmap, state, candidates), dtype=np.float64)
+        values = judged = np.asarray(expert.values(hmap, state, candidates), dtype=np.float64)
         refused = values.max(initial=-np.inf) - values > REFUSED_SHORTFALL
     n = len(candidates)
-    if values.shape != (n,) or refused.shape != (n,):
-        raise FootfallError(f"the teacher's verdict has shapes {values.shape} and "
-                            f"{refused.shape} for {n} candidates")
-    return values, refused
+    if values.shape != (n,) or refused.shape != (n,) or judged.shape != (n,):
+        raise FootfallError(f"the teacher's verdict has shapes {values.shape}, {refused.shape} "
+                            f"and {judged.shape} for {n} candidates")
+    return values, refused, judged
 
 
 def values_each(expert: Any, hmap: HeightMap, states: Sequence[RobotState],

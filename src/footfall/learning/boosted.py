@@ -28,7 +28,7 @@ from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from footfall.core.errors import FootfallError
-from footfall.core.validate import require_float_array
+from footfall.core.validate import require_float_array, require_number
 from footfall.features.family import FeatureFamily
 from footfall.learning.function import MAX_WEIGHT, VETO_PENALTY, ColumnFunction, own_arrays
 from footfall.learning.learner import Learner, register_learner
@@ -335,8 +335,11 @@ class BoostedFunction(ColumnFunction):
     families: tuple[FeatureFamily, ...]
     forest: Forest
     info: dict = field(default_factory=dict)  # trees, cv error, path, the families' facts
-    veto: Forest | None = None  # a learned veto: trees of the log-odds that the teacher refuses
-    # a candidate outright (footfall.learning.veto); > 0 refused: VETO_PENALTY taken
+    veto: Forest | None = None  # a learned veto (footfall.learning.veto): trees of the log-odds
+    # that the teacher refuses a candidate outright (> 0: refused), or with ``veto_margin`` of
+    # the values its refusals are relative to; a refused candidate loses VETO_PENALTY
+    veto_margin: float | None = None  # [value units] a relative veto refuses a candidate
+    # valued more than this below the best of its candidate set; None: the log-odds veto
 
     def __post_init__(self) -> None:
         for forest in (self.forest, self.veto):
@@ -348,13 +351,24 @@ class BoostedFunction(ColumnFunction):
         """The sum of the trees' leaf values, (n, d) -> (n,), less VETO_PENALTY where the veto
         refuses a candidate (its log-odds above 0)."""
         value = self.forest.predict(X)
-        if self.veto is None:
+        if self.veto is None or self.veto_margin is not None:
             return value
         return value - VETO_PENALTY * (self.veto.predict(X) > 0.0)
 
+    def refused_in_sets(self, X: np.ndarray, which: np.ndarray) -> np.ndarray | None:
+        """With a relative veto: the rows whose predicted judged value lies more than
+        ``veto_margin`` below the best of their set (``which``)."""
+        if self.veto is None or self.veto_margin is None:
+            return None
+        judged = self.veto.predict(X)
+        which = np.asarray(which, dtype=np.intp)
+        best = np.full(int(which.max(initial=-1)) + 1, -np.inf)
+        np.maximum.at(best, which, judged)
+        return best[which] - judged > self.veto_margin
+
     def without_veto(self) -> BoostedFunction:
         """The ranker alone (itself without a veto)."""
-        return self if self.veto is None else replace(self, veto=None)
+        return self if self.veto is None else replace(self, veto=None, veto_margin=None)
 
     def arrays(self) -> dict[str, np.ndarray]:
         """``boosted.feature``, ``.threshold``, ``.left``, ``.right``, ``.value``, ``.roots``;
@@ -362,21 +376,31 @@ class BoostedFunction(ColumnFunction):
         out = {f"boosted.{k}": v for k, v in self.forest.arrays().items()}
         if self.veto is not None:
             out.update({f"boosted.veto.{k}": v for k, v in self.veto.arrays().items()})
+        if self.veto_margin is not None:
+            out["boosted.veto_margin"] = np.array([self.veto_margin])
         return out
 
     @classmethod
     def from_arrays(cls, families: tuple[FeatureFamily, ...], arrays: dict[str, np.ndarray],
                     info: dict, prefix: str = "") -> BoostedFunction:
         d = sum(len(f.columns()) for f in families)
-        veto_prefix = f"{prefix}boosted.veto."
+        arrays = dict(arrays)
+        veto_prefix, margin_key = f"{prefix}boosted.veto.", f"{prefix}boosted.veto_margin"
+        margin = arrays.pop(margin_key, None)
         veto = None
         if any(k.startswith(veto_prefix) for k in arrays):
             veto = Forest.from_arrays(own_arrays({k: v for k, v in arrays.items()
                                                   if k.startswith(veto_prefix)},
                                                  veto_prefix, FOREST_ARRAYS), d, veto_prefix)
+        if margin is not None:
+            if veto is None:
+                raise FootfallError(f"array {margin_key} without a veto's trees")
+            margin = require_number(require_float_array(margin, f"array {margin_key}", (1,))[0],
+                                    f"array {margin_key}", 0.0, MAX_WEIGHT)
         mine = own_arrays({k: v for k, v in arrays.items() if not k.startswith(veto_prefix)},
                           f"{prefix}boosted.", FOREST_ARRAYS)
-        return cls(tuple(families), Forest.from_arrays(mine, d, f"{prefix}boosted."), info, veto)
+        return cls(tuple(families), Forest.from_arrays(mine, d, f"{prefix}boosted."), info, veto,
+                   margin)
 
 
 @dataclass(frozen=True)
@@ -398,7 +422,8 @@ class BoostedLearner(Learner):
         return BoostedRanker(self.objective, cv=cv, selection=selection).fit(X, y, groups, units)
 
     def function(self, fitted: BoostedRanker, families: tuple[FeatureFamily, ...],
-                 n_demonstrations: int, veto: Forest | None = None) -> BoostedFunction:
+                 n_demonstrations: int, veto: Forest | None = None,
+                 veto_margin: float | None = None) -> BoostedFunction:
         """Per family the columns a tree reads (a template library keeps those templates);
         with a ``veto`` over the same columns (:func:`footfall.learning.veto.fit_veto`), the
         columns either reads."""
@@ -420,7 +445,7 @@ class BoostedLearner(Learner):
                      "n_nonzero": int(np.count_nonzero(used))})
         keep = np.concatenate(masks)
         return BoostedFunction(tuple(kept), fitted.forest_.renumbered(keep), info,
-                               None if veto is None else veto.renumbered(keep))
+                               None if veto is None else veto.renumbered(keep), veto_margin)
 
     def importance(self, fitted: BoostedRanker) -> np.ndarray:
         """Each column's total split gain in the trees (LightGBM's "gain" importance)."""

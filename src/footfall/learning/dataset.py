@@ -70,6 +70,8 @@ class Example:
     # at the top: footfall.learning.supervision); None: a choice, 1 for the chosen row, 0 else
     refused: np.ndarray | None = None  # (n,) bool: rows the teacher refused outright (None:
     # it said nothing of them)
+    judged: np.ndarray | None = None  # (n,) [value units] what the refusals are relative to
+    judged_best: float = float("nan")  # [value units] the best judged value of the whole F
 
     def relevance(self) -> np.ndarray:
         """(n,) int: each row's relevance level (a choice: 1 for the chosen row, 0 else)."""
@@ -91,10 +93,12 @@ def stack_units(examples: Sequence[Example]) -> np.ndarray | None:
 def make_example(hmap: HeightMap, state: RobotState, candidates: np.ndarray, chosen: int,
                  families: Sequence[FeatureFamily], config: FeatureConfig,
                  rows: np.ndarray | None = None, robot: RobotDescription = LITTLEDOG,
-                 levels: np.ndarray | None = None, refused: np.ndarray | None = None) -> Example:
+                 levels: np.ndarray | None = None, refused: np.ndarray | None = None,
+                 judged: np.ndarray | None = None) -> Example:
     """What every family keeps of (a subset ``rows`` of) a demonstration's candidates, with the
-    relevance ``levels`` (n_all,) of all its candidates if graded (None: a choice) and the
-    teacher's refusals (n_all,) bool if it gave them."""
+    relevance ``levels`` (n_all,) of all its candidates if graded (None: a choice), the
+    teacher's refusals (n_all,) bool and the values they are relative to (n_all,) [value
+    units], if it gave them."""
     rows = np.arange(candidates.shape[0]) if rows is None else np.asarray(rows)
     if not 0 <= chosen < candidates.shape[0] or chosen not in rows:
         raise FootfallError("the chosen candidate must be among the rows")
@@ -105,7 +109,9 @@ def make_example(hmap: HeightMap, state: RobotState, candidates: np.ndarray, cho
                    int(np.flatnonzero(rows == chosen)[0]), robot.leg(state.swing_leg).front, rows,
                    decision_hash(state, candidates, chosen),
                    levels=None if levels is None else np.asarray(levels, dtype=int)[rows],
-                   refused=None if refused is None else np.asarray(refused, dtype=bool)[rows])
+                   refused=None if refused is None else np.asarray(refused, dtype=bool)[rows],
+                   judged=None if judged is None else np.asarray(judged, dtype=float)[rows],
+                   judged_best=float("nan") if judged is None else float(np.max(judged)))
 
 
 def training_rows(n: int, chosen: int, k: int, rng: np.random.Generator) -> np.ndarray:

@@ -180,6 +180,12 @@ class ColumnFunction(RankingFunction):
         has none): what a planner's path bias is scaled to (:attr:`ColumnScorer.spread_basis`)."""
         return self
 
+    def refused_in_sets(self, X: np.ndarray, which: np.ndarray) -> np.ndarray | None:
+        """(n,) bool: the candidates (rows of X (n, d)) a relative veto refuses among the others
+        of their candidate set (``which`` (n,): each row's set), or None for a function
+        without one (a row's value is then its own)."""
+        return None
+
     def scorer(self, config: FeatureConfig, name: str = "learned") -> ColumnScorer:
         """The function as a :class:`ColumnScorer`."""
         return ColumnScorer(self, config, name)
@@ -242,6 +248,9 @@ class ColumnScorer(FootholdScorer):
             where = np.concatenate(valid)
             finite = np.isfinite(X).all(axis=1)
             out[which[finite], where[finite]] = self.function.predict(X[finite])
+            refused = self.function.refused_in_sets(X[finite], which[finite])
+            if refused is not None:  # relative to the others of the same set
+                out[which[finite][refused], where[finite][refused]] -= VETO_PENALTY
         return out
 
     def dense(self, hmap: HeightMap, *, spacing: float = 0.005, yaw: float = 0.0,

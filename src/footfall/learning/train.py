@@ -64,12 +64,13 @@ class TrainingDemo:
     terrain: str = ""  # its terrain's content hash ("" : computed from hmap when needed)
     values: np.ndarray | None = None  # (n,) the teacher's value of each candidate [its units]
     refused: np.ndarray | None = None  # (n,) bool: candidates the teacher refused outright
+    judged: np.ndarray | None = None  # (n,) [value units] what its refusals are relative to
 
     @classmethod
     def of(cls, demo: Demonstration, hmap: HeightMap) -> TrainingDemo:
         """A stored demonstration on its terrain ``hmap``, with its teacher's verdict."""
         return cls(hmap, demo.state, demo.candidates, demo.chosen, demo.source,
-                   demo.terrain_hash, demo.values, demo.refused)
+                   demo.terrain_hash, demo.values, demo.refused, demo.judged)
 
     def levels(self, supervision: Supervision) -> np.ndarray | None:
         """(n,) relevance levels of the candidates by ``supervision``; None for a choice
@@ -143,12 +144,14 @@ def check_budget(learner: Learner, template_budget: float | None) -> None:
 
 def _within_budget(fitted: Any, examples: list[Example], families: tuple[FeatureFamily, ...],
                    learner: Learner, Cs, cv: int, selection: str, budget: float | None,
-                   log: Callable[[str], None]) -> tuple[Any, tuple[FeatureFamily, ...]]:
+                   log: Callable[[str], None]
+                   ) -> tuple[Any, tuple[FeatureFamily, ...], np.ndarray | None]:
     """The fit, or if it reads more templates than ``budget`` x its demonstrations allow, a fit
     on the templates the learner relied on most (its :meth:`Learner.importance`), keeping
-    floor(budget x n); the fitted estimator and the families it was fitted on."""
+    floor(budget x n); the fitted estimator, the families it was fitted on and the mask (d,) of
+    the prepared columns it read (None: all of them)."""
     if budget is None or not any(f.name == "templates" for f in families):
-        return fitted, families
+        return fitted, families, None
     allowed = int(math.floor(budget * len(examples)))
     importance = learner.importance(fitted)
     reduced, masks, start = list(families), [], 0
@@ -159,7 +162,7 @@ def _within_budget(fitted: Any, examples: list[Example], families: tuple[Feature
             weight = np.asarray(importance[start:stop], dtype=np.float64)
             used = int(np.count_nonzero(weight > 0))
             if used <= allowed:
-                return fitted, families
+                return fitted, families, None
             keep[:] = False
             keep[np.argsort(-weight, kind="stable")[:allowed]] = True
             reduced[k] = family.select(keep)[0]  # the kept templates, in the library's order
@@ -168,8 +171,8 @@ def _within_budget(fitted: Any, examples: list[Example], families: tuple[Feature
         masks.append(keep)
         start = stop
     # the prepared data hold every library template's distances: fit on the kept columns
-    return (_fit(examples, families, learner, Cs, cv, selection, np.concatenate(masks)),
-            tuple(reduced))
+    mask = np.concatenate(masks)
+    return _fit(examples, families, learner, Cs, cv, selection, mask), tuple(reduced), mask
 
 
 def _fit_families(unfitted: tuple[FeatureFamily, ...], demos: Sequence[TrainingDemo],
@@ -231,19 +234,29 @@ def _trial_examples(trials: Sequence[TrialFoothold], families: tuple[FeatureFami
             for g, b in index]
 
 
-def _fit_veto(examples: list[Example], families: tuple[FeatureFamily, ...], cv: int,
-              selection: str, seed: int, log: Callable[[str], None]) -> Veto:
+def _fit_veto(examples: list[Example], families: tuple[FeatureFamily, ...],
+              columns: np.ndarray | None, cv: int, selection: str, seed: int,
+              log: Callable[[str], None]) -> Veto:
     """The veto (:mod:`footfall.learning.veto`) of the examples whose teacher gave refusals,
-    on the families' columns, with their fold units."""
+    on the families' columns (only ``columns``, a (d,) bool mask, if given), with their fold
+    units."""
     told = distinct_examples([e for e in examples if e.refused is not None])
     if not told:
         raise FootfallError("a veto is learned from the teacher's refusals; no demonstration "
                             "carries them")
     X, _, groups = stack(told, families)
+    if columns is not None:
+        X = X[:, columns]
     refused = np.concatenate([e.refused for e in told])
+    judged = shortfall = None
+    if all(e.judged is not None for e in told):  # the values the refusals are relative to
+        judged = np.concatenate([e.judged for e in told])
+        shortfall = np.concatenate([e.judged_best - e.judged for e in told])
     units = stack_units(told)
-    veto = fit_veto(X, refused, groups, cv=cv, selection=selection, units=units, seed=seed)
-    log(f"  veto: {veto.trees} trees, cv error {veto.cv_error:.4f} "
+    veto = fit_veto(X, refused, groups, cv=cv, selection=selection, units=units, seed=seed,
+                    judged=judged, shortfall=shortfall)
+    log(f"  veto{'' if veto.margin is None else f' (relative, margin {veto.margin:.3g})'}: "
+        f"{veto.trees} trees, cv error {veto.cv_error:.4f} "
         f"({100 * veto.refused_share:.0f} % of {refused.size} candidates refused)")
     return veto
 
@@ -259,7 +272,8 @@ def _demo_examples(demos: Sequence[TrainingDemo], families: tuple[FeatureFamily,
     for d in demos:
         rows = training_rows(d.candidates.shape[0], d.chosen, training_candidates, rng)
         example = make_example(d.hmap, d.state, d.candidates, d.chosen, families, config, rows,
-                               robot, d.levels(kind), d.refused if veto else None)
+                               robot, d.levels(kind), d.refused if veto else None,
+                               d.judged if veto else None)
         examples.append(replace(example, unit=fold_unit(d, folds)))
     return examples
 
@@ -277,14 +291,15 @@ def _learn_group(group: str, examples: list[Example], families: tuple[FeatureFam
     log(f"{group} legs: {len(chosen)} demonstrations and comparisons")
     tuned = _tune(chosen, families, learner, Cs, cv, log)
     fitted = _fit(chosen, tuned, learner, Cs, cv, selection)
-    fitted, tuned = _within_budget(fitted, chosen, tuned, learner, Cs, cv, selection, budget,
-                                   log)
-    if veto:
-        vetoed = _fit_veto(chosen, tuned, cv, selection, seed, log)
-        function = learner.function(fitted, tuned, len(chosen), veto=vetoed.forest)
+    fitted, kept, mask = _within_budget(fitted, chosen, tuned, learner, Cs, cv, selection,
+                                        budget, log)
+    if veto:  # on the columns the ranker was fitted on
+        vetoed = _fit_veto(chosen, tuned, mask, cv, selection, seed, log)
+        function = learner.function(fitted, kept, len(chosen), veto=vetoed.forest,
+                                    veto_margin=vetoed.margin)
         function.info.update(vetoed.info())
     else:
-        function = learner.function(fitted, tuned, len(chosen))
+        function = learner.function(fitted, kept, len(chosen))
     log(_fitted_line(function.info, fitted.cv_error_, scales))
     return check_function(function)
 

@@ -166,9 +166,8 @@ def test_a_learned_function_walks_as_a_chooser_paired_with_the_hand_tuned_reward
                                                                                tmp_path):
     """A model chooser walks the same boards and seeds under ``model:NAME``, is paired with the
     hand-tuned reward, and its name keeps to its file in the folder."""
-    from test_learners import lowest_foothold_demos
-
     from footfall.learning.train import learn_model
+    from test_learners import lowest_foothold_demos
 
     out, _ = walked
     model = learn_model(lowest_foothold_demos(), "terrain", "l1", cv=3, Cs=3, seed=1)

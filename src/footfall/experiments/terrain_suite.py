@@ -56,8 +56,8 @@ from footfall.experiments.executors import Executor, LocalPool
 from footfall.experiments.reproduce import reproduction_walk
 from footfall.experiments.runs import RunJob, Runner, board_files, claim_folder
 from footfall.experiments.variants import VARIANTS
-from footfall.learning.model import FootholdModel
 from footfall.expert.synthetic import walking_expert
+from footfall.learning.model import FootholdModel
 from footfall.sim.episode import WalkConfig
 from footfall.terrain.kinds import HELD_OUT_KINDS, TRAINING_KINDS
 

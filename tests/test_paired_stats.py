@@ -101,3 +101,17 @@ def test_the_success_curves_draw_every_count_from_none_to_all(tmp_path):
     name, caption = _success_curves(tmp_path, {"sweep": sweep, "test_difficulty": 0.7,
                                                "config": {"sweep_runs": 3}})
     assert (tmp_path / name).stat().st_size > 0 and "Wilson" in caption
+
+
+def test_the_pairs_a_mcnemar_test_would_need_follow_connors_formula():
+    from footfall.core.stats import pairs_to_separate
+
+    # 10 % and 30 % discordant one way and the other: Connor's n for alpha 0.05, power 0.8
+    p10, p01 = 0.3, 0.1
+    psi, delta = p10 + p01, p10 - p01
+    expected = (1.959964 * psi ** 0.5 + 0.841621 * (psi - delta ** 2) ** 0.5) ** 2 / delta ** 2
+    assert pairs_to_separate(30, 10, 100) == np.ceil(expected) == 77
+    assert pairs_to_separate(10, 30, 100) == 77  # either way round
+    assert pairs_to_separate(7, 7, 63) is None and pairs_to_separate(0, 0, 0) is None
+    # a larger difference needs fewer runs
+    assert pairs_to_separate(23, 7, 63) < pairs_to_separate(13, 7, 63)

@@ -53,6 +53,21 @@ def wilson_interval(successes: int, trials: int, level: float = 0.95) -> tuple[f
     return float(lo), float(hi)
 
 
+def pairs_to_separate(a_only: int, b_only: int, pairs: int, alpha: float = 0.05,
+                      power: float = 0.8) -> float | None:
+    """Paired runs [-] a McNemar test would need to tell two methods apart at level ``alpha``
+    with probability ``power``, if their discordant shares stayed as measured: ``a_only`` /
+    ``pairs`` and ``b_only`` / ``pairs`` (Connor's sample size for McNemar's test, 1987).
+    None where the measured shares do not differ (no number of runs separates them)."""
+    if pairs <= 0 or a_only == b_only:
+        return None
+    p10, p01 = a_only / pairs, b_only / pairs
+    psi, delta = p10 + p01, p10 - p01
+    z_a, z_b = norm.ppf(1.0 - alpha / 2.0), norm.ppf(power)
+    n = (z_a * np.sqrt(psi) + z_b * np.sqrt(psi - delta * delta)) ** 2 / (delta * delta)
+    return float(np.ceil(n))
+
+
 def mcnemar_exact(a_only: int, b_only: int) -> float:
     """Two-sided exact McNemar p-value [-] of two methods walked on the same (paired) runs.
 

@@ -27,7 +27,7 @@ from itertools import combinations
 
 import numpy as np
 
-from footfall.core.stats import mcnemar_exact, paired_ratio_difference_ci
+from footfall.core.stats import mcnemar_exact, paired_ratio_difference_ci, pairs_to_separate
 
 ALPHA = 0.05  # significance level of the verdicts
 Unit = tuple[str, int]  # a paired unit: (board name, run seed)
@@ -70,6 +70,7 @@ def compare(outcomes: Outcomes, a: str, b: str, seed: int = 0) -> dict:
     b_only = int(np.sum((x["success"] == 0) & (y["success"] == 1)))
     out = {"a": a, "b": b, "pairs": len(units), "a_only": a_only, "b_only": b_only,
            "p_value": mcnemar_exact(a_only, b_only),
+           "pairs_to_separate": pairs_to_separate(a_only, b_only, len(units)),
            "success_difference": (float(x["success"].mean() - y["success"].mean())
                                   if units else float("nan")),
            "success_difference_ci": list(paired_ratio_difference_ci(

@@ -233,6 +233,12 @@ def _brief(t: dict) -> dict:
                               "slip_mean_mm", "distance_mean_m") if k in t}
 
 
+def _to_separate(v: dict) -> str:
+    n = v.get("pairs_to_separate")
+    return ("none would (as many runs only one crossed either way)" if n is None
+            else f"{n:.0f} (here {v['pairs']})")
+
+
 def _pct(x: float) -> str:
     return f"{100 * x:.1f} %"
 
@@ -253,6 +259,11 @@ def study_markdown(summary: dict) -> str:
     for v in summary["verdicts"]:
         per = "; ".join(f"{s}: {x['success']} / {x['slip']}" for s, x in v["per_seed"].items())
         lines.append(f"| {v['ordering']} | {pair_cells(v)} | {per} |")
+    lines += ["", "Paired runs a success verdict would need (exact McNemar at p < 0.05 with "
+              "power 0.8, were the runs only one of the two crossed as frequent as here; "
+              "Connor 1987): " + "; ".join(
+                  f"{v['ordering']} {_to_separate(v)}"
+                  for v in summary["verdicts"] + summary.get("against_start", [])) + "."]
     lines += ["", "## Against the hand-tuned reward learning starts from", "",
               "The same pooled paired runs and tests.", "",
               f"| ordering | {PAIR_COLUMNS} |", "|" + " --- |" * 11]

@@ -24,7 +24,7 @@ from footfall.core.heightmap import HeightMap
 from footfall.data.runlog import RunRecord
 from footfall.data.schema import SUFFIXES
 from footfall.data.store import Demonstration, DemoStore
-from footfall.expert.protocol import Expert, expert_settings, teacher_verdict
+from footfall.expert.protocol import Expert, expert_settings, kept_verdict, teacher_verdict
 
 DEFAULT_MARGIN = 1.0  # [value units; 1 unit = 1 cm of progress for the synthetic expert] a choice
 # this much worse than the expert's best is corrected: about the value spread of footholds a few
@@ -139,22 +139,10 @@ def corrections_to_demonstrations(run: RunRecord, run_key: str, corrections: lis
 
 
 def _stored_verdict(c: Correction) -> tuple[np.ndarray | None, ...]:
-    """A labelled step's verdict as a demonstration keeps it: a candidate the teacher valued
-    -inf (no foothold) refused and valued at its lowest finite value (its judged value too);
-    the labelled candidate never refused (an imperfect teacher may label a foothold its own
-    veto refuses: its label is its word)."""
+    """A labelled step's verdict as a demonstration keeps it (:func:`kept_verdict`)."""
     if c.values is None or c.refused is None:
         return c.values, c.refused, c.judged
-    values = np.asarray(c.values, dtype=np.float64)
-    finite = np.isfinite(values)
-    judged = None if c.judged is None else np.asarray(c.judged, dtype=np.float64)
-    if judged is not None:
-        finite &= np.isfinite(judged)
-        judged = np.where(finite, judged, judged[finite].min(initial=0.0))
-    refused = np.asarray(c.refused, dtype=bool) | ~finite
-    values = np.where(finite, values, values[finite].min(initial=0.0))
-    refused[c.label] = False
-    return values, refused, judged
+    return kept_verdict(c.values, c.refused, c.judged, c.label)
 
 
 @dataclass(frozen=True)

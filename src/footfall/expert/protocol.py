@@ -54,6 +54,24 @@ def teacher_verdict(expert: Any, hmap: HeightMap, state: RobotState, candidates:
     return values, refused, judged
 
 
+def kept_verdict(values: np.ndarray, refused: np.ndarray, judged: np.ndarray | None,
+                 chosen: int) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """A teacher's verdict as a demonstration keeps it (finite, the choice never refused): a
+    candidate valued -inf (no foothold) refused and valued at the lowest finite value (its
+    judged value too); the chosen candidate not refused (an imperfect teacher may choose a
+    foothold its own veto refuses: its choice is its word)."""
+    values = np.asarray(values, dtype=np.float64)
+    finite = np.isfinite(values)
+    if judged is not None:
+        judged = np.asarray(judged, dtype=np.float64)
+        finite &= np.isfinite(judged)
+        judged = np.where(finite, judged, judged[finite].min(initial=0.0))
+    refused = np.asarray(refused, dtype=bool) | ~finite
+    values = np.where(finite, values, values[finite].min(initial=0.0))
+    refused[chosen] = False
+    return values, refused, judged
+
+
 def values_each(expert: Any, hmap: HeightMap, states: Sequence[RobotState],
                 candidates: np.ndarray) -> np.ndarray:
     """An expert's values of the same candidates (n, 3) [m] in each of ``states`` (one heading

@@ -22,7 +22,7 @@ from footfall.core.heightmap import HeightMap
 from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.state import RobotState, nominal_state, stance_target
 from footfall.data.store import Demonstration
-from footfall.expert.protocol import Expert, expert_settings
+from footfall.expert.protocol import Expert, expert_settings, kept_verdict, teacher_verdict
 from footfall.features.candidates import DEFAULT_SPACING, reachable_footholds
 from footfall.features.config import FeatureConfig
 
@@ -108,7 +108,9 @@ def walk_demonstrations(hmap: HeightMap, expert: Expert, rng: np.random.Generato
     hmap : HeightMap
         The board; its frame's x axis is the walking direction.
     expert : Expert
-        Anything with ``choose(hmap, state, candidates, rng) -> int``.
+        Its ``choose(hmap, state, candidates, rng) -> int`` chooses; its verdict on every
+        candidate (:func:`~footfall.expert.protocol.teacher_verdict`) is kept with each
+        demonstration.
     rng : numpy.random.Generator
         Passed to every ``expert.choose``; the same seed gives the same walk.
     n_max : int
@@ -146,7 +148,9 @@ def walk_demonstrations(hmap: HeightMap, expert: Expert, rng: np.random.Generato
         foothold = candidates[choice]
         if x_range is None or x_range[0] <= foothold[0] <= x_range[1]:
             if eligible % path.record_every == path.record_phase:
-                demo = Demonstration(terrain_hash, state, candidates, choice, options.source, info)
+                verdict = kept_verdict(*teacher_verdict(expert, hmap, state, candidates), choice)
+                demo = Demonstration(terrain_hash, state, candidates, choice, options.source, info,
+                                     values=verdict[0], refused=verdict[1], judged=verdict[2])
                 out.append(demo)
                 if progress is not None:
                     progress(demo)

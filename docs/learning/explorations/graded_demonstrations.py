@@ -17,8 +17,8 @@ from pathlib import Path
 
 import lightgbm
 import numpy as np
-
 from _planner import BIAS, EXPERT, LIGHTGBM, difference, held_out, losses, rows, training
+
 from footfall.learning.ranker import grouped_folds, pairwise_error, select_on_path
 
 TREES = (10, 25, 50, 100, 200, 400)

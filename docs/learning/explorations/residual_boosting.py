@@ -14,9 +14,9 @@ from pathlib import Path
 
 import lightgbm
 import numpy as np
+from _planner import LIGHTGBM, difference, held_out, losses, rows, training
 from scipy.optimize import minimize_scalar
 
-from _planner import LIGHTGBM, difference, held_out, losses, rows, training
 from footfall.learning.ranker import grouped_folds, pairwise_error, select_on_path
 
 TREES = (0, 10, 25, 50, 100, 200)

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import lightgbm
 import numpy as np
-
 from _planner import LIGHTGBM, difference, held_out, losses, rows, training
+
 from footfall.learning.ranker import grouped_folds
 
 KS = (1, 3, 5, 10, 20, 40, 1000)  # shortlist lengths (1000: no shortlist)

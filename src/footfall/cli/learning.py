@@ -53,6 +53,21 @@ def model_output(path: str) -> Path:
     return out
 
 
+def supervision_options(f):
+    """Add --supervision and --veto: what a demonstration's teacher verdict tells the learner."""
+    f = click.option("--veto", is_flag=True,
+                     help="Beside each function, learn which candidates the teacher refuses "
+                          "outright (relative to the best of a candidate set where the "
+                          "demonstrations carry the values the teacher's veto judges by, else "
+                          "from the refusals alone) and take a penalty from them when scoring "
+                          "(lambdarank only).")(f)
+    return click.option("--supervision", type=SUPERVISION, default="choice", show_default=True,
+                        help="What a demonstration tells the learner: the teacher's choice (the "
+                             "paper's), its choice and the candidates it refused ('never "
+                             "here'), or every candidate graded by the teacher's values (where "
+                             "it gave them).")(f)
+
+
 @click.command()
 @click.argument("store_path", metavar="[DEMOS.sqlite]", required=False)
 @click.option("--features", "feature_set", type=FEATURE_SET, required=True,
@@ -84,16 +99,7 @@ def model_output(path: str) -> Path:
               help="Each leg group's function reads at most this share of its "
                    "demonstrations' number of templates (fitted again on those its learner "
                    "relied on most), or 'none'.")
-@click.option("--supervision", type=SUPERVISION, default="choice",
-              show_default=True,
-              help="What a demonstration tells the learner: the teacher's choice (the paper's), "
-                   "its choice and the candidates it refused ('never here'), or every "
-                   "candidate graded by the teacher's values (where it gave them).")
-@click.option("--veto", is_flag=True,
-              help="Beside each function, learn which candidates the teacher refuses outright "
-                   "(relative to the best of a candidate set where the demonstrations carry the "
-                   "values the teacher's veto judges by, else from the refusals alone) and "
-                   "take a penalty from them when scoring (lambdarank only).")
+@supervision_options
 @click.option("--source", multiple=True, help=SOURCE_HELP)
 @click.option("--trials", multiple=True, metavar="RUNS.sqlite",
               help="Also learn from the robot's own runs in this store (repeatable): every "

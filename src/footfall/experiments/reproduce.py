@@ -53,8 +53,6 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
-
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, above, at_least, param, within
@@ -62,7 +60,7 @@ from footfall.core.robot import LITTLEDOG
 from footfall.data.store import DemoStore
 from footfall.experiments.difficulty import calibration_held
 from footfall.experiments.executors import Executor, LocalPool
-from footfall.experiments.imitation import imitation_gap
+from footfall.experiments.judged_runs import choice_quality, imitation_gaps
 from footfall.experiments.report import write_report
 from footfall.experiments.reproduce_learning import learn_functions, learn_saved
 from footfall.experiments.runs import RunJob, Runner
@@ -80,10 +78,9 @@ from footfall.experiments.workspace import (
     test_boards,
 )
 from footfall.expert.collect import collect_demonstrations
-from footfall.expert.corrections import REPRODUCTION_MARGIN, SEVERE_SHORTFALL, step_verdicts
+from footfall.expert.corrections import REPRODUCTION_MARGIN
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
 from footfall.expert.teachers import TEACHERS
-from footfall.features.family import PAPER_FEATURE_SETS
 from footfall.learning.evaluation import expert_values, rank_scores
 from footfall.learning.learner import LEARNERS, get_learner
 from footfall.learning.model import LEG_GROUPS
@@ -410,17 +407,12 @@ def run_reproduction(out: str | os.PathLike, config: ReproduceConfig | None = No
         # The offline ranking of the three functions on the expert's demonstrations, and the
         # expert's verdict on every choice the robot made in the test-board runs.
         results["ranking"] = _ranking(ws, store, functions.models, log)
-        results["choices"] = _choice_quality(store, ws.by_hash, config, evaluation.boards, log)
-        results["imitation_gap"] = _imitation_gap(store, ws.by_hash, config, evaluation.boards,
+        results["choices"] = choice_quality(store, ws.by_hash, config, evaluation.boards, log)
+        results["imitation_gap"] = imitation_gaps(store, ws.by_hash, config, evaluation.boards,
                                                   log)
         results["seconds_this_session"] = time.perf_counter() - started
     write_report(ws.out, results, ws.maps, functions.models, config, log)
     return results
-
-
-def _runs_by_key(store: DemoStore, prefix: str) -> list[dict]:
-    """The stored runs under ``prefix`` in key order: not in the order parallel workers finished."""
-    return sorted(store.runs(key_prefix=prefix), key=lambda r: r["key"])
 
 
 def _demo_summary(demos: list, maps: dict[str, HeightMap]) -> dict:
@@ -435,54 +427,6 @@ def _demo_summary(demos: list, maps: dict[str, HeightMap]) -> dict:
         kinds[kind] = kinds.get(kind, 0) + 1
         legs[d.swing_leg] = legs.get(d.swing_leg, 0) + 1
     return {"n": len(demos), "by_module": dict(sorted(kinds.items())), "by_leg": legs}
-
-
-def _choice_quality(store: DemoStore, maps: dict[str, HeightMap], config: ReproduceConfig,
-                    test: list[str], log: Callable[[str], None]) -> dict:
-    """The expert's verdict on every step of the runs on the ``test`` boards, per method.
-
-    For the three functions and the two references: the steps judged, and the
-    mean, median and 90th percentile of the shortfall [value units] of the
-    robot's choice against the expert's best in the same F, with the fractions
-    of steps above the correction margin and above :data:`SEVERE_SHORTFALL`.
-    """
-    expert = SyntheticExpert(config.expert)
-    log("the expert's verdict on the choices of the test-board runs")
-    out = {}
-    for k in (*PAPER_FEATURE_SETS, "expert", "default"):  # every method of the test boards
-        parts = []
-        for row in (r for board in test for r in _runs_by_key(store, f"eval/{board}/{k}/")):
-            run = store.run(row["id"])
-            parts.append(step_verdicts(run, maps[run.terrain_hash], expert)[1])
-        sf = np.concatenate(parts) if parts else np.zeros(0)
-        out[k] = {"steps": int(sf.size), "severe_above": SEVERE_SHORTFALL}
-        if sf.size:
-            out[k].update(mean=float(sf.mean()), median=float(np.median(sf)),
-                          p90=float(np.percentile(sf, 90)),
-                          above_margin=float(np.mean(sf > config.margin)),
-                          severe=float(np.mean(sf > SEVERE_SHORTFALL)))
-    return out
-
-
-def _imitation_gap(store: DemoStore, maps: dict[str, HeightMap], config: ReproduceConfig,
-                   test: list[str], log: Callable[[str], None]) -> dict:
-    """Per learned function, the test-board runs it failed and the teacher crossed (same board
-    and seed), each judged by the teacher step by step (:mod:`footfall.experiments.imitation`)."""
-    step = config.walk.footstep
-    teacher = TEACHERS.get(config.teacher).expert(config.expert, step.bias_weight, step.lead)
-    log("the teacher's verdict on the learned functions' failed test-board runs")
-    out = {}
-    for fs in PAPER_FEATURE_SETS:
-        pairs = []
-        for board in test:
-            teacher_runs = {r["key"].rsplit("/", 1)[1]: r
-                            for r in _runs_by_key(store, f"eval/{board}/expert/")}
-            for row in _runs_by_key(store, f"eval/{board}/{fs}/"):
-                other = teacher_runs.get(row["key"].rsplit("/", 1)[1])
-                if other is not None:
-                    pairs.append((store.run(row["id"]), store.run(other["id"])))
-        out[fs] = imitation_gap(pairs, maps, teacher, config.margin)
-    return out
 
 
 def _ranking(ws: Workspace, store: DemoStore, models: dict, log: Callable[[str], None]) -> dict:

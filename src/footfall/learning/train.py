@@ -236,14 +236,20 @@ def _trial_examples(trials: Sequence[TrialFoothold], families: tuple[FeatureFami
 
 def _fit_veto(examples: list[Example], families: tuple[FeatureFamily, ...],
               columns: np.ndarray | None, cv: int, selection: str, seed: int,
-              log: Callable[[str], None]) -> Veto:
+              log: Callable[[str], None]) -> Veto | None:
     """The veto (:mod:`footfall.learning.veto`) of the examples whose teacher gave refusals,
     on the families' columns (only ``columns``, a (d,) bool mask, if given), with their fold
-    units."""
+    units; None where the teacher refused none of their candidates, or all (nothing to learn:
+    the function walks without a veto)."""
     told = distinct_examples([e for e in examples if e.refused is not None])
     if not told:
         raise FootfallError("a veto is learned from the teacher's refusals; no demonstration "
                             "carries them")
+    share = float(np.mean(np.concatenate([e.refused for e in told])))
+    if share in (0.0, 1.0):
+        log(f"  no veto: the teacher refused {'none' if share == 0 else 'all'} of these "
+            f"demonstrations' candidates")
+        return None
     X, _, groups = stack(told, families)
     if columns is not None:
         X = X[:, columns]
@@ -293,8 +299,8 @@ def _learn_group(group: str, examples: list[Example], families: tuple[FeatureFam
     fitted = _fit(chosen, tuned, learner, Cs, cv, selection)
     fitted, kept, mask = _within_budget(fitted, chosen, tuned, learner, Cs, cv, selection,
                                         budget, log)
-    if veto:  # on the columns the ranker was fitted on
-        vetoed = _fit_veto(chosen, tuned, mask, cv, selection, seed, log)
+    vetoed = _fit_veto(chosen, tuned, mask, cv, selection, seed, log) if veto else None
+    if vetoed is not None:  # on the columns the ranker was fitted on
         function = learner.function(fitted, kept, len(chosen), veto=vetoed.forest,
                                     veto_margin=vetoed.margin)
         function.info.update(vetoed.info())

@@ -24,9 +24,11 @@ TINY = ReproduceConfig(
     test_boards=2, sweep_runs=1, rounds=2, target_demos=1000, corrections_per_run=None, margin=2.0, library_size=30,
     training_candidates=20, cv=2, final_bandwidth_rms=0.004, eval_runs=1, offline_demos=4,
     walk=WalkConfig(max_steps=8),  # eight steps a run: small, but every stage runs
-    expert=ExpertConfig(), teacher="expert")  # the expert who values progress corrects most of
-# eight steps (the walking expert, who wants the foot where this gait puts it, too few of them to
-# learn from; the guarded teacher fewer still)
+    expert=ExpertConfig(), teacher="expert", every_step=False, round_runs=1,
+    supervision="choice", veto=False, library_capped=False)  # the paper's loop: the expert who
+# values progress corrects most of eight steps (the walking expert, who wants the foot where this
+# gait puts it, too few of them to learn from; the guarded teacher fewer still). The student's
+# default loop -- every step labelled, graded, the veto -- is DAGGER's, below
 
 
 def _stored(out):
@@ -282,8 +284,10 @@ def test_the_three_functions_learned_in_worker_processes_are_the_same_bits(unint
             np.testing.assert_array_equal(learned[0][k], saved[0][k])
 
 
-DAGGER = replace(TINY, every_step=True, round_runs=2, supervision="graded", teacher="accepted",
-                 expert=None, learner="lambdarank", template_budget=None)
+DAGGER = replace(TINY, every_step=ReproduceConfig().every_step,  # the student's defaults
+                 round_runs=ReproduceConfig().round_runs, supervision=ReproduceConfig().supervision,
+                 veto=ReproduceConfig().veto, library_capped=ReproduceConfig().library_capped,
+                 teacher=ReproduceConfig().teacher, expert=None)
 
 
 def _rounds(out, config, on_run=None):
@@ -310,6 +314,7 @@ def test_dagger_labels_every_step_of_the_students_runs_and_resumes(tmp_path):
     assert totals == [runs["correct/r0/train00"] + runs["correct/r0/train00/s1"], len(whole.demos)]
     assert 0 < totals[0] < totals[1]  # the student's own states added to the teacher's
     assert whole.rounds[1]["reward"] == "models/round1.npz"  # round 1 walked the student
+    assert DAGGER.every_step and DAGGER.veto and DAGGER.supervision == "graded"
     assert all(d.values is not None and d.refused is not None for d in whole.demos)
     assert any(d.refused.any() for d in whole.demos)  # the veto says "never here" somewhere
     first: list[str] = []

@@ -159,30 +159,31 @@ class ReproduceConfig(Params):
                              doc="unseen test boards at the test difficulty (Table II per "
                                  "board and pooled; the first is the paper's one-board table)")
     rounds: int = param(5, range=at_least(1), doc="most correction rounds (walk, correct, learn)")
-    target_demos: int = param(100, range=at_least(1),
-                              doc="rounds stop once this many corrections are collected")
+    target_demos: int | None = param(
+        None, range=at_least(1), doc="rounds stop once this many corrections are collected; "
+                                     "None: every round is walked")
     extra_rounds: int = param(3, range=at_least(0),
                               doc="further rounds, walked only while the front or the hind legs "
                                   "have fewer corrections than the cv folds need")
     corrections_per_run: int | None = param(
-        6, range=at_least(1), doc="the expert labels the worst this many steps of a run whose "
-                                  "shortfall exceeds the margin (None: all of them)")
+        None, range=at_least(1), doc="the teacher labels at most the worst this many steps of "
+                                     "a run (None: all of them)")
     every_step: bool = param(
-        False, doc="the teacher labels every step of the robot's runs, not only those short of "
+        True, doc="the teacher labels every step of the robot's runs, not only those short of "
                    "its best by more than the margin (DAgger: the student's own states); "
                    "corrections_per_run still bounds them")
-    round_runs: int = param(1, range=at_least(1),
+    round_runs: int = param(2, range=at_least(1),
                             doc="runs on each training board in every correction round")
     supervision: str = param(
-        "choice", check=lambda v: v in SUPERVISIONS, must="a registered supervision kind",
+        "graded", check=lambda v: v in SUPERVISIONS, must="a registered supervision kind",
         doc="what the learners read of a correction (learning.supervision): the teacher's "
             "choice (the paper's), its refusals too, or every candidate graded by its values")
     veto: bool = param(
-        False, doc="beside each ranking function, learn which candidates the teacher refuses "
+        True, doc="beside each ranking function, learn which candidates the teacher refuses "
                    "outright (learning.veto: relative to the best of a candidate set, from the "
                    "values its veto judges by) and take a penalty from them when walking")
     library_capped: bool = param(
-        False, doc="the template library holds at most library_size templates however many "
+        True, doc="the template library holds at most library_size templates however many "
                    "corrections there are (a sample of their footholds); False: every "
                    "corrected foothold is a template (the paper's)")
     margin: float = param(REPRODUCTION_MARGIN, unit="value", range=at_least(0),
@@ -190,7 +191,7 @@ class ReproduceConfig(Params):
                               "expert's unit: 1 cm off the gait-nominal foothold)")
     library_size: int = param(1000, range=at_least(1),
                               doc="templates in the library before L1 selection")
-    training_candidates: int = param(100, range=at_least(1),
+    training_candidates: int = param(30, range=at_least(1),
                                      doc="candidates per demonstration in the pairwise training set")
     selection: str = param("min", choices=SELECTIONS,
                            doc="lambda: at the smallest cross-validation error (paper §V) or by "
@@ -249,7 +250,7 @@ class ReproduceConfig(Params):
         return cls(seed=seed, train_boards=((("rocky", 0.5),), (("steps", 0.5),)),
                    test_kinds=("rocky",), difficulties=(0.5, 0.9), calibration_boards=1,
                    calibration_runs=2, calibration_level_runs=4, confirmation_runs=2,
-                   test_boards=2, rounds=2, target_demos=24, corrections_per_run=6,
+                   test_boards=2, rounds=2, corrections_per_run=6,
                    library_size=200, training_candidates=40, cv=3, final_bandwidth_rms=0.004,
                    eval_runs=3, sweep_runs=1, offline_demos=12)
 
@@ -322,7 +323,8 @@ def correction_rounds(ws: Workspace, runner: Runner) -> Corrections:
         log(f"round {r}: {rounds[-1]['successes']} / {len(runs)} crossings, "
             f"{len(demos)} corrections so far")
         short = _short_groups(demos, config.cv)
-        if (len(demos) >= config.target_demos or r >= config.rounds - 1) and not short:
+        if ((config.target_demos is not None and len(demos) >= config.target_demos)
+                or r >= config.rounds - 1) and not short:
             break
         if short:  # too few to learn from: walk the next round with the same reward
             log(f"  too few corrections of the {' and '.join(short)} legs to learn from "

@@ -201,7 +201,7 @@ def test_the_default_reproduction_walks_with_the_walking_expert_and_a_local_f():
 def test_tables_do_not_depend_on_the_order_in_which_runs_finished():
     from types import SimpleNamespace
 
-    from footfall.experiments.reproduce import _runs_by_key
+    from footfall.experiments.judged_runs import _runs_by_key
 
     rows = [{"key": "eval/both/s5002", "id": 1}, {"key": "eval/both/s5000", "id": 2},
             {"key": "eval/both/s5001", "id": 3}]

@@ -64,7 +64,10 @@ def test_a_learner_that_cannot_rank_its_columns_refuses_a_budget(demos):
         learn_model(demos, "templates", "kernel", template_budget=0.5, **SETTINGS)
     with pytest.raises(FootfallError, match="kernel.*cannot rank"):
         ReproduceConfig(learner="kernel")  # the reproduction's budget: refused before walking
-    assert ReproduceConfig(learner="kernel", template_budget=None).template_budget is None
+    with pytest.raises(FootfallError, match="kernel.*cannot carry a learned veto"):
+        ReproduceConfig(learner="kernel", template_budget=None)  # nor the teacher's veto
+    config = ReproduceConfig(learner="kernel", template_budget=None, veto=False)
+    assert config.template_budget is None and not config.veto
 
 
 @pytest.mark.parametrize("bad", [0, -0.5, float("nan"), float("inf"), True, "half"])

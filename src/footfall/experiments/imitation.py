@@ -4,12 +4,14 @@ For every pair of runs on the same board with the same seed -- one walked by a l
 function (the student), one by its teacher choosing every foothold -- in which the student
 failed and the teacher crossed, the teacher judges every step of the student's run: its
 values of the step's candidates, those it refuses outright, and its own choice
-(:func:`~footfall.expert.protocol.teacher_verdict`). The run is an **imitation error** when,
-before it failed, the student stood on a foothold the teacher refuses or values short of its
-best by more than the margin; otherwise the teacher accepted every foothold the student
-chose and the failure is one the teacher's own choices could have met on the student's way
-(**accepted throughout**). The first step where the student's foothold is not the teacher's
-choice is reported too: where the two runs parted.
+(:func:`~footfall.expert.protocol.teacher_verdict`). A foothold is *unacceptable* where the
+teacher refuses it or values it short of its best by more than the margin. The run is an
+**imitation error at the end** when the student stood on an unacceptable foothold in the
+last gait cycle before it failed (its last :data:`END_STEPS` steps: each foot once), an
+**imitation error earlier** when its unacceptable footholds all lie before that, and
+**accepted throughout** when the teacher accepted every foothold it chose: a failure the
+teacher's own choices could have met on the student's way. The first step where the
+student's foothold is not the teacher's choice is reported too: where the two runs parted.
 """
 
 from __future__ import annotations
@@ -23,7 +25,8 @@ from footfall.core.heightmap import HeightMap
 from footfall.data.runlog import RunRecord
 from footfall.expert.protocol import Expert, teacher_verdict
 
-CAUSES = ("imitation error", "accepted throughout")
+CAUSES = ("imitation error at the end", "imitation error earlier", "accepted throughout")
+END_STEPS = 4  # [steps] the last gait cycle before a failure: each foot of the crawl once
 
 
 @dataclass(frozen=True)
@@ -40,6 +43,8 @@ class GapRun:
     # short of its best by more than the margin (None: none)
     unacceptable_shortfall: float | None  # [value units] at that step (None: none)
     refused: bool  # the teacher refuses that foothold outright
+    last_unacceptable: int | None  # the last such step (None: none)
+    unacceptable_steps: int  # how many of the run's steps stood on such a foothold
     cause: str  # one of CAUSES
 
     def as_dict(self) -> dict:
@@ -50,10 +55,11 @@ class GapRun:
 def judge_gap_run(student: RunRecord, hmap: HeightMap, teacher: Expert, margin: float
                   ) -> GapRun:
     """The teacher's verdict on every step of a failed ``student`` run on ``hmap``."""
-    parted = unacceptable = None
+    parted = unacceptable = last = None
     parted_short: float | None = None
     unacceptable_short: float | None = None
     refused_there = False
+    count = 0
     rng = np.random.default_rng(0)  # a noiseless teacher draws nothing
     for step in student.steps:  # one run's steps (dozens), each vectorised over F
         values, refused, _ = teacher_verdict(teacher, hmap, step.state, step.candidates)
@@ -61,14 +67,18 @@ def judge_gap_run(student: RunRecord, hmap: HeightMap, teacher: Expert, margin: 
         if parted is None and int(teacher.choose(hmap, step.state, step.candidates,
                                                  rng)) != step.chosen:
             parted, parted_short = step.k, short
-        if unacceptable is None and (bool(refused[step.chosen]) or short > margin):
-            unacceptable, unacceptable_short = step.k, short
-            refused_there = bool(refused[step.chosen])
-        if parted is not None and unacceptable is not None:
-            break
+        if bool(refused[step.chosen]) or short > margin:
+            count += 1
+            last = step.k
+            if unacceptable is None:
+                unacceptable, unacceptable_short = step.k, short
+                refused_there = bool(refused[step.chosen])
+    end = student.steps[-1].k if student.steps else 0
+    cause = (CAUSES[2] if last is None else CAUSES[0] if end - last < END_STEPS
+             else CAUSES[1])
     return GapRun(student.key or "", str(student.result.get("reason", "")), len(student.steps),
-                  parted, parted_short, unacceptable, unacceptable_short, refused_there,
-                  CAUSES[0] if unacceptable is not None else CAUSES[1])
+                  parted, parted_short, unacceptable, unacceptable_short, refused_there, last,
+                  count, cause)
 
 
 def imitation_gap(pairs: Sequence[tuple[RunRecord, RunRecord]], maps: dict[str, HeightMap],

@@ -20,6 +20,7 @@ from matplotlib.figure import Figure
 from footfall.core.atomic import atomic_path, write_text_atomic
 from footfall.core.files import plain_json
 from footfall.experiments.batch import reward_source, save_strip
+from footfall.experiments.imitation import CAUSES, END_STEPS
 from footfall.features.dense import score_grid
 from footfall.plots.maps import save_kept_templates, save_score_maps
 from footfall.plots.relief import save_relief
@@ -365,20 +366,23 @@ def _gap(results: dict) -> list[str]:
         return []
     lines = ["## The imitation gap: test runs a learned function failed and the teacher crossed",
              "", "Same board, same run seed. The teacher judges every step of the learned "
-             "function's run: an *imitation error* where, before the failure, the robot stood on "
-             "a foothold the teacher refuses or values short of its best by more than the "
-             "margin; *accepted throughout* where the teacher accepted every foothold it chose. "
-             "*Parted*: the median step at which its foothold first was not the teacher's "
-             "choice.", "",
+             "function's run; a foothold is *unacceptable* where the teacher refuses it or values "
+             "it short of its best by more than the margin. *At the end*: the robot stood on one "
+             f"in its last {END_STEPS} steps before failing (the last gait cycle); *earlier*: only "
+             "before that; *accepted throughout*: never, a failure the teacher's choices could "
+             "have met on its way. *Refused*: the first unacceptable foothold was refused "
+             "outright. *Parted*: the median step at which its foothold first was not the "
+             "teacher's choice.", "",
              "| method | paired runs | only it crossed | only the teacher crossed | imitation "
-             "errors (refused) | accepted throughout | parted at step (median) |",
-             "| --- | --- | --- | --- | --- | --- | --- |"]
+             "error at the end | earlier | accepted throughout | refused | parted at step "
+             "(median) |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for fs, g in gap.items():
         parted = [r["parted"] for r in g["runs"] if r["parted"] is not None]
+        by = g["by_cause"]
         lines.append(f"| {NAMES[fs]} | {g['pairs']} | {g['student_only']} | {g['teacher_only']} "
-                     f"| {g['by_cause']['imitation error']} ({g['refused']}) | "
-                     f"{g['by_cause']['accepted throughout']} | "
-                     f"{statistics.median(parted) if parted else '-'} |")
+                     + "".join(f"| {by[c]} " for c in CAUSES) + f"| {g['refused']} | "
+                     f"{format(statistics.median(parted), 'g') if parted else '-'} |")
     return lines + [""]
 
 

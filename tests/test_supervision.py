@@ -195,3 +195,12 @@ def test_a_veto_is_learned_on_the_columns_the_ranker_kept_within_its_template_bu
     scorer = model.reward_for(d.state.swing_leg)
     values = scorer.values(Candidates.of_state(d.hmap, d.state, d.candidates, model.config))
     assert np.isfinite(values).all() and np.ptp(values) > 0
+    # LightGBM on two threads (the reproduction's rounds) grows the same trees and veto
+    threaded = learn_model(demos, "both", "lambdarank", cv=3, training_candidates=30, seed=7,
+                           library_size=30, supervision="graded", veto=True,
+                           template_budget=0.2, threads=2)
+    for group, f in model.functions.items():
+        mine, theirs = f.arrays(), threaded.functions[group].arrays()
+        assert mine.keys() == theirs.keys() and any("veto" in k for k in mine)
+        for k in mine:
+            np.testing.assert_array_equal(mine[k], theirs[k], err_msg=k)

@@ -53,6 +53,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
+from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, above, at_least, param, within
@@ -299,6 +300,12 @@ class Corrections:
     demos: list  # the corrections of every round, in source order (run key, step)
 
 
+def _learning_threads(runner: Runner) -> int:
+    """A round's learning has this machine to itself (no run is walked meanwhile): the local
+    pool's processes as its threads, at most the cores this process may use."""
+    return max(1, min(getattr(runner.executor, "processes", None) or 1, usable_cores()))
+
+
 def correction_rounds(ws: Workspace, runner: Runner) -> Corrections:
     """Walk, correct, learn, for up to ``rounds + extra_rounds`` rounds (see the module)."""
     config, log = ws.config, runner.log
@@ -332,7 +339,7 @@ def correction_rounds(ws: Workspace, runner: Runner) -> Corrections:
                 + (" (an extra round)" if r + 1 >= config.rounds else ""))
             continue
         learn_saved(ws, f"round{r + 1}", demos, ROBOT_FEATURE_SET, config.round_bandwidth_rms,
-                    log)
+                    log, _learning_threads(runner))
         model_path = str(ws.model_path(f"round{r + 1}"))
     if short:
         raise FootfallError(

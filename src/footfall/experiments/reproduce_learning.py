@@ -69,11 +69,12 @@ def _saved(path: Path, key: str) -> FootholdModel | None:
 
 
 def learn_saved(ws: Workspace, name: str, demos: list, feature_set: str, rms: float | None,
-                log: Callable[[str], None]) -> FootholdModel:
+                log: Callable[[str], None], threads: int = 1) -> FootholdModel:
     """The model learned from ``demos`` (ordered by source), reused from its file if it matches.
 
     ``rms`` [m]: the RBF bandwidths fixed as that RMS height difference on
-    every scale; None: chosen by cross-validation.
+    every scale; None: chosen by cross-validation. ``threads``: each fit's threads
+    (:func:`~footfall.learning.train.learn_model`; the same model whatever the number).
     """
     config, path = ws.config, ws.model_path(name)
     key, seed = _key(ws, demos, feature_set, rms)
@@ -90,7 +91,8 @@ def learn_saved(ws: Workspace, name: str, demos: list, feature_set: str, rms: fl
                         seed=seed, selection=config.selection, folds=config.folds,
                         template_budget=config.template_budget,
                         supervision=config.supervision, veto=config.veto,
-                        library_capped=config.library_capped, log=lambda s: log("    " + s))
+                        library_capped=config.library_capped, threads=threads,
+                        log=lambda s: log("    " + s))
     model = replace(model, info={**model.info, "training_key": key,
                                  "sources": [d.source for d in demos]})
     model.save(path)
@@ -146,7 +148,7 @@ def learn_functions(ws: Workspace, demos: list, log: Callable[[str], None],
     selection (:class:`~footfall.experiments.reproduce.ReproduceConfig`: learner, selection,
     folds): with ``processes`` > 1 and the corrections stored (``store_path``), those not
     saved yet are learned in that many worker processes at once, their logs in the sets'
-    order."""
+    order; one left to learn takes ``processes`` threads."""
     rms = ws.config.final_bandwidth_rms
     todo = [fs for fs in PAPER_FEATURE_SETS
             if _saved(ws.model_path(fs), _key(ws, demos, fs, rms)[0]) is None]
@@ -163,5 +165,5 @@ def learn_functions(ws: Workspace, demos: list, log: Callable[[str], None],
     for fs in PAPER_FEATURE_SETS:
         if not (pooled and fs in todo):
             log(_heading(ws, fs))
-        models[fs] = learn_saved(ws, fs, demos, fs, rms, log)
+        models[fs] = learn_saved(ws, fs, demos, fs, rms, log, 1 if pooled else processes)
     return Functions(models)

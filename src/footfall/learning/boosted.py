@@ -415,11 +415,13 @@ class BoostedLearner(Learner):
     order_only: bool = True  # a split reads a column's order: an RBF bandwidth re-maps nothing
     objective: str = "lambdarank"
     vetoes: bool = True  # its function can carry a learned veto (footfall.learning.veto)
+    threads: int = 1  # LightGBM's threads a fit (see BoostedRanker's n_jobs)
 
     def fit(self, X, y, groups, *, Cs=10, cv: int = 5, selection: str = "1se",
             units=None) -> BoostedRanker:
         """:class:`BoostedRanker`, fitted (the number of trees is its path; ``Cs`` unused)."""
-        return BoostedRanker(self.objective, cv=cv, selection=selection).fit(X, y, groups, units)
+        return BoostedRanker(self.objective, cv=cv, selection=selection,
+                             n_jobs=self.threads).fit(X, y, groups, units)
 
     def function(self, fitted: BoostedRanker, families: tuple[FeatureFamily, ...],
                  n_demonstrations: int, veto: Forest | None = None,

@@ -38,7 +38,9 @@ class Learner(ABC):
     which re-maps a column monotonically -- an RBF bandwidth -- changes nothing
     it could learn and is not searched for it
     (:meth:`FeatureFamily.tune <footfall.features.family.FeatureFamily.tune>`); ``vetoes``:
-    whether :meth:`function` takes a learned veto (``veto=``, :mod:`footfall.learning.veto`).
+    whether :meth:`function` takes a learned veto (``veto=``, :mod:`footfall.learning.veto`);
+    ``threads``: the threads a fit may use where the learner has its own (the boosted ranker's
+    LightGBM), the fit the same whatever the number (``dataclasses.replace`` sets it).
     """
 
     name: str
@@ -47,6 +49,7 @@ class Learner(ABC):
     ranks_columns: bool = False  # its importance() ranks the columns (a template budget works)
     order_only: bool = False  # it reads each column's order only: monotone re-maps are not tuned
     vetoes: bool = False  # its function can carry a learned veto (footfall.learning.veto)
+    threads: int = 1  # threads a fit may use, where the learner has its own
 
     @abstractmethod
     def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray, *, Cs: Any = 10,

@@ -15,7 +15,7 @@ import math
 import os
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
@@ -235,7 +235,7 @@ def _trial_examples(trials: Sequence[TrialFoothold], families: tuple[FeatureFami
 
 
 def _fit_veto(examples: list[Example], families: tuple[FeatureFamily, ...],
-              columns: np.ndarray | None, cv: int, selection: str, seed: int,
+              columns: np.ndarray | None, cv: int, selection: str, seed: int, threads: int,
               log: Callable[[str], None]) -> Veto | None:
     """The veto (:mod:`footfall.learning.veto`) of the examples whose teacher gave refusals,
     on the families' columns (only ``columns``, a (d,) bool mask, if given), with their fold
@@ -260,7 +260,7 @@ def _fit_veto(examples: list[Example], families: tuple[FeatureFamily, ...],
         shortfall = np.concatenate([e.judged_best - e.judged for e in told])
     units = stack_units(told)
     veto = fit_veto(X, refused, groups, cv=cv, selection=selection, units=units, seed=seed,
-                    judged=judged, shortfall=shortfall)
+                    judged=judged, shortfall=shortfall, threads=threads)
     log(f"  veto{'' if veto.margin is None else f' (relative, margin {veto.margin:.3g})'}: "
         f"{veto.trees} trees, cv error {veto.cv_error:.4f} "
         f"({100 * veto.refused_share:.0f} % of {refused.size} candidates refused)")
@@ -299,7 +299,8 @@ def _learn_group(group: str, examples: list[Example], families: tuple[FeatureFam
     fitted = _fit(chosen, tuned, learner, Cs, cv, selection)
     fitted, kept, mask = _within_budget(fitted, chosen, tuned, learner, Cs, cv, selection,
                                         budget, log)
-    vetoed = _fit_veto(chosen, tuned, mask, cv, selection, seed, log) if veto else None
+    vetoed = (_fit_veto(chosen, tuned, mask, cv, selection, seed, learner.threads, log)
+              if veto else None)
     if vetoed is not None:  # on the columns the ranker was fitted on
         function = learner.function(fitted, kept, len(chosen), veto=vetoed.forest,
                                     veto_margin=vetoed.margin)
@@ -326,7 +327,7 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
                 bandwidth_rms: Sequence[float] | None = None, Cs=10, cv: int = 5, seed: int = 0,
                 selection: str = "1se", family_options: dict[str, dict[str, Any]] | None = None,
                 folds: str = "demonstration", template_budget: float | None = None,
-                supervision: str = "choice", veto: bool = False,
+                supervision: str = "choice", veto: bool = False, threads: int = 1,
                 log: Callable[[str], None] = lambda s: None) -> FootholdModel:
     """Learn front- and hind-leg ranking functions from demonstrations.
 
@@ -346,7 +347,9 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     demonstration's teacher verdict becomes relevance levels of its candidates
     (:mod:`footfall.learning.supervision`: ``choice``, the paper's; ``refusals``; ``graded``).
     ``veto``: beside each function, learn which candidates the teacher refuses outright
-    (:mod:`footfall.learning.veto`). ``trials`` are footholds
+    (:mod:`footfall.learning.veto`). ``threads``: the threads each fit may use where the
+    learner has its own (the boosted ranker and the veto: LightGBM's; the same model whatever
+    the number, faster only on cores nothing else holds). ``trials`` are footholds
     of the robot's own runs labelled by what followed
     (:mod:`footfall.learning.trials`): each that went wrong is ranked below
     ``trial_pairs`` that did not, of its board and leg group -- alone (no
@@ -356,6 +359,10 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     if folds not in FOLDS:
         raise FootfallError(f"unknown fold grouping {folds!r}; use one of {', '.join(FOLDS)}")
     chosen_learner = get_learner(learner)  # a registered learner, or a clear error
+    threads = require_int(threads, "threads", 1)
+    if threads != chosen_learner.threads and "threads" in {f.name for f in
+                                                           fields(chosen_learner)}:
+        chosen_learner = replace(chosen_learner, threads=threads)  # a learner with its own
     kind = get_supervision(supervision)
     if veto and not chosen_learner.vetoes:
         raise FootfallError(f"learner {learner!r} cannot carry a learned veto; the boosted "

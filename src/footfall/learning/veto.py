@@ -64,10 +64,11 @@ class Veto:
                 "veto_refused_share": self.refused_share, "veto_margin": self.margin}
 
 
-def _train(X: np.ndarray, target: np.ndarray, rounds: int, seed: int, objective: str) -> Any:
+def _train(X: np.ndarray, target: np.ndarray, rounds: int, seed: int, objective: str,
+           threads: int) -> Any:
     import lightgbm  # imported when a veto is learned
 
-    params = {**VETO_PARAMS, "seed": seed, "objective": objective}
+    params = {**VETO_PARAMS, "seed": seed, "objective": objective, "num_threads": int(threads)}
     data = lightgbm.Dataset(X, target.astype(np.float64), params=params,
                             free_raw_data=True).construct()
     return lightgbm.train(params, data, num_boost_round=int(rounds))
@@ -75,14 +76,16 @@ def _train(X: np.ndarray, target: np.ndarray, rounds: int, seed: int, objective:
 
 def fit_veto(X: np.ndarray, refused: np.ndarray, groups: np.ndarray, *, cv: int = 5,
              selection: str = "min", units: np.ndarray | None = None, seed: int = 0,
-             judged: np.ndarray | None = None, shortfall: np.ndarray | None = None) -> Veto:
+             judged: np.ndarray | None = None, shortfall: np.ndarray | None = None,
+             threads: int = 1) -> Veto:
     """The veto learned from candidates (n, d) and the teacher's refusals (n,) bool: relative
     with ``judged`` (n,) [value units] and each candidate's ``shortfall`` (n,) [value units]
     below the best judged value of its whole F, absolute without them.
 
     ``groups`` (n,) names each candidate's demonstration and ``units`` (n,), if given, its fold
     unit (run or board): no fold splits one. The folds are fitted one after another (LightGBM's
-    objectives keep static state that boosters made at once in threads race on).
+    objectives keep static state that boosters made at once in threads race on), each with
+    LightGBM's ``threads`` (the same trees whatever the number).
 
     Raises
     ------
@@ -108,15 +111,15 @@ def fit_veto(X: np.ndarray, refused: np.ndarray, groups: np.ndarray, *, cv: int 
         clip = max(JUDGED_CLIP, 3.0 * margin)  # well beyond where the veto decides
         target = np.asarray(judged, dtype=np.float64) + np.maximum(shortfall - clip, 0.0)
         objective = "regression"
-    trees, errors = _path(X, target, refused, groups, units, int(cv), objective, seed)
+    trees, errors = _path(X, target, refused, groups, units, int(cv), objective, seed, threads)
     best = select_on_path(errors.mean(axis=0), errors.std(axis=0), errors.shape[0], selection)
-    booster = _train(X, target, trees[best], seed, objective)
+    booster = _train(X, target, trees[best], seed, objective, threads)
     return Veto(forest_of(booster), int(trees[best]), float(errors[:, best].mean()),
                 float(refused.mean()), margin)
 
 
 def _path(X: np.ndarray, target: np.ndarray, refused: np.ndarray, groups: np.ndarray,
-          units: np.ndarray | None, cv: int, objective: str, seed: int
+          units: np.ndarray | None, cv: int, objective: str, seed: int, threads: int
           ) -> tuple[np.ndarray, np.ndarray]:
     """The numbers of trees and each fold's held-out error at each, (folds, trees): squared
     error of a regression, the share misclassified of the log-odds."""
@@ -126,7 +129,7 @@ def _path(X: np.ndarray, target: np.ndarray, refused: np.ndarray, groups: np.nda
     errors = np.empty((len(folds), trees.size))
     for k, (train_groups, _) in enumerate(folds):  # one at a time: see fit_veto
         train = np.isin(groups, uniq[train_groups])
-        booster = _train(X[train], target[train], trees[-1], seed, objective)
+        booster = _train(X[train], target[train], trees[-1], seed, objective, threads)
         for j, t in enumerate(trees):
             raw = booster.predict(X[~train], num_iteration=int(t), raw_score=True)
             errors[k, j] = (np.mean((raw - target[~train]) ** 2) if objective == "regression"

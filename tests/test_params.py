@@ -39,6 +39,7 @@ from footfall.experiments.curve_walk import CurveWalkConfig
 from footfall.experiments.learning_curve import CurveConfig
 from footfall.experiments.offline import OfflineConfig
 from footfall.experiments.reproduce import ReproduceConfig
+from footfall.experiments.student_curve import StudentCurveConfig
 from footfall.experiments.terrain_suite import SuiteConfig
 from footfall.expert.synthetic import ExpertConfig
 from footfall.features.config import FeatureConfig
@@ -48,7 +49,7 @@ from footfall.sim.simulation import PerturbationConfig
 CONFIGS = (Limits, FeatureConfig, PerturbationConfig, WalkConfig, LowLevelConfig, BodyPathConfig,
            FootstepConfig, CogConfig, SwingConfig, PoseConfig, ExpertConfig, ReproduceConfig,
            OfflineConfig, ReflexConfig, AblationConfig, CurveConfig, CurveWalkConfig,
-           SuiteConfig)
+           SuiteConfig, StudentCurveConfig)
 """Every declared config of footfall (test_every_declared_config_is_listed keeps it whole)."""
 
 

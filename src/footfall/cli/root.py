@@ -47,6 +47,10 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "curve-walk": ("footfall.cli.experiments", "curve_walk",
                    "Walk a learning curve's points on boards never trained on, paired with "
                    "the hand-tuned reward: crossings beside the curve's offline measure."),
+    "student-curve": ("footfall.cli.student", "student_curve",
+                      "The student's walking learning curve: reproductions' labelling loops "
+                      "continued, each kind of supervision learned at each point, walked with "
+                      "the teacher and the hand-tuned reward."),
     "reproduce": ("footfall.cli.experiments", "reproduce",
                   "The paper's walking experiment end to end: corrections, learning, Tables I "
                   "and II."),

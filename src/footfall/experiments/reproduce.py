@@ -274,7 +274,7 @@ def _short_groups(demos: list, cv: int) -> list[str]:
     return [g for g in LEG_GROUPS if counts[g] < cv]
 
 
-def _corrections(store: DemoStore, rounds: int) -> list:
+def round_labels(store: DemoStore, rounds: int) -> list:
     """The corrections of rounds 0 .. rounds - 1, in source order.
 
     A resumed reproduction may already hold later rounds' corrections: a
@@ -321,7 +321,7 @@ def correction_rounds(ws: Workspace, runner: Runner) -> Corrections:
                 for name, runs in zip(train, correction_seeds(config, r))
                 for k, (seed, inspect) in enumerate(runs)]
         runner.run(jobs, f"round {r} runs")
-        demos = _corrections(runner.store, r + 1)
+        demos = round_labels(runner.store, r + 1)
         runs = [runner.store.runs(key_prefix=j.key)[0] for j in jobs]
         rounds.append({"round": r, "reward": (f"models/{Path(model_path).name}" if model_path
                                               else "hand-tuned default"),
@@ -346,7 +346,7 @@ def correction_rounds(ws: Workspace, runner: Runner) -> Corrections:
             f"after {len(rounds)} correction rounds the {' and '.join(short)} legs have fewer "
             f"than {config.cv} corrections, too few to learn from: the robot's choices seldom "
             f"fell short of the expert's by the margin ({config.margin:g} units)")
-    return Corrections(rounds, _corrections(runner.store, len(rounds)))
+    return Corrections(rounds, round_labels(runner.store, len(rounds)))
 
 
 # ---------------------------------------------------------------- stage 3

@@ -16,6 +16,7 @@ learners are linear classifiers on pairwise differences
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from dataclasses import fields, is_dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -50,6 +51,14 @@ class Learner(ABC):
     order_only: bool = False  # it reads each column's order only: monotone re-maps are not tuned
     vetoes: bool = False  # its function can carry a learned veto (footfall.learning.veto)
     threads: int = 1  # threads a fit may use, where the learner has its own
+
+    def with_threads(self, threads: int) -> Learner:
+        """This learner with ``threads`` where it has threads of its own (a dataclass field
+        ``threads``), else itself."""
+        if (threads != self.threads and is_dataclass(self)
+                and "threads" in {f.name for f in fields(self)}):
+            return replace(self, threads=threads)
+        return self
 
     @abstractmethod
     def fit(self, X: np.ndarray, y: np.ndarray, groups: np.ndarray, *, Cs: Any = 10,

@@ -15,7 +15,7 @@ import math
 import os
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -347,22 +347,16 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     demonstration's teacher verdict becomes relevance levels of its candidates
     (:mod:`footfall.learning.supervision`: ``choice``, the paper's; ``refusals``; ``graded``).
     ``veto``: beside each function, learn which candidates the teacher refuses outright
-    (:mod:`footfall.learning.veto`). ``threads``: the threads each fit may use where the
-    learner has its own (the boosted ranker and the veto: LightGBM's; the same model whatever
-    the number, faster only on cores nothing else holds). ``trials`` are footholds
-    of the robot's own runs labelled by what followed
-    (:mod:`footfall.learning.trials`): each that went wrong is ranked below
-    ``trial_pairs`` that did not, of its board and leg group -- alone (no
-    ``demos``) or with the demonstrations, in one fit.
+    (:mod:`footfall.learning.veto`). ``threads``: each fit's threads where the learner has its
+    own (LightGBM's: the same model, faster on idle cores). ``trials`` are footholds of the
+    robot's own runs labelled by what followed (:mod:`footfall.learning.trials`): each that
+    went wrong is ranked below ``trial_pairs`` that did not, of its board and leg group --
+    alone (no ``demos``) or with the demonstrations, in one fit.
     """
     feature_set = check_feature_set(feature_set)
     if folds not in FOLDS:
         raise FootfallError(f"unknown fold grouping {folds!r}; use one of {', '.join(FOLDS)}")
-    chosen_learner = get_learner(learner)  # a registered learner, or a clear error
-    threads = require_int(threads, "threads", 1)
-    if threads != chosen_learner.threads and "threads" in {f.name for f in
-                                                           fields(chosen_learner)}:
-        chosen_learner = replace(chosen_learner, threads=threads)  # a learner with its own
+    chosen_learner = get_learner(learner).with_threads(require_int(threads, "threads", 1))
     kind = get_supervision(supervision)
     if veto and not chosen_learner.vetoes:
         raise FootfallError(f"learner {learner!r} cannot carry a learned veto; the boosted "

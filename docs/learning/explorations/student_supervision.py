@@ -1,0 +1,42 @@
+"""The kinds of supervision on the same labels (docs/learning/student.md): a reproduction's
+templates + features function learned again from exactly its labels, in its order, with its
+seed and settings, but another supervision and veto. A lab script, not part of footfall's
+interface; walk the models with student_dagger.py's EXTRA_MODELS.
+
+python student_supervision.py REPRODUCTION_FOLDER OUT.npz SUPERVISION VETO(0/1) [THREADS]
+"""
+import json
+import sys
+from pathlib import Path
+
+from footfall.data.store import DemoStore
+from footfall.learning.model import FootholdModel
+from footfall.learning.train import TrainingDemo, learn_model
+
+
+def main():
+    folder, out, supervision, veto = Path(sys.argv[1]), sys.argv[2], sys.argv[3], sys.argv[4]
+    threads = int(sys.argv[5]) if len(sys.argv) > 5 else 1
+    config = json.loads((folder / "config.json").read_text())
+    adopted = FootholdModel.load(folder / "models" / "both.npz")
+    sources = adopted.info["sources"]
+    with DemoStore(folder / "reproduce.sqlite", read_only=True) as store:
+        by_source = {d.source: d for d in store.demonstrations()}
+        demos = [by_source[s] for s in sources]  # the adopted function's labels, its order
+        maps = {h: store.terrain(h) for h in {d.terrain_hash for d in demos}}
+    training = [TrainingDemo.of(d, maps[d.terrain_hash]) for d in demos]
+    rms = config.get("final_bandwidth_rms")
+    model = learn_model(training, "both", config["learner"], library_size=config["library_size"],
+                        training_candidates=config["training_candidates"],
+                        bandwidth_rms=None if rms is None else (rms,) * 3, cv=config["cv"],
+                        seed=adopted.info["seed"], selection=config["selection"],
+                        folds=config["folds"], template_budget=config["template_budget"],
+                        supervision=supervision, veto=veto == "1",
+                        library_capped=config["library_capped"], threads=threads,
+                        log=lambda s: print("   ", s, flush=True))
+    model.save(out)
+    print("saved", out, len(training), f"{model.info['seconds']:.0f} s", flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -68,6 +68,7 @@ def test_a_loop_continued_learns_each_variant_at_each_point_and_walks_them_paire
         for row in v["points"].values():
             assert row["runs"] == 1 and row["against_hand_tuned"]["pairs"] == 1
     assert (tmp_path / "curve" / "curve.md").read_text().startswith("# The student's walking")
+    assert (tmp_path / "curve" / "curve.png").stat().st_size > 0
     # run again: nothing walked or learned twice
     mtimes = {p.name: p.stat().st_mtime_ns for p in (draw / "models").glob("*.npz")}
     again = run_student_curve([source], tmp_path / "curve", CURVE, processes=1,

@@ -59,6 +59,7 @@ from footfall.experiments.reproduce_learning import learn_saved
 from footfall.experiments.runs import RunJob, Runner, board_files, claim_folder
 from footfall.experiments.workspace import ROBOT_FEATURE_SET, Spec, Workspace, open_workspace
 from footfall.learning.supervision import SUPERVISIONS
+from footfall.plots.curves import save_student_curve_figure
 
 CURVE_STORE = "curve.sqlite"
 REFERENCES = ("teacher", "hand-tuned")  # the teacher choosing every foothold; the reward
@@ -234,7 +235,7 @@ def run_student_curve(sources: Sequence[str | Path], out: str | Path,
                       log: Callable[[str], None] = print, executor: Executor | None = None
                       ) -> dict:
     """Continue each source's loop, learn every variant at every point, walk them all with the
-    references; return the summary (also ``curve.json`` and ``curve.md`` in ``out``)."""
+    references; return the summary (also ``curve.json``, ``.md``, ``.png`` in ``out``)."""
     config = StudentCurveConfig() if config is None else config
     out = Path(out)
     sources = [Path(s) for s in sources]
@@ -271,6 +272,7 @@ def run_student_curve(sources: Sequence[str | Path], out: str | Path,
     summary = summarise(config, draws, runs)
     write_text_atomic(out / "curve.json", json.dumps(summary, indent=1, sort_keys=True))
     write_text_atomic(out / "curve.md", curve_markdown(summary))
+    save_student_curve_figure(summary, out / "curve.png")
     return summary
 
 
@@ -344,6 +346,7 @@ def curve_markdown(summary: dict) -> str:
            f"each function walks {len(c['boards'])} boards, {units} runs a draw, the same run "
            f"seeds for every method. Labels: the labelled steps after that many rounds, per "
            f"draw. Paired: exact McNemar, only this one crossed / only the other.", "",
+           "![Crossings against labelled steps](curve.png)", "",
            "| reference | crossed (of the runs of one draw) |", "| --- | --- |"]
     for name, f in summary["references"].items():
         out.append(f"| {name} | {f['successes']} / {f['runs']} |")

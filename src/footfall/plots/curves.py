@@ -45,3 +45,27 @@ def save_curve_figure(rows: list[dict], lines: dict, path: str | os.PathLike) ->
     grid[0][0].legend(fontsize=8)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=DPI)
+
+
+def save_student_curve_figure(summary: dict, path: str | os.PathLike) -> None:
+    """The student's walking curve: each variant's share of runs crossed (pooled over the
+    draws) against its labelled steps (mean over the draws), with the teacher choosing every
+    foothold and the hand-tuned reward as horizontal lines. ``summary``: :func:`~footfall.
+    experiments.student_curve.summarise`'s."""
+    fig = Figure(figsize=(6.4, 4.2), layout="constrained")
+    ax = fig.subplots()
+    for variant, f in summary["variants"].items():
+        rows = list(f["points"].values())
+        labels = [sum(r["labels"]) / len(r["labels"]) for r in rows]
+        ax.plot(labels, [r["successes"] / max(r["runs"], 1) for r in rows], marker="o",
+                label=variant)
+    for name, style in (("teacher", ("0.5", ":")), ("hand-tuned", ("k", "--"))):
+        ref = summary["references"][name]
+        ax.axhline(ref["successes"] / max(ref["runs"], 1), color=style[0], ls=style[1],
+                   label=name)
+    ax.set_xlabel("labelled steps (mean over the draws)")
+    ax.set_ylabel("share of runs crossed")
+    ax.set_ylim(0, 1.02)
+    ax.legend(fontsize=7)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=DPI)

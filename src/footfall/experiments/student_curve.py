@@ -158,8 +158,8 @@ def _copy_store(source: Path, target: Path) -> None:
 
 def continue_loop(source: str | Path, out: Path, rounds: int, runner_for: Callable,
                   log: Callable[[str], None]) -> Workspace:
-    """The reproduction at ``source`` copied to ``out`` once (its settings, store, boards and
-    round models) and its labelling loop continued there to ``rounds`` rounds."""
+    """The reproduction at ``source`` copied to ``out`` once (its store, boards and round
+    models) and its labelling loop continued there to ``rounds`` rounds."""
     source = Path(source)
     try:
         held = ReproduceConfig.from_dict(json.loads((source / "config.json").read_text()))
@@ -173,6 +173,9 @@ def continue_loop(source: str | Path, out: Path, rounds: int, runner_for: Callab
         (out / "models").mkdir(parents=True, exist_ok=True)
         for model in sorted((source / "models").glob("round*.npz")):
             shutil.copyfile(model, out / "models" / model.name)
+        (out / "terrain").mkdir(exist_ok=True)  # its boards, checked again when opened
+        for board in sorted((source / "terrain").glob("*.npz")):
+            shutil.copyfile(board, out / "terrain" / board.name)
         _copy_store(source / STORE_NAME, out / STORE_NAME)
     ws = open_workspace(out, config)
     with DemoStore(out / STORE_NAME, create=True) as store:

@@ -189,3 +189,21 @@ def test_a_learned_function_walks_as_a_chooser_paired_with_the_hand_tuned_reward
                   processes=1, log=lambda s: None)
     with pytest.raises(FootfallError, match="'model:NAME' of a model given"):
         replace(TINY, who=("hand", "model:x"))
+
+
+def test_the_reproductions_teacher_walks_as_a_chooser_paired_with_the_hand_tuned_reward(walked):
+    """``--who teacher``: the hand-tuned reward among the footholds the expert accepts chooses
+    every foothold, on the same boards and seeds, paired with the hand-tuned reward."""
+    out, _ = walked
+    with_teacher = replace(TINY, who=("hand", "teacher"))
+    paths = {name: out / "terrain" / f"{name}.npz" for name in with_teacher.board_specs()}
+    jobs = [j for j in suite_jobs(with_teacher, paths) if j.key.startswith("teacher/")]
+    assert jobs and all(j.judge and j.teacher == "accepted" and j.model is None for j in jobs)
+    summary = run_suite(out, with_teacher, processes=1, log=lambda s: None)
+    with DemoStore(out / STORE_NAME) as store:
+        keys = {r["key"] for r in store.runs()}
+    mine = sorted(k.split("/", 1)[1] for k in keys if k.startswith("teacher/"))
+    assert mine == sorted(k.split("/", 1)[1] for k in keys if k.startswith("hand/"))
+    assert summary["paired_models"]["teacher"]["all"]["pairs"] == 2 * TINY.boards * TINY.runs
+    assert "Paired, the teacher against the hand-tuned reward" in suite_markdown(summary)
+    assert SuiteConfig().who == ("expert", "hand")  # the teacher's runs only when asked for

@@ -406,8 +406,11 @@ def ablation(out: str, variants: tuple[str, ...], who: tuple[str, ...], hard: bo
                    "[default: out/suite-SUITE].")
 @click.option("--kind", "kinds", multiple=True,
               help="A kind of the suite to walk (repeatable) [default: all of them].")
-@click.option("--who", "who", multiple=True, type=click.Choice(["expert", "hand"]),
-              help="Who chooses the footholds (repeatable) [default: both].")
+@click.option("--who", "who", multiple=True, type=click.Choice(["expert", "hand", "teacher"]),
+              help="Who chooses the footholds (repeatable) [default: expert and hand]: the "
+                   "walking expert, the hand-tuned reward, or the reproduction's teacher (the "
+                   "hand-tuned reward among the footholds the expert accepts), paired with the "
+                   "hand-tuned reward.")
 @click.option("--model", "models", multiple=True, metavar="NAME=MODEL.npz",
               help="A learned function walked as a chooser too, named NAME (repeatable); "
                    "paired with the hand-tuned reward.")

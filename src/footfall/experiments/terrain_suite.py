@@ -63,7 +63,9 @@ from footfall.terrain.kinds import HELD_OUT_KINDS, TRAINING_KINDS
 
 SUITES = {"held-out": HELD_OUT_KINDS, "training": TRAINING_KINDS}
 """The suites by name: their kinds, in order (a kind's place fixes its board seeds)."""
-WHO = ("expert", "hand")  # the walking expert choosing every foothold; the hand-tuned reward
+WHO = ("expert", "hand", "teacher")  # the walking expert choosing every foothold; the hand-tuned
+# reward; the reproduction's teacher choosing every foothold (the `accepted` one)
+SUITE_TEACHER = "accepted"  # the teacher a "teacher" chooser is
 MODEL_PREFIX = "model:"  # a learned function as a chooser: "model:NAME"
 STORE_NAME = "suite.sqlite"
 MODELS_NAME = "models.json"  # a suite folder's model choosers: name -> the file's sha256
@@ -93,10 +95,10 @@ class SuiteConfig(Params):
                                             and len(set(v)) == len(v)),
         must="a tuple of distinct kinds of the suite",
         doc="the suite's kinds walked; None: all of them")
-    who: tuple[str, ...] = param(WHO, check=lambda v: isinstance(v, tuple) and len(v) > 0
-                                 and len(set(v)) == len(v),
-                                 must="a tuple of distinct choosers: 'expert', 'hand' or "
-                                      "'model:NAME' of a model in models",
+    who: tuple[str, ...] = param(("expert", "hand"), check=lambda v: isinstance(v, tuple)
+                                 and len(v) > 0 and len(set(v)) == len(v),
+                                 must="a tuple of distinct choosers: 'expert', 'hand', "
+                                      "'teacher' or 'model:NAME' of a model in models",
                                  doc="who chooses the footholds")
     models: tuple[tuple[str, str], ...] = param(
         (), check=_models_ok, must="a tuple of distinct (name, model file) pairs, a name "
@@ -122,7 +124,7 @@ class SuiteConfig(Params):
     def __post_init__(self) -> None:
         super().__post_init__()
         if not _choosers_ok(self.who, self.models):
-            raise FootfallError(f"who must name 'expert', 'hand' or 'model:NAME' of a model "
+            raise FootfallError(f"who must name 'expert', 'hand', 'teacher' or 'model:NAME' of a model "
                                 f"given (models: {', '.join(m[0] for m in self.models) or 'none'})"
                                 f", got {self.who!r}")
         unknown = sorted(set(self.kinds or ()) - set(SUITES[self.suite]))
@@ -171,7 +173,9 @@ def suite_jobs(config: SuiteConfig, paths: dict[str, Path]) -> list[RunJob]:
         for name, path in paths.items():
             kind, board = name.rsplit("-", 1)
             jobs += [RunJob(f"{who}/{kind}/{board}/s{s}", str(path), model, s, config.walked(),
-                            expert=expert, judge=who == "expert") for s in config.run_seeds()]
+                            expert=expert, judge=who in ("expert", "teacher"),
+                            teacher=SUITE_TEACHER if who == "teacher" else "expert")
+                     for s in config.run_seeds()]
     return jobs
 
 
@@ -251,10 +255,10 @@ def summarise_suite(config: SuiteConfig, records: dict) -> dict:
         paired = {kind: _paired(records, (kind,)) for kind in kinds}
         paired["all"] = _paired(records, kinds)
     models = {}
-    if "hand" in config.who:  # each learned function against the hand-tuned reward
-        models = {w: {**{kind: _paired(records, (kind,), w) for kind in kinds},
+    if "hand" in config.who:  # each learned function and the teacher against the hand-tuned
+        models = {w: {**{kind: _paired(records, (kind,), w) for kind in kinds},  # reward
                       "all": _paired(records, kinds, w)}
-                  for w in config.who if w.startswith(MODEL_PREFIX)}
+                  for w in config.who if w.startswith(MODEL_PREFIX) or w == "teacher"}
     return {"config": config.to_dict(), "kinds": rows, "pooled": pooled, "paired": paired,
             **({"paired_models": models} if models else {})}
 
@@ -331,7 +335,7 @@ def comparison_markdown(comparison: dict, label: str) -> str:
 def suite_markdown(summary: dict) -> str:
     """The suite's table (crossings with Wilson intervals, slip, causes) and the paired test."""
     c = summary["config"]
-    names = {"expert": "expert", "hand": "hand-tuned",
+    names = {"expert": "expert", "hand": "hand-tuned", "teacher": "the teacher",
              **{f"{MODEL_PREFIX}{m[0]}": m[0] for m in c.get("models", [])}}
     head = ["kind"] + [f"{names[w]}: {what}" for w in c["who"]
                        for what in ("crossed (95 %)", "slip of crossings [mm]", "failures")]

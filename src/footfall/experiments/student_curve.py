@@ -42,6 +42,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from footfall.core.atomic import write_text_atomic
+from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, at_least, param
@@ -249,7 +250,8 @@ def run_student_curve(sources: Sequence[str | Path], out: str | Path,
     claim_folder(out, {**config.to_dict(), "sources": [str(s.resolve()) for s in sources]},
                  "a student curve", free=FREE)
     executor = executor or LocalPool(processes)
-    threads = max(1, getattr(executor, "processes", None) or 1)
+    threads = max(1, min(getattr(executor, "processes", None) or 1, usable_cores()))  # learns
+    # while no run is walked, on this machine
     draws = []
     for k, source in enumerate(sources):
         log(f"draw{k}: {source}, its loop to {config.rounds} rounds")

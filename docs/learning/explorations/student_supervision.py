@@ -3,10 +3,14 @@ templates + features function learned again from exactly its labels, in its orde
 seed and settings, but another supervision and veto. A lab script, not part of footfall's
 interface; walk the models with student_dagger.py's EXTRA_MODELS.
 
-python student_supervision.py REPRODUCTION_FOLDER OUT.npz SUPERVISION VETO(0/1) [THREADS]
+python student_supervision.py REPRODUCTION_FOLDER OUT.npz SUPERVISION VETO [THREADS]
+
+VETO: 0 none, 1 the learned veto as the labels give it (relative where they keep the judged
+values), abs an absolute veto (the judged values dropped: a classifier of the refusals).
 """
 import json
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from footfall.data.store import DemoStore
@@ -25,13 +29,15 @@ def main():
         demos = [by_source[s] for s in sources]  # the adopted function's labels, its order
         maps = {h: store.terrain(h) for h in {d.terrain_hash for d in demos}}
     training = [TrainingDemo.of(d, maps[d.terrain_hash]) for d in demos]
+    if veto == "abs":
+        training = [replace(t, judged=None) for t in training]
     rms = config.get("final_bandwidth_rms")
     model = learn_model(training, "both", config["learner"], library_size=config["library_size"],
                         training_candidates=config["training_candidates"],
                         bandwidth_rms=None if rms is None else (rms,) * 3, cv=config["cv"],
                         seed=adopted.info["seed"], selection=config["selection"],
                         folds=config["folds"], template_budget=config["template_budget"],
-                        supervision=supervision, veto=veto == "1",
+                        supervision=supervision, veto=veto in ("1", "abs"),
                         library_capped=config["library_capped"], threads=threads,
                         log=lambda s: print("   ", s, flush=True))
     model.save(out)

@@ -30,6 +30,7 @@ from footfall.core.params import Params, above, at_least, param
 from footfall.core.robot import DEFAULT_STRIDE, LEG_NAMES, LITTLEDOG, RobotDescription
 from footfall.core.sphere_surface import seen_under_sphere
 from footfall.core.state import RobotState, feet_pitch
+from footfall.core.validate import require_int
 from footfall.features.candidates import lattice, reachable_footholds, reaches
 from footfall.features.dense import ScoreGrid
 from footfall.features.family import Candidates
@@ -274,12 +275,9 @@ class FootstepPlanner:
         return reward.state_values_each([first] + [first.with_state(s) for s in states[1:]])
 
     def _near(self, state: RobotState, target: np.ndarray) -> np.ndarray:
-        """Candidates (m, 3) of the swing leg within lookahead_radius of target (2,) [m].
-
-        The same rule as :func:`~footfall.features.candidates.reachable_footholds`
-        (lattice point with data, ball-foot centre reachable within the joint
-        limits), on a small window instead of the leg's whole reach.
-        """
+        """Candidates (m, 3) of the swing leg within lookahead_radius of target (2,) [m]: the
+        rule of :func:`~footfall.features.candidates.reachable_footholds` (lattice point with
+        data, ball-foot centre reachable within the joint limits) on a small window."""
         r = self.config.lookahead_radius
         pts = lattice(self.hmap, (target[0] - r, target[0] + r), (target[1] - r, target[1] + r),
                       self.config.spacing)
@@ -334,7 +332,7 @@ class FootstepPlanner:
         return float(np.median(z)) if z.size else math.nan
 
     # ---------------------------------------------------------------- plan
-    def plan(self, state: RobotState) -> FootstepPlan:
+    def plan(self, state: RobotState, first: int | None = None) -> FootstepPlan:
         """The foothold of ``state.swing_leg`` that maximises the reward over the next steps.
 
         ``state`` is the robot as the swing leg lifts off: its feet, and its
@@ -365,6 +363,8 @@ class FootstepPlanner:
         rollouts stop early where a step has no candidates (e.g. at the end
         of the map).
 
+        ``first``: the index in F to take instead (:mod:`footfall.sim.branch`), rolled out.
+
         Raises
         ------
         NoFootholdError
@@ -374,6 +374,8 @@ class FootstepPlanner:
             raise FootfallError(f"plan needs a RobotState, got {type(state).__name__}")
         ahead = self._horizon(state)
         st0, cand, reward, total, roots = self._first_step(state, ahead)
+        if first is not None:  # the candidate a branch of the run tries
+            roots = np.array([require_int(first, "first", 0, below=cand.shape[0])])
         value, chosen = self._rollouts(state, ahead, cand[roots], total[roots])
         best = int(np.argmax(value))  # ties: the better first step (roots are ranked)
         index = int(roots[best])

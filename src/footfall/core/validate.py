@@ -74,13 +74,17 @@ def _interval(low: float, high: float, low_open: bool) -> str:
     return f"in {'(' if low_open else '['}{low:g}, {high:g}]"
 
 
-def require_int(value: Any, what: str, minimum: int | None = None) -> int:
-    """``value`` as an int (not a bool, not a float), at least ``minimum``."""
+def require_int(value: Any, what: str, minimum: int | None = None,
+                below: int | None = None) -> int:
+    """``value`` as an int (not a bool, not a float), at least ``minimum`` and less than
+    ``below`` (an index into ``below`` items, say)."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise FootfallError(f"{what} must be an integer, got {type(value).__name__} "
                             f"{shown(value)}")
     if minimum is not None and value < minimum:
         raise FootfallError(f"{what} must be >= {minimum}, got {value}")
+    if below is not None and value >= below:
+        raise FootfallError(f"{what} must be < {below}, got {value}")
     return int(value)
 
 

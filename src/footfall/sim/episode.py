@@ -35,7 +35,7 @@ from footfall.core.files import plain_json
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, at_least, param, within
 from footfall.core.robot import LEG_NAMES, LITTLEDOG, RobotDescription
-from footfall.core.state import nominal_state
+from footfall.core.state import RobotState, nominal_state
 from footfall.data.runlog import RunRecord
 from footfall.expert.synthetic import WALKER_PLACEMENT_ERROR
 from footfall.features.scorer import FootholdScorer, RewardFor
@@ -147,7 +147,7 @@ class Walk:
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise FootfallError(f"seed must be a non-negative integer, got {seed!r}")
         self.hmap, self.reward_for, self.seed = hmap, reward_for, int(seed)
-        self.config, self.robot = config, robot
+        self.config, self.robot, self.judge = config, robot, judge
         t0 = time.perf_counter()
         self.start_xy, self.goal_x = board_line(hmap, robot, config)
         self.goal = np.array([self.goal_x + 0.3, self.start_xy[1]])  # [m] the body path's end
@@ -173,14 +173,23 @@ class Walk:
         with threadpool_limits(limits=1):
             return self._run()
 
+    def start_state(self) -> RobotState:
+        """Where the run starts: the robot standing on its nominal footholds at the board's start."""
+        return nominal_state(self.hmap, self.start_xy, 0.0, self.robot.gait_order[0],
+                             goal=self.goal, robot=self.robot)
+
     def _run(self) -> RunRecord:
-        sim, controller, task = self.sim, self.controller, self.task
         wall0 = time.perf_counter()
-        state0 = nominal_state(self.hmap, self.start_xy, 0.0, self.robot.gait_order[0],
-                               goal=self.goal, robot=self.robot)
-        sim.stand(state0.body_position, state0.body_rpy, state0.feet)
-        controller.start(self._measure(), state0.feet)
-        task.start(sim)
+        state0 = self.start_state()
+        self.sim.stand(state0.body_position, state0.body_rpy, state0.feet)
+        self.controller.start(self._measure(), state0.feet)
+        self.task.start(self.sim)
+        return self._periods(wall0)
+
+    def _periods(self, wall0: float) -> RunRecord:
+        """The control periods from here to the run's end (``wall0`` [s]: when it began, by
+        ``time.perf_counter``); the run log."""
+        sim, controller, task = self.sim, self.controller, self.task
         while True:
             targets = controller.act()
             task.review(controller.notes(), sim)

@@ -7,6 +7,7 @@ stepping and the kinematic readings (poses, joint angles) stay with the simulati
 
 from __future__ import annotations
 
+import copy
 from typing import TYPE_CHECKING
 
 import mujoco
@@ -60,6 +61,14 @@ class Sensors:
 
         self._force_adr = np.stack([sensor(f"{leg}_foot_force") for leg in LEG_NAMES])
         self._imu_adr = {k: sensor(f"imu_{k}") for k in ("quat", "gyro", "accel")}
+
+    def noise_state(self) -> dict:
+        """The noise generator's state (a copy; numpy's ``bit_generator.state``)."""
+        return copy.deepcopy(self._rng.bit_generator.state)
+
+    def set_noise_state(self, state: dict) -> None:
+        """The noise generator put back into ``state`` (from :meth:`noise_state`)."""
+        self._rng.bit_generator.state = copy.deepcopy(state)
 
     def foot_forces(self, frame: str = "world", noise: bool = True) -> np.ndarray:
         """3-axis foot force sensor readings (4, 3) [N], with sensor noise.

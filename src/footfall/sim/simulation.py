@@ -40,7 +40,11 @@ from footfall.sim.mjcf import (
 )
 from footfall.sim.sensors import LEG_PARTS, Sensors, model_ids
 
-__all__ = ["LEG_PARTS", "PerturbationConfig", "SimPerturbation", "Simulation", "bench_stepping"]
+__all__ = ["LEG_PARTS", "PHYSICS_STATE", "PerturbationConfig", "SimPerturbation", "Simulation", "bench_stepping"]
+
+
+PHYSICS_STATE = mujoco.mjtState.mjSTATE_INTEGRATION  # what MuJoCo's next step depends on: time,
+# positions, velocities, controls, mocap poses and the constraint solver's warm start
 
 
 # ----------------------------------------------------------------- perturbation
@@ -346,9 +350,21 @@ class Simulation:
         cpu = time.process_time()
         mujoco.mj_step(self.model, self.data, nstep=n)
         self.physics_cpu += time.process_time() - cpu
-        # mj_step leaves body and site poses at the start of its last step; bring them (and the
-        # centre of mass) up to the new joint state, so that poses, foot positions and joint
-        # angles agree.
+        # mj_step leaves poses at the start of its last step: bring them and the centre of mass
+        # up to the new joint state (poses, foot positions and joint angles agree).
+        mujoco.mj_kinematics(self.model, self.data)
+        mujoco.mj_comPos(self.model, self.data)
+
+    def state(self) -> np.ndarray:
+        """The integration state (:data:`PHYSICS_STATE`, SI units) to :meth:`restore`."""
+        state = np.empty(mujoco.mj_stateSize(self.model, PHYSICS_STATE))
+        mujoco.mj_getState(self.model, self.data, state, PHYSICS_STATE)
+        return state
+
+    def restore(self, state: np.ndarray) -> None:
+        """Back to ``state``, as after a step: stepping on is bit for bit as from there."""
+        state = _array(state, (mujoco.mj_stateSize(self.model, PHYSICS_STATE),), "state")
+        mujoco.mj_setState(self.model, self.data, state, PHYSICS_STATE)
         mujoco.mj_kinematics(self.model, self.data)
         mujoco.mj_comPos(self.model, self.data)
 

@@ -55,9 +55,9 @@ def test_forcing_the_recorded_choice_gives_the_recorded_run_bit_for_bit(taped, w
     walk, record = taped
     n = len(walk.tape.decisions)
     at = {"first": 0, "middle": n // 2, "last": n - 1}[where]
-    same_run(walk.branch(at), record)
+    same_run(walk.branch(at).record, record)
     chosen = walk.tape.decisions[at].plan.index
-    same_run(walk.branch(at, first=chosen), record)  # the same candidate, planned again
+    same_run(walk.branch(at, first=chosen).record, record)  # the same candidate, planned again
 
 
 def test_another_candidate_is_taken_there_and_the_run_goes_on_from_it(taped):
@@ -68,7 +68,7 @@ def test_another_candidate_is_taken_there_and_the_run_goes_on_from_it(taped):
     ranked = np.argsort(-decision.plan.value, kind="stable")
     other = int(ranked[1])
     assert other != decision.plan.index
-    branch = walk.branch(at, first=other)
+    branch = walk.branch(at, first=other).record
     for sa, sb in zip(branch.steps[:k], record.steps[:k]):  # the steps before: the recorded
         assert sa.chosen == sb.chosen
         np.testing.assert_array_equal(sa.touchdown, sb.touchdown)
@@ -76,7 +76,7 @@ def test_another_candidate_is_taken_there_and_the_run_goes_on_from_it(taped):
     np.testing.assert_array_equal(branch.steps[k].candidates, record.steps[k].candidates)
     assert branch.result != record.result
     # the branch is itself a run: walked twice, the same
-    same_run(walk.branch(at, first=other), branch)
+    same_run(walk.branch(at, first=other).record, branch)
 
 
 def test_a_branch_refuses_what_the_run_does_not_have(taped):

@@ -44,12 +44,13 @@ from footfall.experiments.terrain_suite import SuiteConfig
 from footfall.expert.synthetic import ExpertConfig
 from footfall.features.config import FeatureConfig
 from footfall.sim.episode import WalkConfig
+from footfall.sim.rollout import RolloutConfig
 from footfall.sim.simulation import PerturbationConfig
 
 CONFIGS = (Limits, FeatureConfig, PerturbationConfig, WalkConfig, LowLevelConfig, BodyPathConfig,
            FootstepConfig, CogConfig, SwingConfig, PoseConfig, ExpertConfig, ReproduceConfig,
            OfflineConfig, ReflexConfig, AblationConfig, CurveConfig, CurveWalkConfig,
-           SuiteConfig, StudentCurveConfig)
+           SuiteConfig, StudentCurveConfig, RolloutConfig)
 """Every declared config of footfall (test_every_declared_config_is_listed keeps it whole)."""
 
 

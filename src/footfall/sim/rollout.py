@@ -1,0 +1,227 @@
+"""The rollout teacher: each candidate foothold tried in branches of the run, the best taught.
+
+At a decision of a run (:mod:`footfall.sim.branch`), the teacher tries the
+base chooser's best ``candidates`` of F by its plan's value (the base chooser
+is the walk's own planner: its reward, or a learned function) and, if asked,
+the synthetic expert's best. Each is walked in ``branches`` branches of the
+run for ``horizon`` steps after its own -- the base chooser choosing after it
+-- each branch with its own variation (sensor noise, friction, a push on the
+trunk), the same variations for every candidate (common random numbers: the
+candidates are compared on the same luck). A branch's value is what followed,
+with the weights of :class:`RolloutConfig`:
+
+    value = - w_fall * fell - w_failed * (another failure)
+            - w_slide * max(0, slide - STANCE_SLID) - w_miss * max(0, miss - MISSED)
+            + w_progress * progress
+
+``slide`` [m]: the most a foot put down in the branch travelled while it stood
+(to its next lift-off, or to the branch's end for a foot still standing);
+``miss`` [m]: the furthest a foot put down in the branch touched down from its
+foothold; ``progress`` [m]: the body's advance along x from the decision. A
+candidate's value is the mean over its branches; the best is taught if it is
+above the base chooser's own choice by more than ``margin``, else the base's. By the rollout algorithm's policy-improvement
+property the teacher walks at least as well as its base chooser in
+expectation, to the extent the branches' value measures what matters.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from footfall.control.footstep import FootstepPlan
+from footfall.core.errors import FootfallError
+from footfall.core.params import Params, at_least, param, within
+from footfall.core.robot import LEG_NAMES
+from footfall.core.state import RobotState
+from footfall.data.outcomes import MISSED, STANCE_SLID
+from footfall.expert.protocol import Expert
+from footfall.sim.branch import Branched, BranchVariation, TapedWalk
+from footfall.sim.task import foot_slip
+
+__all__ = ["BranchOutcome", "RolloutConfig", "RolloutVerdict", "RolloutWalk", "branch_variations",
+           "rollout_verdict"]
+
+
+@dataclass(frozen=True)
+class RolloutConfig(Params):
+    """What the rollout teacher tries at a decision and how it values what followed."""
+
+    candidates: int = param(3, unit="candidates", range=at_least(1),
+                            doc="K: the base chooser's best candidates of F tried, by its plan's "
+                                "value")
+    expert_best: bool = param(True, doc="also try the synthetic expert's best candidate")
+    horizon: int = param(4, unit="steps", range=at_least(0),
+                         doc="steps a branch walks after the decision's own (4: a crawl-gait "
+                             "cycle)")
+    branches: int = param(2, unit="branches", range=at_least(1),
+                          doc="S: branches of each candidate, each with its own variation")
+    friction: float = param(0.1, unit="-", range=within(0, 1, high_open=True),
+                            doc="a branch's friction scale is uniform in 1 +- this")
+    push: float = param(2.0, unit="N", range=at_least(0),
+                        doc="largest horizontal push on the trunk: its size uniform up to this, "
+                            "its direction uniform")
+    push_time: float = param(0.2, unit="s", range=at_least(0),
+                             doc="how long a branch's push lasts from the decision")
+    margin: float = param(0.05, unit="value", range=at_least(0),
+                          doc="another candidate is taught only if its value is above the base "
+                              "chooser's by more than this (5 cm of progress, or 5 mm of slide)")
+    w_fall: float = param(1.0, unit="value", range=at_least(0), doc="a fall in the branch")
+    w_failed: float = param(0.5, unit="value", range=at_least(0),
+                            doc="another failure in the branch: stuck, no foothold, out of time")
+    w_slide: float = param(10.0, unit="value/m", range=at_least(0),
+                           doc="per metre beyond STANCE_SLID (15 mm) a foot put down in the "
+                               "branch travelled while it stood")
+    w_miss: float = param(10.0, unit="value/m", range=at_least(0),
+                          doc="per metre beyond MISSED (20 mm) a foot put down in the branch "
+                              "touched down off its foothold")
+    w_progress: float = param(1.0, unit="value/m", range=at_least(0),
+                              doc="per metre the body advanced in the branch")
+
+
+@dataclass(frozen=True)
+class BranchOutcome:
+    """What followed one candidate in one branch."""
+
+    candidate: int  # its index in the decision's F
+    branch: int  # which variation (0 .. branches - 1)
+    reason: str  # how the branch ended ("step limit": it walked its horizon; "goal")
+    fell: bool  # the trunk tilted over or touched the terrain
+    failed: bool  # another failure: stuck, no foothold, out of time
+    slide: float  # [m] the most a foot put down in the branch travelled while it stood
+    miss: float  # [m] the furthest a foot put down in the branch touched down off its foothold
+    progress: float  # [m] the body's advance along x from the decision to the branch's end
+    value: float  # [value units] by the weights of RolloutConfig
+
+    def describe(self) -> str:
+        """In a few words, for a person deciding ("slid 22 mm", "fell", "walked on")."""
+        if self.fell:
+            return "fell"
+        if self.failed:
+            return self.reason
+        parts = []
+        if self.slide > STANCE_SLID:
+            parts.append(f"slid {1e3 * self.slide:.0f} mm")
+        if self.miss > MISSED:
+            parts.append(f"missed by {1e3 * self.miss:.0f} mm")
+        return ", ".join(parts) or ("crossed" if self.reason == "goal" else "walked on")
+
+
+@dataclass(frozen=True)
+class RolloutVerdict:
+    """The rollout teacher at one decision: what it tried, how each went, what it teaches."""
+
+    decision: int  # the decision's index in the run
+    base: int  # the base chooser's choice (index in F)
+    tried: np.ndarray  # (m,) int: the candidates tried (indices in F), the base's first
+    values: np.ndarray  # (m,) [value units] each one's mean value over its branches
+    outcomes: tuple[BranchOutcome, ...]  # (m * branches,) candidate by candidate
+    best: int  # the candidate taught (index in F): the best, unless within the margin of the base
+
+
+def branch_variations(config: RolloutConfig, seed: int, decision: int) -> list[BranchVariation]:
+    """The ``config.branches`` variations of the branches at ``decision`` of the run with seed
+    ``seed``: the same for every candidate there, another draw at every decision."""
+    out = []
+    for s in range(config.branches):
+        rng = np.random.default_rng([seed, decision, s])
+        angle, size = rng.uniform(0.0, 2.0 * math.pi), rng.uniform(0.0, config.push)
+        out.append(BranchVariation(
+            noise_seed=int(rng.integers(2 ** 63)),
+            friction_scale=1.0 + config.friction * rng.uniform(-1.0, 1.0),
+            push=(size * math.cos(angle), size * math.sin(angle), 0.0),
+            push_time=config.push_time))
+    return out
+
+
+def outcome_of(branched: Branched, first_step: int, start_x: float, candidate: int,
+               branch: int, config: RolloutConfig) -> BranchOutcome:
+    """What followed ``candidate`` in a branch whose steps from ``first_step`` on are its own;
+    ``start_x`` [m]: the body's x at the decision."""
+    record = branched.record
+    reason = str(record.result["reason"])
+    fell = reason.startswith("fall")
+    failed = not record.result["success"] and not fell and reason != "step limit"
+    slide = miss = 0.0
+    last = {}  # leg -> its last touch-down in the branch
+    for step in record.steps[first_step:]:
+        if not np.isfinite(step.touchdown).all():
+            continue
+        miss = max(miss, float(np.hypot(*(step.touchdown[:2] - step.foothold[:2]))))
+        if np.isfinite(step.slip):
+            slide = max(slide, float(step.slip))
+        last[step.swing_leg] = step
+    for leg, step in last.items():  # feet still standing at the end: their travel so far
+        if not np.isfinite(step.slip):
+            moved = foot_slip(step.touchdown, branched.feet[LEG_NAMES.index(leg)])
+            slide = max(slide, float(moved))
+    progress = float(branched.body[0] - start_x)
+    value = (-config.w_fall * fell - config.w_failed * failed
+             - config.w_slide * max(0.0, slide - STANCE_SLID)
+             - config.w_miss * max(0.0, miss - MISSED) + config.w_progress * progress)
+    return BranchOutcome(candidate, branch, reason, fell, failed, slide, miss, progress,
+                         float(value))
+
+
+def rollout_verdict(walk: TapedWalk, at: int, config: RolloutConfig = RolloutConfig(),
+                    expert: Expert | None = None) -> RolloutVerdict:
+    """The rollout teacher at decision ``at`` of the walked ``walk`` (see the module);
+    ``expert``: whose best candidate is tried too (with ``config.expert_best``)."""
+    decisions = walk.tape.decisions
+    if not 0 <= at < len(decisions):
+        raise FootfallError(f"rollout: no decision {at} in this run (it made {len(decisions)})")
+    decision = decisions[at]
+    plan = decision.plan
+    ranked = np.argsort(-np.nan_to_num(plan.value, nan=-np.inf), kind="stable")
+    ranked = ranked[np.isfinite(plan.value[ranked])][:config.candidates]
+    tried = [plan.index] + [int(i) for i in ranked if i != plan.index]
+    tried = tried[:config.candidates]
+    if config.expert_best and expert is not None:
+        best = int(np.argmax(expert.values(walk.hmap, plan.state, plan.candidates)))
+        tried += [] if best in tried else [best]
+    first_step = len(decision.task.steps)
+    start_x = float(decision.state.body_position[0])
+    variations = branch_variations(config, walk.seed, at)
+    outcomes = []
+    for c in tried:
+        for s, v in enumerate(variations):
+            branched = walk.branch(at, first=c, steps=config.horizon, variation=v)
+            outcomes.append(outcome_of(branched, first_step, start_x, c, s, config))
+    values = np.array([o.value for o in outcomes]).reshape(len(tried), config.branches)
+    values = values.mean(axis=1)
+    top = int(np.argmax(values))
+    best = tried[top] if values[top] > values[0] + config.margin else plan.index
+    return RolloutVerdict(at, plan.index, np.array(tried), values, tuple(outcomes), int(best))
+
+
+class RolloutWalk(TapedWalk):
+    """A walk whose footholds the rollout teacher chooses: at each decision the base chooser's
+    plan (the walk's own planner), its verdict, and the foothold it teaches (:attr:`verdicts`
+    keeps every verdict). Built as :class:`TapedWalk`, with the teacher's ``rollout``
+    settings and the ``expert`` whose best candidate it tries too."""
+
+    def __init__(self, *args, rollout: RolloutConfig = RolloutConfig(),
+                 expert: Expert | None = None, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.rollout, self.expert = rollout, expert
+        self.verdicts: list[RolloutVerdict] = []
+
+    def _decide(self, planner, index: int, state: RobotState) -> FootstepPlan:
+        plan = super()._decide(planner, index, state)  # kept as the base chooser planned
+        verdict = rollout_verdict(self, index, self.rollout, self.expert)
+        self.verdicts.append(verdict)
+        if verdict.best == plan.index:
+            return plan
+        taught = planner.plan(state, first=verdict.best)  # what the run takes, and replays
+        decisions = self.tape.decisions
+        decisions[index] = replace(decisions[index], plan=copy.deepcopy(taught))
+        return taught
+
+    def _settings(self) -> dict:
+        settings = super()._settings()
+        settings["teacher"] = {"rollout": self.rollout.to_dict(),
+                               "expert_best": self.expert is not None}
+        return settings

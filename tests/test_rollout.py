@@ -1,0 +1,75 @@
+"""The rollout teacher (footfall.sim.rollout): candidates tried in branches of a run, what
+followed each valued, the best taught -- on a run that falls where other footholds walk on."""
+
+import numpy as np
+import pytest
+
+from footfall.core.errors import FootfallError
+from footfall.expert.synthetic import ExpertConfig, SyntheticExpert
+from footfall.features.reward import default_reward
+from footfall.sim.branch import TapedWalk
+from footfall.sim.episode import WalkConfig
+from footfall.sim.rollout import RolloutConfig, RolloutWalk, branch_variations, rollout_verdict
+from footfall.terrain import make_board, parse_board_spec
+
+
+@pytest.fixture(scope="module")
+def taped():
+    """The hand-tuned reward on a rough board: its last decisions lead to a fall."""
+    reward = default_reward()
+    hmap = make_board([parse_board_spec("rocky:1.0")], seed=3)
+    walk = TapedWalk(hmap, lambda leg: reward, 1, WalkConfig())
+    record = walk.run()
+    assert record.result["reason"].startswith("fall")
+    return walk
+
+
+def test_where_the_base_choice_falls_the_teacher_teaches_one_that_walks_on(taped):
+    config = RolloutConfig()
+    verdict = rollout_verdict(taped, 13, config, SyntheticExpert(ExpertConfig()))
+    assert verdict.base == taped.tape.decisions[13].plan.index == verdict.tried[0]
+    m = verdict.tried.size
+    assert config.candidates <= m <= config.candidates + 1  # the expert's best, if not tried
+    assert len(verdict.outcomes) == m * config.branches
+    assert [o.candidate for o in verdict.outcomes] == np.repeat(verdict.tried, 2).tolist()
+    base = [o for o in verdict.outcomes if o.candidate == verdict.base]
+    taught = [o for o in verdict.outcomes if o.candidate == verdict.best]
+    assert any(o.fell for o in base) and not any(o.fell or o.failed for o in taught)
+    assert verdict.best != verdict.base
+    np.testing.assert_allclose(verdict.values[list(verdict.tried).index(verdict.best)],
+                               np.mean([o.value for o in taught]))
+    assert {o.describe() for o in base} & {"fell"}
+
+
+def test_where_every_candidate_falls_the_base_choice_stands(taped):
+    last = len(taped.tape.decisions) - 1
+    verdict = rollout_verdict(taped, last, RolloutConfig(candidates=2, branches=1))
+    assert all(o.fell for o in verdict.outcomes)
+    assert verdict.best == verdict.base
+
+
+def test_the_verdict_is_the_same_for_the_same_run_and_its_branches_share_their_luck(taped):
+    config = RolloutConfig(candidates=2, branches=2, horizon=1)
+    a, b = rollout_verdict(taped, 5, config), rollout_verdict(taped, 5, config)
+    np.testing.assert_array_equal(a.values, b.values)
+    assert a.outcomes == b.outcomes
+    # the same variations for every candidate at a decision, new ones at the next
+    assert branch_variations(config, 1, 5) == branch_variations(config, 1, 5)
+    assert branch_variations(config, 1, 5) != branch_variations(config, 1, 6)
+    assert len({v.noise_seed for v in branch_variations(config, 1, 5)}) == 2
+    with pytest.raises(FootfallError, match="no decision"):
+        rollout_verdict(taped, len(taped.tape.decisions), config)
+
+
+def test_a_walk_the_rollout_teacher_chooses_takes_what_it_teaches():
+    reward = default_reward()
+    hmap = make_board([parse_board_spec("rocky:1.0")], seed=3)
+    config = RolloutConfig(candidates=2, branches=1, horizon=1, margin=0.0)
+    walk = RolloutWalk(hmap, lambda leg: reward, 1, WalkConfig(max_steps=6), rollout=config)
+    record = walk.run()
+    assert len(walk.verdicts) == len(walk.tape.decisions) >= len(record.steps) == 6
+    taught = [v.best for v in walk.verdicts]
+    assert [s.chosen for s in record.steps] == taught[:len(record.steps)]
+    assert [d.plan.index for d in walk.tape.decisions] == taught  # the tape keeps what was taken
+    assert any(v.best != v.base for v in walk.verdicts)  # at margin 0 progress alone decides
+    assert record.settings["teacher"]["rollout"]["candidates"] == 2

@@ -174,6 +174,21 @@ def test_a_relative_veto_refuses_what_lies_far_below_the_best_of_its_own_set(tmp
     assert alone.max() > -VETO_PENALTY / 2
 
 
+def test_a_veto_reads_what_its_supervision_reads():
+    """Refusals alone (a person's marks) give the absolute veto even where the teacher's judged
+    values are stored beside them; grades give the veto relative to them."""
+    demos = []
+    for d in lowest_foothold_demos():
+        judged = -1000.0 * d.candidates[:, 2]
+        demos.append(TrainingDemo(d.hmap, d.state, d.candidates, d.chosen, values=judged,
+                                  refused=judged.max() - judged > 10.0, judged=judged))
+    margins = {sup: learn_model(demos, "terrain+pose", "lambdarank", cv=3,
+                                training_candidates=30, seed=7, supervision=sup,
+                                veto=True).functions["front"].veto_margin
+               for sup in ("refusals", "graded")}
+    assert margins["refusals"] is None and margins["graded"] is not None
+
+
 def test_a_veto_is_learned_on_the_columns_the_ranker_kept_within_its_template_budget():
     """A budget fits the ranker again on the templates it relied on most; the veto is fitted
     on those same columns, and the function reads what either reads."""

@@ -26,7 +26,9 @@ def main():
     out = Path(sys.argv[1]); rounds = int(sys.argv[2]); per = int(sys.argv[3])
     fs = sys.argv[4]; sup = sys.argv[5]; val_runs = int(sys.argv[6]) if len(sys.argv) > 6 else 4
     out.mkdir(parents=True, exist_ok=True)
-    config = ReproduceConfig()
+    saved = out / "ws" / "config.json"  # a folder walked before keeps its settings
+    config = ReproduceConfig.from_dict(json.loads(saved.read_text())) if saved.exists() \
+        else ReproduceConfig()
     ws = open_workspace(out / "ws", config)
     streams = seed_streams(config)
     train = [n for n in ws.paths if n.startswith("train")]

@@ -272,14 +272,17 @@ def _demo_examples(demos: Sequence[TrainingDemo], families: tuple[FeatureFamily,
                    veto: bool, training_candidates: int, folds: str,
                    rng: np.random.Generator) -> list[Example]:
     """Each demonstration's chosen candidate and up to ``training_candidates`` others, with
-    their levels by ``kind`` (and the teacher's refusals for a ``veto``), one at a time: each
-    is vectorised over its candidates."""
+    their levels by ``kind`` (and the teacher's refusals for a ``veto``: with the values they
+    are relative to only where ``kind`` reads values -- a veto reads what its supervision
+    does, so refusals alone give the absolute veto a person's marks would), one at a time:
+    each is vectorised over its candidates."""
     examples = []
+    relative = veto and "values" in kind.reads
     for d in demos:
         rows = training_rows(d.candidates.shape[0], d.chosen, training_candidates, rng)
         example = make_example(d.hmap, d.state, d.candidates, d.chosen, families, config, rows,
                                robot, d.levels(kind), d.refused if veto else None,
-                               d.judged if veto else None)
+                               d.judged if relative else None)
         examples.append(replace(example, unit=fold_unit(d, folds)))
     return examples
 

@@ -73,3 +73,23 @@ def test_a_walk_the_rollout_teacher_chooses_takes_what_it_teaches():
     assert [d.plan.index for d in walk.tape.decisions] == taught  # the tape keeps what was taken
     assert any(v.best != v.base for v in walk.verdicts)  # at margin 0 progress alone decides
     assert record.settings["teacher"]["rollout"]["candidates"] == 2
+
+
+def test_the_rollout_teacher_walks_where_any_teacher_walks_and_refuses_to_label(tmp_path):
+    from footfall.experiments.runs import RunJob, execute
+    from footfall.expert.synthetic import walking_expert
+    from footfall.expert.teachers import TEACHERS
+
+    board = make_board([parse_board_spec("rocky:0.7")], seed=3)
+    board.save(tmp_path / "board.npz")
+    config = WalkConfig(max_steps=2)
+    settings = walking_expert(config.footstep.lead)
+    record, demos = execute(RunJob(None, str(tmp_path / "board.npz"), None, 0, config,
+                                   expert=settings, judge=True, teacher="rollout"))
+    assert len(record.steps) == 2 and demos == []
+    assert record.settings["teacher"] == {"rollout": RolloutConfig().to_dict(),
+                                          "expert_best": True}
+    walker = TEACHERS.get("rollout").walker(settings, 60.0, 0.01)
+    assert walker.rollout and walker.reward is not None  # over the accepted teacher
+    with pytest.raises(FootfallError, match="labels no stored run"):
+        TEACHERS.get("rollout").expert(settings, 60.0, 0.01)

@@ -45,8 +45,11 @@ def _chooser_options(f):
     f = click.option("--teacher", type=TEACHER, default=None,
                      help="This teacher chooses every foothold (no --model): 'expert', the "
                           "synthetic expert (as --expert); 'guarded', the hand-tuned reward "
-                          "with the expert's veto of severe footholds (the reproduction's "
-                          "teacher).")(f)
+                          "with the expert's veto of severe footholds; 'accepted', with its "
+                          "veto at the correction margin (the reproduction's teacher); "
+                          "'rollout', the accepted teacher's best candidates and the expert's "
+                          "tried in branches of the run, the one that walked best taken "
+                          "(about 4 s a step).")(f)
     return click.option("--expert", is_flag=True,
                         help="The synthetic walking expert chooses every foothold (no --model): "
                              "what learning from its demonstrations can reach at best.")(f)

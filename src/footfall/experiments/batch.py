@@ -30,11 +30,11 @@ from footfall.data.runlog import RunRecord
 from footfall.data.schema import SUFFIXES as STORE_SUFFIXES
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor, LocalPool
-from footfall.experiments.runs import RunJob, reward_source
+from footfall.experiments.runs import RunJob, reward_source, teacher_walk
 from footfall.experiments.variants import VARIANTS
 from footfall.expert.scorer import ExpertScorer, judge_name, settings_hash
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
-from footfall.expert.teachers import TEACHERS, Walker
+from footfall.expert.teachers import TEACHERS
 from footfall.plots.explain import save_explain_plot
 from footfall.sim.episode import Frames, Walk, WalkConfig
 
@@ -116,7 +116,7 @@ def batch_jobs(terrain_path: str | os.PathLike, model_path: str | os.PathLike | 
     reward_source(model_path, hmap)  # fail early, in this process, on a bad model
     model = None if model_path is None else str(model_path)
     judge = chooser_expert(config, expert, expert_config)
-    TEACHERS.get(teacher).expert(judge, config.footstep.bias_weight, config.footstep.lead)
+    TEACHERS.get(teacher).walker(judge, config.footstep.bias_weight, config.footstep.lead)
     return [RunJob(None, str(terrain_path), model, s, config, expert=judge, judge=expert,
                    teacher=teacher) for s in range(seed, seed + runs)]
 
@@ -371,12 +371,8 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
     if snapshots or video:
         pictures = Frames(snapshot_count=frames if snapshots else 0,
                           video_fps=25.0 if video else 0.0)
-    walker = Walker()
-    if expert:
-        walker = TEACHERS.get(teacher).walker(judge, config.footstep.bias_weight,
-                                              config.footstep.lead)
-        reward_for = reward_for if walker.reward is None else lambda leg: walker.reward
-    run = Walk(hmap, reward_for, seed, config, frames=pictures, judge=walker.judge)
+    run = (teacher_walk(hmap, reward_for, seed, config, teacher, judge, pictures) if expert
+           else Walk(hmap, reward_for, seed, config, frames=pictures))
     record = run.run()
     run_id = None
     if log is not None:  # stored before any picture: a picture that fails loses no run

@@ -37,11 +37,12 @@ from footfall.expert.corrections import (
     inspect_run,
     worst_corrections,
 )
-from footfall.expert.synthetic import ExpertConfig
+from footfall.expert.synthetic import ExpertConfig, SyntheticExpert
 from footfall.expert.teachers import TEACHERS
 from footfall.features.scorer import SCORERS
 from footfall.learning.model import FootholdModel
-from footfall.sim.episode import WalkConfig, walk
+from footfall.sim.episode import Frames, Walk, WalkConfig
+from footfall.sim.rollout import RolloutConfig, RolloutWalk
 from footfall.terrain import make_board
 
 if TYPE_CHECKING:
@@ -86,6 +87,22 @@ def reward_source(model_path: str | os.PathLike | None, hmap: HeightMap):
     return model.reward_for
 
 
+def teacher_walk(hmap: HeightMap, reward_for, seed: int, config: WalkConfig, teacher: str,
+                 expert: ExpertConfig, frames: Frames | None = None) -> Walk:
+    """The walk in which ``teacher`` (:data:`~footfall.expert.teachers.TEACHERS`, with the
+    expert of ``expert``) chooses every foothold: the judged planner, the planner of a reward
+    it guards, or the rollout teacher over that (:class:`~footfall.sim.rollout.RolloutWalk`).
+    ``reward_for`` plans the body path where the teacher is a judge."""
+    step = config.footstep
+    walker = TEACHERS.get(teacher).walker(expert, step.bias_weight, step.lead)
+    if walker.reward is not None:
+        reward_for = lambda leg: walker.reward  # noqa: E731
+    if walker.rollout:
+        return RolloutWalk(hmap, reward_for, seed, config, frames=frames, judge=walker.judge,
+                           rollout=RolloutConfig(), expert=SyntheticExpert(expert))
+    return Walk(hmap, reward_for, seed, config, frames=frames, judge=walker.judge)
+
+
 def execute(job: RunJob) -> RunOutput:
     """One run (in a worker process): walk, and the expert's corrections if asked for."""
     hmap = _board(job.terrain)
@@ -94,13 +111,10 @@ def execute(job: RunJob) -> RunOutput:
     teacher = TEACHERS.get(job.teacher)
     footstep = job.walk.footstep
     with threadpool_limits(limits=1):
-        judge, reward_for = None, reward_source(job.model, hmap)
-        if job.judge:
-            walker = teacher.walker(job.expert, footstep.bias_weight, footstep.lead)
-            judge = walker.judge
-            if walker.reward is not None:
-                reward_for = lambda leg: walker.reward  # noqa: E731
-        record = walk(hmap, reward_for, job.seed, job.walk, judge=judge)
+        reward_for = reward_source(job.model, hmap)
+        run = (teacher_walk(hmap, reward_for, job.seed, job.walk, job.teacher, job.expert)
+               if job.judge else Walk(hmap, reward_for, job.seed, job.walk))
+        record = run.run()
         record = replace(record, key=job.key)
         demos = []
         if job.correct:

@@ -14,6 +14,10 @@ expert's settings and the walk's footstep settings, so a run job names a teacher
 * ``"accepted"``: the same with the veto at the correction margin
   (:data:`~footfall.expert.corrections.REPRODUCTION_MARGIN`): the hand-tuned reward choosing among
   the footholds the expert accepts.
+* ``"rollout"``: the simulator (:mod:`footfall.sim.rollout`): at every decision the
+  ``accepted`` teacher's best candidates and the expert's best are tried in branches of the run,
+  and the one that walked best is taken. It walks; it labels no stored run yet (its verdicts
+  need the run walked again, taped), so its expert face refuses.
 """
 
 from __future__ import annotations
@@ -39,6 +43,8 @@ class Walker:
 
     judge: FootholdScorer | None = None
     reward: FootholdScorer | None = None
+    rollout: bool = False  # the simulator chooses: candidates tried in branches of the run,
+    # this walker's choice the base (footfall.sim.rollout; the expert's best is tried too)
 
 
 @dataclass(frozen=True)
@@ -84,3 +90,16 @@ TEACHERS.register("guarded", _guarded_teacher(
 TEACHERS.register("accepted", _guarded_teacher(
     REPRODUCTION_MARGIN, "the hand-tuned reward among the footholds the expert accepts (within "
                          "the margin)"))
+
+
+def _rollout_labels(expert: ExpertConfig, bias_weight: float, lead: float) -> Expert:
+    raise FootfallError("the rollout teacher labels by walking branches of a run: it walks "
+                        "(walk-many --teacher rollout) but labels no stored run yet")
+
+
+TEACHERS.register("rollout", Teacher(
+    _rollout_labels,
+    lambda expert, bias_weight, lead: Walker(
+        reward=_guarded(expert, bias_weight, lead, REPRODUCTION_MARGIN).scorer, rollout=True),
+    "the simulator: the accepted teacher's best candidates and the expert's best tried in "
+    "branches of the run, the one that walked best taken"))

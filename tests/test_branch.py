@@ -1,9 +1,12 @@
 """Branching a run at a decision (footfall.sim.branch): the recorded choice forced gives the
 recorded run bit for bit; another candidate gives another run from that step on."""
 
+import json
+
 import numpy as np
 import pytest
 
+from cli_helpers import run
 from footfall.core.errors import FootfallError
 from footfall.features.reward import default_reward
 from footfall.sim.branch import TapedWalk
@@ -89,3 +92,12 @@ def test_a_branch_refuses_what_the_run_does_not_have(taped):
     size = walk.tape.decisions[0].plan.candidates.shape[0]
     with pytest.raises(FootfallError, match="first must be <"):
         walk.branch(0, first=size)
+
+
+def test_the_branch_benchmark_times_both_ways_and_they_agree(capsys):
+    code, out, _ = run(capsys, "bench", "branch", "--decisions", "1", "--tries", "1", "--json")
+    assert code == 0
+    result = json.loads(out)
+    assert result["agree"] is True and len(result["branches"]) == 1
+    row = result["branches"][0]
+    assert 0 < row["physics_cpu_s"] < row["forked_cpu_s"] and row["replayed_cpu_s"] > 0

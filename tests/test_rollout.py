@@ -93,3 +93,20 @@ def test_the_rollout_teacher_walks_where_any_teacher_walks_and_refuses_to_label(
     assert walker.rollout and walker.reward is not None  # over the accepted teacher
     with pytest.raises(FootfallError, match="labels no stored run"):
         TEACHERS.get("rollout").expert(settings, 60.0, 0.01)
+
+
+def test_branches_forked_at_the_decision_answer_as_the_replayed_ones():
+    """The rollout walk tries its candidates in forked copies of the run at each decision;
+    afterwards the same tries by replay (TapedWalk.branch) give the same outcomes, bit for bit."""
+    reward = default_reward()
+    hmap = make_board([parse_board_spec("rocky:1.0")], seed=3)
+    config = RolloutConfig(candidates=2, branches=2, horizon=2)
+    walk = RolloutWalk(hmap, lambda leg: reward, 1, WalkConfig(max_steps=5), rollout=config)
+    walk.branch_processes = 2
+    walk.run()
+    kept = [v for v in walk.verdicts if v.best == v.base]  # their tape keeps the base's plan
+    assert kept
+    for live in kept:
+        again = rollout_verdict(walk, live.decision, config)
+        assert again.outcomes == live.outcomes
+        np.testing.assert_array_equal(again.values, live.values)

@@ -8,6 +8,7 @@ import click
 from footfall.cli.choices import SEED
 from footfall.cli.output import emit, json_option, progress_log
 from footfall.core.errors import FootfallError
+from footfall.experiments.bench.branch import bench_branch, format_branch
 from footfall.experiments.bench.executors import bench_executors, format_executors
 from footfall.experiments.bench.expert import bench_expert, format_expert
 from footfall.experiments.bench.learning import bench_learning, format_learning
@@ -124,6 +125,21 @@ def bench_expert_cmd(runs: int, sets: int, as_json: bool) -> None:
     time), and its terrain terms compiled against the NumPy rules."""
     result = bench_expert(runs=runs, sets=sets)
     emit(as_json, result, format_expert(result))
+
+
+@bench.command("branch")
+@click.option("--seed", type=click.IntRange(0), default=5000, show_default=True,
+              help="The run's seed.")
+@click.option("--decisions", type=click.IntRange(1, 100), default=4, show_default=True,
+              help="Decisions, spread over the run, whose candidates are tried.")
+@click.option("--tries", type=click.IntRange(1, 20), default=3, show_default=True,
+              help="Candidates tried at each of them (the planner's best).")
+@json_option
+def bench_branch_cmd(seed: int, decisions: int, tries: int, as_json: bool) -> None:
+    """A branch of a run forked at a decision and one replayed after it, against the physics
+    of its own steps (CPU time)."""
+    result = bench_branch(seed=seed, decisions=decisions, tries=tries)
+    emit(as_json, result, format_branch(result))
 
 
 @bench.command("teach")

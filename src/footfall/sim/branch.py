@@ -22,13 +22,21 @@ candidate asked for (its look-ahead rolled out by the planner), after it the
 walk's own planner. Forcing the recorded choice gives the recorded run, bit
 for bit to its end (tests/test_branch.py); a branch costs its replay (the
 control periods before the decision, no physics and no planning) and its own
-walking.
+walking. During the run, at the decision it is making,
+:meth:`TapedWalk.try_candidates` forks the process instead: each copy is the
+run at that moment and walks on as its branch, nothing replayed, and returns
+what its judge says as JSON -- the same answers as the replay (about half its
+cost: ``footfall bench branch``). A fork copies a process that must not hold
+running threads (a run holds none: it walks on one core).
 """
 
 from __future__ import annotations
 
 import copy
+import json
+import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import mujoco
@@ -85,6 +93,7 @@ class Branched:
     record: RunRecord  # the whole run's log, the steps before the decision the recorded run's
     feet: np.ndarray  # (4, 3) [m] foot centres at the branch's end (LEG_NAMES order)
     body: np.ndarray  # (3,) [m] body position at the branch's end
+    physics_cpu: float = 0.0  # [s] CPU time of the branch's own physics steps (benchmarks)
 
 
 @dataclass
@@ -105,31 +114,86 @@ class _Recorded:
 
     def plan(self, state: RobotState) -> FootstepPlan:
         index, self._calls = self._calls, self._calls + 1
-        return self._on_plan(self._planner, index, state)
+        try:
+            return self._on_plan(self._planner, index, state)
+        except _BranchHere as here:  # a forked copy of the run: it goes on from here, this way
+            return self._planner.plan(state, first=here.first)
+
+
+class _BranchHere(BaseException):
+    """Raised in a forked copy of a run at its decision, to take candidate ``first`` there
+    (None: the planner's own choice); caught where the planner was called. A BaseException,
+    so that nothing between catches it as an error."""
+
+    def __init__(self, first: int | None) -> None:
+        super().__init__(first)
+        self.first = first
+
+
+class _Varied(Walk):
+    """A walk whose physics can be varied from a moment on (:class:`BranchVariation`)."""
+
+    _variation: BranchVariation | None = None
+    _push_until: float = -np.inf  # [s] simulated time the push ends
+
+    def _vary(self, v: BranchVariation) -> None:
+        """The walk's own noise, friction and push from here on."""
+        sim = self.sim
+        self._variation = v
+        if v.noise_seed is not None:
+            sim.sensors.set_noise_state(np.random.default_rng(v.noise_seed).bit_generator.state)
+        if v.friction_scale != 1.0:  # the terrain's friction is 0: MuJoCo takes the robot's
+            sim.model.geom_friction[:, 0] *= v.friction_scale
+            sim.model.pair_friction[:, :2] *= v.friction_scale
+        if v.push_time > 0 and any(v.push):
+            self._trunk = mujoco.mj_name2id(sim.model, mujoco.mjtObj.mjOBJ_BODY, "trunk")
+            self._push_until = sim.time + v.push_time
+
+    def _actuate(self, targets) -> None:
+        super()._actuate(targets)
+        if np.isfinite(self._push_until):  # on while the push lasts, then off for good
+            on = self.sim.time < self._push_until - 1e-9
+            self.sim.data.xfrc_applied[self._trunk, :3] = self._variation.push if on else 0.0
+            self._push_until = self._push_until if on else -np.inf
 
     def __getattr__(self, name: str):
         return getattr(self._planner, name)
 
 
-class TapedWalk(Walk):
+class TapedWalk(_Varied):
     """A walk that can be branched at any of its decisions (see the module's docstring).
 
     Built as :class:`~footfall.sim.episode.Walk` is; :meth:`run` walks and keeps
     :attr:`tape`; :meth:`branch` walks another run from one of its decisions.
     """
 
+    branch_processes: int = 1  # forked branches walked at once (try_candidates)
+
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         self.tape = Tape()
-        self.controller.planner = _Recorded(self.controller.planner, self._decide)
+        self.controller.planner = _Recorded(self.controller.planner, self._decision)
+        self._deciding: int | None = None  # the decision being made now
+        self._forked: tuple[int, Callable, int] | None = None  # in a forked branch: its pipe,
+        # its judge and its index among the tries
 
     def _measure(self) -> Measurements:
         m = super()._measure()
         self.tape.measurements.append(m)
         return m
 
+    def _decision(self, planner, index: int, state: RobotState) -> FootstepPlan:
+        self._deciding = index
+        try:
+            return self._decide(planner, index, state)
+        finally:
+            self._deciding = None
+
     def _decide(self, planner, index: int, state: RobotState) -> FootstepPlan:
-        """A decision of the run: the state kept, then the planner's choice."""
+        """A decision of the run: the state kept, then the planner's choice (in a forked
+        branch, after its own decision: the planner's choice alone)."""
+        if self._forked is not None:
+            return planner.plan(state)
         physics, noise = self.sim.state(), self.sim.sensors.noise_state()
         task = copy.deepcopy(self.task)
         periods = len(self.tape.measurements) - 1
@@ -137,6 +201,79 @@ class TapedWalk(Walk):
         self.tape.decisions.append(Decision(index, periods, physics, noise, task,
                                             copy.deepcopy(state), copy.deepcopy(plan)))
         return plan
+
+    def try_candidates(self, at: int, tries: list[tuple[int | None, BranchVariation]],
+                       steps: int, judge: Callable[[Branched, int], dict]) -> list[dict]:
+        """``judge(branched, i)`` (a JSON object) of each try ``i``, a (candidate, variation)
+        walked from decision ``at`` for ``steps`` steps after the decision's own.
+
+        At the decision the run is making now (from within :meth:`_decide`), each try is a
+        forked copy of this process (``os.fork``: nothing replayed, ``branch_processes`` at
+        once; the judge runs in the copy and its answer comes back as JSON); at any other
+        decision, or where there is no fork, :meth:`branch` (the replay). The two give the
+        same answers (tests/test_branch.py).
+        """
+        if self._deciding == at and hasattr(os, "fork"):
+            return self._forked_tries(tries, steps, judge)
+        return [judge(self.branch(at, first, steps, v), i)
+                for i, (first, v) in enumerate(tries)]
+
+    def _forked_tries(self, tries, steps: int, judge) -> list[dict]:
+        limit = len(self.task.steps) + 1 + require_int(steps, "steps", 0)
+        answers: list[dict | None] = [None] * len(tries)
+        running: dict[int, tuple[int, int]] = {}  # pid -> (read end, try)
+        for i, (first, variation) in enumerate(tries):
+            if len(running) >= max(1, self.branch_processes):
+                self._collect(running, answers)
+            read, write = os.pipe()
+            pid = os.fork()
+            if pid == 0:  # the branch: from here the run goes on as it
+                os.close(read)
+                self._forked = (write, judge, i)
+                self.sim.physics_cpu = 0.0  # the branch's own from here
+                self.controller.config = replace(self.controller.config, max_steps=limit)
+                self._vary(variation)
+                raise _BranchHere(first)
+            os.close(write)
+            running[pid] = (read, i)
+        while running:
+            self._collect(running, answers)
+        return answers
+
+    @staticmethod
+    def _collect(running: dict, answers: list) -> None:
+        """Wait for one forked branch; its answer into ``answers``."""
+        pid, status = os.wait()
+        read, i = running.pop(pid)
+        with os.fdopen(read, "rb") as pipe:
+            data = pipe.read()
+        if os.waitstatus_to_exitcode(status) != 0 or not data:
+            raise FootfallError(f"a forked branch (try {i}) failed: exit status "
+                                f"{os.waitstatus_to_exitcode(status)}")
+        answers[i] = json.loads(data)
+
+    def _periods(self, wall0: float) -> RunRecord:
+        # A forked branch is made inside this call and returns through it: whether it is one is
+        # known only at the end. It ends here -- its answer to the pipe, and the copy is gone.
+        try:
+            record = super()._periods(wall0)
+        except BaseException:
+            if self._forked is not None:
+                os._exit(70)
+            raise
+        if self._forked is None:
+            return record
+        write, judge, i = self._forked
+        try:
+            branched = Branched(record, self.sim.foot_positions(), self.sim.body_pose()[0],
+                                self.sim.physics_cpu)
+            data = json.dumps(judge(branched, i)).encode()
+            while data:
+                data = data[os.write(write, data):]
+            os.close(write)
+        except BaseException:
+            os._exit(70)
+        os._exit(0)
 
     def branch(self, at: int, first: int | None = None, steps: int | None = None,
                variation: BranchVariation | None = None) -> Branched:
@@ -156,10 +293,11 @@ class TapedWalk(Walk):
             config = replace(config, max_steps=limit)
         walk = _Branch(self, int(at), first, config, variation or BranchVariation())
         record = walk.run()
-        return Branched(record, walk.sim.foot_positions(), walk.sim.body_pose()[0])
+        return Branched(record, walk.sim.foot_positions(), walk.sim.body_pose()[0],
+                        walk.sim.physics_cpu)
 
 
-class _Branch(Walk):
+class _Branch(_Varied):
     """A walk from a decision of a taped one (:meth:`TapedWalk.branch`)."""
 
     def __init__(self, source: TapedWalk, at: int, first: int | None, config,
@@ -168,7 +306,6 @@ class _Branch(Walk):
                          judge=source.judge)
         self.source, self.at, self.first, self.variation = source, at, first, variation
         self.controller.planner = _Recorded(self.controller.planner, self._decide)
-        self._push_until = -np.inf  # [s] simulated time the push ends
 
     def _decide(self, planner, index: int, state: RobotState) -> FootstepPlan:
         """Before the decision the recorded plans (the state checked against the recorded
@@ -198,23 +335,3 @@ class _Branch(Walk):
         self.task = copy.deepcopy(decision.task)
         self.trace = self.task.trace
         return self._periods(wall0)
-
-    def _vary(self, v: BranchVariation) -> None:
-        """The branch's own noise, friction and push from here on."""
-        sim = self.sim
-        if v.noise_seed is not None:
-            sim.sensors.set_noise_state(np.random.default_rng(v.noise_seed).bit_generator.state)
-        if v.friction_scale != 1.0:  # the terrain's friction is 0: MuJoCo takes the robot's
-            sim.model.geom_friction[:, 0] *= v.friction_scale
-            sim.model.pair_friction[:, :2] *= v.friction_scale
-        if v.push_time > 0 and any(v.push):
-            self._trunk = mujoco.mj_name2id(sim.model, mujoco.mjtObj.mjOBJ_BODY, "trunk")
-            self._push_until = sim.time + v.push_time
-
-    def _actuate(self, targets) -> None:
-        super()._actuate(targets)
-        if np.isfinite(self._push_until):  # on while the push lasts, then off for good
-            on = self.sim.time < self._push_until - 1e-9
-            self.sim.data.xfrc_applied[self._trunk, :3] = self.variation.push if on else 0.0
-            self._push_until = self._push_until if on else -np.inf
-

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import copy
 import math
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -185,11 +185,13 @@ def rollout_verdict(walk: TapedWalk, at: int, config: RolloutConfig = RolloutCon
     first_step = len(decision.task.steps)
     start_x = float(decision.state.body_position[0])
     variations = branch_variations(config, walk.seed, at)
-    outcomes = []
-    for c in tried:
-        for s, v in enumerate(variations):
-            branched = walk.branch(at, first=c, steps=config.horizon, variation=v)
-            outcomes.append(outcome_of(branched, first_step, start_x, c, s, config))
+    tries = [(c, v) for c in tried for v in variations]
+
+    def judge(branched: Branched, i: int) -> dict:
+        c, s = tries[i][0], i % config.branches
+        return asdict(outcome_of(branched, first_step, start_x, c, s, config))
+
+    outcomes = [BranchOutcome(**o) for o in walk.try_candidates(at, tries, config.horizon, judge)]
     values = np.array([o.value for o in outcomes]).reshape(len(tried), config.branches)
     values = values.mean(axis=1)
     top = int(np.argmax(values))
@@ -210,6 +212,8 @@ class RolloutWalk(TapedWalk):
         self.verdicts: list[RolloutVerdict] = []
 
     def _decide(self, planner, index: int, state: RobotState) -> FootstepPlan:
+        if self._forked is not None:  # a branch: the base chooser from here on
+            return planner.plan(state)
         plan = super()._decide(planner, index, state)  # kept as the base chooser planned
         verdict = rollout_verdict(self, index, self.rollout, self.expert)
         self.verdicts.append(verdict)

@@ -110,3 +110,48 @@ def test_branches_forked_at_the_decision_answer_as_the_replayed_ones():
         again = rollout_verdict(walk, live.decision, config)
         assert again.outcomes == live.outcomes
         np.testing.assert_array_equal(again.values, live.values)
+
+
+def test_the_rollout_teacher_labels_the_runs_own_states_as_it_goes(tmp_path):
+    """A correcting run job with the rollout teacher: the run walks with its own choices, the
+    teacher's verdict at every decision becomes a demonstration -- its choice the best tried,
+    the tried candidates that went clearly worse refused."""
+    from footfall.experiments.runs import RunJob, execute
+    from footfall.expert.synthetic import walking_expert
+
+    board = make_board([parse_board_spec("rocky:1.0")], seed=3)
+    board.save(tmp_path / "board.npz")
+    config = WalkConfig(max_steps=4)
+    settings = walking_expert(config.footstep.lead)
+    job = RunJob("r0", str(tmp_path / "board.npz"), None, 1, config, correct=True,
+                 expert=settings, teacher="rollout", every_step=True)
+    record, demos = execute(job)
+    plain = execute(RunJob("r0", str(tmp_path / "board.npz"), None, 1, config))[0]
+    assert [s.chosen for s in record.steps] == [s.chosen for s in plain.steps]  # its own choices
+    assert [d.source for d in demos] == [f"run:r0:step:{k}" for k in range(4)]
+    for d, step in zip(demos, record.steps):
+        np.testing.assert_array_equal(d.candidates, step.candidates)
+        assert d.values is None and not d.refused[d.chosen]
+        assert d.expert["class"].endswith("RolloutVerdict")
+
+
+def test_rollout_labels_refuse_what_went_worse_and_a_cap_keeps_the_largest_gains():
+    from footfall.sim.rollout import refused_of, verdict_demonstrations
+
+    reward = default_reward()
+    hmap = make_board([parse_board_spec("rocky:1.0")], seed=3)
+    config = RolloutConfig(candidates=3, branches=1, horizon=1, margin=0.0, refuse=0.0)
+    walk = RolloutWalk(hmap, lambda leg: reward, 1, WalkConfig(max_steps=6), rollout=config,
+                       take=False)
+    record = walk.run()
+    every = verdict_demonstrations(walk, record, "r", every_step=True)
+    changed = verdict_demonstrations(walk, record, "r", every_step=False)
+    assert len(every) == 6 and 0 < len(changed) < 6  # at margin 0 progress alone decides
+    for d, v in zip(every, walk.verdicts):
+        assert d.chosen == v.best
+        assert set(np.flatnonzero(d.refused)) == set(v.tried[refused_of(v, 0.0)])
+    assert any(d.refused.any() for d in every)
+    gains = {d.source: v.values.max() - v.values[0] for d, v in zip(every, walk.verdicts)}
+    capped = verdict_demonstrations(walk, record, "r", every_step=False, cap=1)
+    assert len(capped) == 1
+    assert gains[capped[0].source] == max(gains[d.source] for d in changed)

@@ -42,7 +42,7 @@ from footfall.expert.teachers import TEACHERS
 from footfall.features.scorer import SCORERS
 from footfall.learning.model import FootholdModel
 from footfall.sim.episode import Frames, Walk, WalkConfig
-from footfall.sim.rollout import RolloutConfig, RolloutWalk
+from footfall.sim.rollout import RolloutConfig, RolloutWalk, verdict_demonstrations
 from footfall.terrain import make_board
 
 if TYPE_CHECKING:
@@ -110,14 +110,22 @@ def execute(job: RunJob) -> RunOutput:
     # fighting over the cores the other runs use.
     teacher = TEACHERS.get(job.teacher)
     footstep = job.walk.footstep
+    rollout = teacher.walker(job.expert, footstep.bias_weight, footstep.lead).rollout
     with threadpool_limits(limits=1):
         reward_for = reward_source(job.model, hmap)
-        run = (teacher_walk(hmap, reward_for, job.seed, job.walk, job.teacher, job.expert)
-               if job.judge else Walk(hmap, reward_for, job.seed, job.walk))
+        if job.judge:
+            run = teacher_walk(hmap, reward_for, job.seed, job.walk, job.teacher, job.expert)
+        elif job.correct and rollout:  # it labels the run's own states as the run goes
+            run = RolloutWalk(hmap, reward_for, job.seed, job.walk, rollout=RolloutConfig(),
+                              expert=SyntheticExpert(job.expert), take=False)
+        else:
+            run = Walk(hmap, reward_for, job.seed, job.walk)
         record = run.run()
         record = replace(record, key=job.key)
         demos = []
-        if job.correct:
+        if job.correct and rollout and not job.judge:
+            demos = verdict_demonstrations(run, record, job.key, job.every_step, job.cap)
+        elif job.correct:
             expert = teacher.expert(job.expert, footstep.bias_weight, footstep.lead)
             found = inspect_run(record, hmap, expert, job.margin, rng=job.inspect_seed,
                                 every_step=job.every_step)

@@ -16,8 +16,9 @@ expert's settings and the walk's footstep settings, so a run job names a teacher
   the footholds the expert accepts.
 * ``"rollout"``: the simulator (:mod:`footfall.sim.rollout`): at every decision the
   ``accepted`` teacher's best candidates and the expert's best are tried in branches of the run,
-  and the one that walked best is taken. It walks; it labels no stored run yet (its verdicts
-  need the run walked again, taped), so its expert face refuses.
+  and the one that walked best is taken. It labels a run's own states as the run is walked (a
+  correcting run job, :func:`footfall.sim.rollout.verdict_demonstrations`), not a stored run
+  (its verdicts need the run walked again, taped), so its expert face refuses.
 """
 
 from __future__ import annotations
@@ -94,7 +95,8 @@ TEACHERS.register("accepted", _guarded_teacher(
 
 def _rollout_labels(expert: ExpertConfig, bias_weight: float, lead: float) -> Expert:
     raise FootfallError("the rollout teacher labels by walking branches of a run: it walks "
-                        "(walk-many --teacher rollout) but labels no stored run yet")
+                        "(walk-many --teacher rollout) and labels runs as they are walked, "
+                        "but labels no stored run yet")
 
 
 TEACHERS.register("rollout", Teacher(

@@ -37,13 +37,16 @@ from footfall.core.errors import FootfallError
 from footfall.core.params import Params, at_least, param, within
 from footfall.core.robot import LEG_NAMES
 from footfall.core.state import RobotState
+from footfall.data.demonstration import Demonstration
 from footfall.data.outcomes import MISSED, STANCE_SLID
+from footfall.data.runlog import RunRecord
+from footfall.expert.corrections import source_of
 from footfall.expert.protocol import Expert
 from footfall.sim.branch import Branched, BranchVariation, TapedWalk
 from footfall.sim.task import foot_slip
 
 __all__ = ["BranchOutcome", "RolloutConfig", "RolloutVerdict", "RolloutWalk", "branch_variations",
-           "rollout_verdict"]
+           "refused_of", "rollout_verdict", "verdict_demonstrations"]
 
 
 @dataclass(frozen=True)
@@ -69,6 +72,10 @@ class RolloutConfig(Params):
     margin: float = param(0.05, unit="value", range=at_least(0),
                           doc="another candidate is taught only if its value is above the base "
                               "chooser's by more than this (5 cm of progress, or 5 mm of slide)")
+    refuse: float = param(0.5, unit="value", range=at_least(0),
+                          doc="as labels: a tried candidate this far below the taught one is "
+                              "refused (half a fall: it fell in at least half its branches "
+                              "more than the taught one did, or as much worse)")
     w_fall: float = param(1.0, unit="value", range=at_least(0), doc="a fall in the branch")
     w_failed: float = param(0.5, unit="value", range=at_least(0),
                             doc="another failure in the branch: stuck, no foothold, out of time")
@@ -203,12 +210,14 @@ class RolloutWalk(TapedWalk):
     """A walk whose footholds the rollout teacher chooses: at each decision the base chooser's
     plan (the walk's own planner), its verdict, and the foothold it teaches (:attr:`verdicts`
     keeps every verdict). Built as :class:`TapedWalk`, with the teacher's ``rollout``
-    settings and the ``expert`` whose best candidate it tries too."""
+    settings and the ``expert`` whose best candidate it tries too; ``take`` False: the base
+    chooser walks on with its own choice and the verdicts are labels of its own states
+    (:func:`verdict_demonstrations`)."""
 
     def __init__(self, *args, rollout: RolloutConfig = RolloutConfig(),
-                 expert: Expert | None = None, **kwargs) -> None:
+                 expert: Expert | None = None, take: bool = True, **kwargs) -> None:
         super().__init__(*args, **kwargs)
-        self.rollout, self.expert = rollout, expert
+        self.rollout, self.expert, self.take = rollout, expert, take
         self.verdicts: list[RolloutVerdict] = []
 
     def _decide(self, planner, index: int, state: RobotState) -> FootstepPlan:
@@ -217,7 +226,7 @@ class RolloutWalk(TapedWalk):
         plan = super()._decide(planner, index, state)  # kept as the base chooser planned
         verdict = rollout_verdict(self, index, self.rollout, self.expert)
         self.verdicts.append(verdict)
-        if verdict.best == plan.index:
+        if verdict.best == plan.index or not self.take:
             return plan
         taught = planner.plan(state, first=verdict.best)  # what the run takes, and replays
         decisions = self.tape.decisions
@@ -226,6 +235,49 @@ class RolloutWalk(TapedWalk):
 
     def _settings(self) -> dict:
         settings = super()._settings()
-        settings["teacher"] = {"rollout": self.rollout.to_dict(),
-                               "expert_best": self.expert is not None}
+        if self.take:
+            settings["teacher"] = {"rollout": self.rollout.to_dict(),
+                                   "expert_best": self.expert is not None}
         return settings
+
+
+def refused_of(verdict: RolloutVerdict, refuse: float) -> np.ndarray:
+    """(m,) bool over ``verdict.tried``: the candidates more than ``refuse`` [value units]
+    below the taught one's value."""
+    best = verdict.values[list(verdict.tried).index(verdict.best)]
+    return verdict.values < best - refuse
+
+
+def verdict_demonstrations(walk: RolloutWalk, record: RunRecord, run_key: str,
+                           every_step: bool = True, cap: int | None = None
+                           ) -> list[Demonstration]:
+    """The rollout teacher's labels of the steps of ``record`` (the run ``walk`` walked,
+    stored as ``run_key``): one demonstration a step, sourced ``run:<run_key>:step:<k>``, its
+    choice the verdict's best, the tried candidates refused where they lie more than
+    ``rollout.refuse`` below it (no values: the untried ones are unknown); ``every_step``
+    False: only the steps where it taught another foothold than the run took; ``cap``: at
+    most this many, those it valued most above the run's own choice (ties: the earlier). A
+    step planned again after it was called off is labelled at its last decision."""
+    last = {len(walk.tape.decisions[v.decision].task.steps): v for v in walk.verdicts}
+    settings = {"class": f"{__name__}.RolloutVerdict", "config": walk.rollout.to_dict(),
+                "expert_best": walk.expert is not None}
+    out, gains = [], []
+    for step in record.steps:
+        verdict = last.get(step.k)
+        if verdict is None or (not every_step and verdict.best == step.chosen):
+            continue
+        tried = list(verdict.tried)
+        own = verdict.values[tried.index(step.chosen)] if step.chosen in tried else -np.inf
+        gains.append(verdict.values[tried.index(verdict.best)] - own)
+        plan = walk.tape.decisions[verdict.decision].plan
+        if not np.array_equal(plan.candidates, step.candidates):
+            raise FootfallError(f"rollout labels: step {step.k} is not its decision's")
+        refused = np.zeros(step.candidates.shape[0], dtype=bool)
+        refused[verdict.tried[refused_of(verdict, walk.rollout.refuse)]] = True
+        out.append(Demonstration(record.terrain_hash, step.state, step.candidates,
+                                 verdict.best, source=source_of(run_key, step.k),
+                                 expert=settings, refused=refused))
+    if cap is not None and len(out) > cap:
+        keep = np.sort(np.argsort(-np.array(gains), kind="stable")[:cap])
+        out = [out[i] for i in keep]
+    return out

@@ -69,6 +69,8 @@ class RunJob:
     teacher: str = "expert"  # who judges and corrects (footfall.expert.teachers.TEACHERS)
     every_step: bool = False  # the teacher labels every step (DAgger), not only those short
     # of its best by more than ``margin`` (``cap`` still bounds them)
+    rollout: RolloutConfig = field(default_factory=RolloutConfig)  # the rollout teacher's
+    # settings, where the teacher is "rollout"
 
 
 def reward_source(model_path: str | os.PathLike | None, hmap: HeightMap):
@@ -88,18 +90,20 @@ def reward_source(model_path: str | os.PathLike | None, hmap: HeightMap):
 
 
 def teacher_walk(hmap: HeightMap, reward_for, seed: int, config: WalkConfig, teacher: str,
-                 expert: ExpertConfig, frames: Frames | None = None) -> Walk:
+                 expert: ExpertConfig, frames: Frames | None = None,
+                 rollout: RolloutConfig = RolloutConfig()) -> Walk:
     """The walk in which ``teacher`` (:data:`~footfall.expert.teachers.TEACHERS`, with the
     expert of ``expert``) chooses every foothold: the judged planner, the planner of a reward
     it guards, or the rollout teacher over that (:class:`~footfall.sim.rollout.RolloutWalk`).
-    ``reward_for`` plans the body path where the teacher is a judge."""
+    ``reward_for`` plans the body path where the teacher is a judge; ``rollout``: the rollout
+    teacher's settings."""
     step = config.footstep
     walker = TEACHERS.get(teacher).walker(expert, step.bias_weight, step.lead)
     if walker.reward is not None:
         reward_for = lambda leg: walker.reward  # noqa: E731
     if walker.rollout:
         return RolloutWalk(hmap, reward_for, seed, config, frames=frames, judge=walker.judge,
-                           rollout=RolloutConfig(), expert=SyntheticExpert(expert))
+                           rollout=rollout, expert=SyntheticExpert(expert))
     return Walk(hmap, reward_for, seed, config, frames=frames, judge=walker.judge)
 
 
@@ -114,9 +118,10 @@ def execute(job: RunJob) -> RunOutput:
     with threadpool_limits(limits=1):
         reward_for = reward_source(job.model, hmap)
         if job.judge:
-            run = teacher_walk(hmap, reward_for, job.seed, job.walk, job.teacher, job.expert)
+            run = teacher_walk(hmap, reward_for, job.seed, job.walk, job.teacher, job.expert,
+                               rollout=job.rollout)
         elif job.correct and rollout:  # it labels the run's own states as the run goes
-            run = RolloutWalk(hmap, reward_for, job.seed, job.walk, rollout=RolloutConfig(),
+            run = RolloutWalk(hmap, reward_for, job.seed, job.walk, rollout=job.rollout,
                               expert=SyntheticExpert(job.expert), take=False)
         else:
             run = Walk(hmap, reward_for, job.seed, job.walk)

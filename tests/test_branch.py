@@ -8,6 +8,7 @@ import pytest
 
 from cli_helpers import run
 from footfall.core.errors import FootfallError
+from footfall.experiments.reproduce import ReproduceConfig
 from footfall.features.reward import default_reward
 from footfall.sim.branch import TapedWalk
 from footfall.sim.episode import WALL_CLOCK_FIELDS, WalkConfig
@@ -101,3 +102,14 @@ def test_the_branch_benchmark_times_both_ways_and_they_agree(capsys):
     assert result["agree"] is True and len(result["branches"]) == 1
     row = result["branches"][0]
     assert 0 < row["physics_cpu_s"] < row["forked_cpu_s"] and row["replayed_cpu_s"] > 0
+
+
+@pytest.mark.parametrize("kind", ReproduceConfig().test_kinds)
+def test_every_test_kind_branches_bit_for_bit(kind):
+    """A run on a board of each test kind (the reproduction's, at difficulty 1.0): branched at
+    a middle decision with its recorded choice, the recorded run again."""
+    reward = default_reward()
+    hmap = make_board([parse_board_spec(f"{kind}:1.0")], seed=11)
+    walk = TapedWalk(hmap, lambda leg: reward, 2, WalkConfig(max_steps=12))
+    record = walk.run()
+    same_run(walk.branch(len(walk.tape.decisions) // 2).record, record)

@@ -91,7 +91,7 @@ def test_the_rollout_teacher_walks_where_any_teacher_walks_and_refuses_to_label(
                                           "expert_best": True}
     walker = TEACHERS.get("rollout").walker(settings, 60.0, 0.01)
     assert walker.rollout and walker.reward is not None  # over the accepted teacher
-    with pytest.raises(FootfallError, match="labels no stored run"):
+    with pytest.raises(FootfallError, match="not a state alone"):
         TEACHERS.get("rollout").expert(settings, 60.0, 0.01)
 
 

@@ -94,9 +94,9 @@ TEACHERS.register("accepted", _guarded_teacher(
 
 
 def _rollout_labels(expert: ExpertConfig, bias_weight: float, lead: float) -> Expert:
-    raise FootfallError("the rollout teacher labels by walking branches of a run: it walks "
-                        "(walk-many --teacher rollout) and labels runs as they are walked, "
-                        "but labels no stored run yet")
+    raise FootfallError("the rollout teacher judges by walking branches of a run, not a state "
+                        "alone: it walks (walk, walk-many --teacher rollout) but does not yet "
+                        "label stored runs, a reproduction or an offline table")
 
 
 TEACHERS.register("rollout", Teacher(

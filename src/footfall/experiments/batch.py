@@ -36,6 +36,7 @@ from footfall.expert.scorer import ExpertScorer, judge_name, settings_hash
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
 from footfall.expert.teachers import TEACHERS
 from footfall.plots.explain import save_explain_plot
+from footfall.sim.branch import TapedWalk
 from footfall.sim.episode import Frames, Walk, WalkConfig
 
 
@@ -373,6 +374,8 @@ def walk_once(terrain_path: str | os.PathLike, seed: int, *,
                           video_fps=25.0 if video else 0.0)
     run = (teacher_walk(hmap, reward_for, seed, config, teacher, judge, pictures) if expert
            else Walk(hmap, reward_for, seed, config, frames=pictures))
+    if isinstance(run, TapedWalk):  # one run: its branches on every core this process may use
+        run.branch_processes = usable_cores()
     record = run.run()
     run_id = None
     if log is not None:  # stored before any picture: a picture that fails loses no run

@@ -5,14 +5,17 @@ from __future__ import annotations
 import click
 
 from footfall.cli.choices import RECORDED_STEP, SEED, TEACHER, Finite, count_range
+from footfall.cli.executors import executor_options, opened_executor
 from footfall.cli.output import emit, json_option, progress_bar
 from footfall.control.footstep import FootstepConfig
+from footfall.core.errors import FootfallError
 from footfall.data.inventory import store_inventory
 from footfall.data.store import DemoStore
 from footfall.expert.collect import collect_into_store
 from footfall.expert.corrections import DEFAULT_MARGIN, correct_stored_runs
 from footfall.expert.settings_file import load_expert
 from footfall.expert.synthetic import SyntheticExpert, walking_expert
+from footfall.experiments.relabel import relabel_runs
 from footfall.expert.teachers import TEACHERS
 from footfall.teach.agreement import agreement_lines
 from footfall.teach.judging import default_expert, store_agreement
@@ -80,23 +83,41 @@ def demos_collect(terrains: tuple[str, ...], more_terrains: tuple[str, ...], n: 
                    "more than the margin: the teacher's choice on every state the robot visited "
                    "(DAgger), each with its verdict on every candidate.")
 @click.option("--teacher", type=TEACHER, default="expert", show_default=True,
-              help="Who corrects: the synthetic expert, or the hand-tuned reward with its veto "
-                   "(guarded, accepted; docs/learning/teacher.md).")
+              help="Who corrects: the synthetic expert, the hand-tuned reward with its veto "
+                   "(guarded, accepted), or the simulator trying the accepted teacher's best "
+                   "candidates in branches of each run walked again (rollout; "
+                   "docs/learning/teacher.md).")
 @click.option("--run-key", default=None, metavar="PREFIX",
               help="Only the runs whose key starts with this.")
 @click.option("--expert-config", default=None, metavar="EXPERT.json",
               help="Correct with these expert settings; default: the walking expert.")
 @click.option("--seed", type=SEED, default=0, show_default=True,
               help="Seed of an imperfect expert's labels.")
+@click.option("--model", "model_path", default=None, metavar="MODEL.npz",
+              help="With a teacher that walks the runs again (rollout): the function that "
+                   "walked them [default: the hand-tuned reward]; a run it does not walk again "
+                   "as logged is refused.")
+@executor_options
 @json_option
 def demos_correct(run_paths: tuple[str, ...], output: str, margin: float,
                   per_run: int | None, every_step: bool, teacher: str, run_key: str | None,
-                  expert_config: str | None, seed: int, as_json: bool) -> None:
+                  expert_config: str | None, seed: int, model_path: str | None,
+                  processes: int | None, executor_name: str, ray_address: str | None,
+                  as_json: bool) -> None:
     """The teacher's corrections of logged runs (walk-many --log, a reproduction's store), as
     the reproduction's correction rounds make them, added to a demonstration store with its
-    verdict on every candidate of each corrected step."""
+    verdict on every candidate of each corrected step. The rollout teacher labels a run by
+    walking it again from its log, trying candidates in branches (minutes a run); runs the
+    store already holds labels of are skipped."""
     footstep = FootstepConfig()
     config = load_expert(expert_config) if expert_config else walking_expert(footstep.lead)
+    if TEACHERS.get(teacher).walker(config, footstep.bias_weight, footstep.lead).rollout:
+        _correct_by_walking(run_paths, output, per_run, every_step, teacher, run_key, config,
+                            model_path, processes, executor_name, ray_address, as_json)
+        return
+    if model_path is not None:
+        raise FootfallError("--model names the function that walked the runs, for a teacher "
+                            "that walks them again (--teacher rollout)")
     judge = TEACHERS.get(teacher).expert(config, footstep.bias_weight, footstep.lead)
     done = correct_stored_runs(run_paths, output, judge, margin,
                                per_run if per_run is not None else (None if every_step else 6),
@@ -105,6 +126,23 @@ def demos_correct(run_paths: tuple[str, ...], output: str, margin: float,
          f"added {done.added} corrections to {done.store}: {done.runs} "
          f"{_plural(done.runs, 'run')}, {done.steps} steps, {done.above_margin} short of the "
          f"expert's best by more than {done.margin:g}")
+
+
+def _correct_by_walking(run_paths, output, per_run, every_step, teacher, run_key, config,
+                        model_path, processes, executor_name, ray_address, as_json) -> None:
+    """``demos correct`` by a teacher that walks the runs again (footfall.experiments.relabel)."""
+    todo = {"runs": 0}
+    with (opened_executor(executor_name, processes, ray_address) as executor,
+          progress_bar(lambda: todo["runs"], "runs labelled", "run", quiet=False,
+                       log_lines=True) as step):
+        done = relabel_runs(run_paths, output, model_path, teacher, config, per_run=per_run,
+                            every_step=every_step, key_prefix=run_key, executor=executor,
+                            progress=step, todo=lambda n: todo.update(runs=n))
+    skipped = (f"; {done.skipped} {_plural(done.skipped, 'run')} already labelled there, "
+               f"skipped" if done.skipped else "")
+    emit(as_json, done.as_dict(),
+         f"added {done.added} labels to {done.store}: {done.runs} {_plural(done.runs, 'run')} "
+         f"walked again, {done.steps} steps{skipped}")
 
 
 @demos.command("info")

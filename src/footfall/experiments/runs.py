@@ -38,7 +38,7 @@ from footfall.expert.corrections import (
     worst_corrections,
 )
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert
-from footfall.expert.teachers import TEACHERS
+from footfall.expert.teachers import TEACHERS, state_judge
 from footfall.features.scorer import SCORERS
 from footfall.learning.model import FootholdModel
 from footfall.sim.episode import Frames, Walk, WalkConfig
@@ -114,22 +114,28 @@ def execute(job: RunJob) -> RunOutput:
     # fighting over the cores the other runs use.
     teacher = TEACHERS.get(job.teacher)
     footstep = job.walk.footstep
-    rollout = teacher.walker(job.expert, footstep.bias_weight, footstep.lead).rollout
+    walker = teacher.walker(job.expert, footstep.bias_weight, footstep.lead)
+    rollout = walker.rollout
     with threadpool_limits(limits=1):
         reward_for = reward_source(job.model, hmap)
         if job.judge:
             run = teacher_walk(hmap, reward_for, job.seed, job.walk, job.teacher, job.expert,
                                rollout=job.rollout)
-        elif job.correct and rollout:  # it labels the run's own states as the run goes
+        elif job.correct and rollout:  # it labels the run's own states as the run goes, the
+            # teacher it improves on its base chooser
+            base = walker.reward
             run = RolloutWalk(hmap, reward_for, job.seed, job.walk, rollout=job.rollout,
-                              expert=SyntheticExpert(job.expert), take=False)
+                              expert=SyntheticExpert(job.expert), take=False,
+                              base=None if base is None else (lambda leg: base))
         else:
             run = Walk(hmap, reward_for, job.seed, job.walk)
         record = run.run()
         record = replace(record, key=job.key)
         demos = []
         if job.correct and rollout and not job.judge:
-            demos = verdict_demonstrations(run, record, job.key, job.every_step, job.cap)
+            untried = state_judge(job.teacher, job.expert, footstep.bias_weight, footstep.lead)
+            demos = verdict_demonstrations(run, record, job.key, job.every_step, job.cap,
+                                           untried=untried)
         elif job.correct:
             expert = teacher.expert(job.expert, footstep.bias_weight, footstep.lead)
             found = inspect_run(record, hmap, expert, job.margin, rng=job.inspect_seed,

@@ -16,9 +16,11 @@ expert's settings and the walk's footstep settings, so a run job names a teacher
   the footholds the expert accepts.
 * ``"rollout"``: the simulator (:mod:`footfall.sim.rollout`): at every decision the
   ``accepted`` teacher's best candidates and the expert's best are tried in branches of the run,
-  and the one that walked best is taken. It labels a run's own states as the run is walked (a
-  correcting run job, :func:`footfall.sim.rollout.verdict_demonstrations`), not a stored run
-  (its verdicts need the run walked again, taped), so its expert face refuses.
+  and the one that walked best is taken. It labels a run's states as the run is walked (a
+  correcting run job, :func:`footfall.sim.rollout.verdict_demonstrations`; a stored run is
+  walked again to be labelled, :mod:`footfall.experiments.relabel`), so its own expert face
+  refuses; on a state alone -- an offline table, the candidates it did not try -- its base
+  answers (:func:`state_judge`).
 """
 
 from __future__ import annotations
@@ -56,6 +58,8 @@ class Teacher:
     expert: Callable[[ExpertConfig, float, float], Expert]  # values and labels F
     walker: Callable[[ExpertConfig, float, float], Walker]  # chooses every foothold
     doc: str
+    base: str | None = None  # the teacher whose face answers on a state alone, for one that
+    # judges only by walking (the rollout teacher: the teacher it improves on)
 
 
 TEACHERS: Registry[Teacher] = Registry("teacher")
@@ -93,10 +97,17 @@ TEACHERS.register("accepted", _guarded_teacher(
                          "the margin)"))
 
 
+def state_judge(name: str, expert: ExpertConfig, bias_weight: float, lead: float) -> Expert:
+    """The teacher ``name``'s verdict on a state alone: its own expert face, or its base's for
+    a teacher that judges only by walking."""
+    teacher = TEACHERS.get(name)
+    return TEACHERS.get(teacher.base or name).expert(expert, bias_weight, lead)
+
+
 def _rollout_labels(expert: ExpertConfig, bias_weight: float, lead: float) -> Expert:
     raise FootfallError("the rollout teacher judges by walking branches of a run, not a state "
-                        "alone: it walks (walk, walk-many --teacher rollout) but does not yet "
-                        "label stored runs, a reproduction or an offline table")
+                        "alone: its labels come from walking the runs (walk-many --teacher "
+                        "rollout, demos correct --teacher rollout, reproduce --teacher rollout)")
 
 
 TEACHERS.register("rollout", Teacher(
@@ -104,4 +115,4 @@ TEACHERS.register("rollout", Teacher(
     lambda expert, bias_weight, lead: Walker(
         reward=_guarded(expert, bias_weight, lead, REPRODUCTION_MARGIN).scorer, rollout=True),
     "the simulator: the accepted teacher's best candidates and the expert's best tried in "
-    "branches of the run, the one that walked best taken"))
+    "branches of the run, the one that walked best taken", base="accepted"))

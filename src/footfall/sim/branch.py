@@ -19,7 +19,8 @@ settings), replays its controller through the recorded measurements to the
 decision (the recorded plans stand in for the planner there), restores the
 physics, the noise and the referee, and walks on: at the decision the
 candidate asked for (its look-ahead rolled out by the planner), after it the
-walk's own planner. Forcing the recorded choice gives the recorded run, bit
+walk's own planner (or its :attr:`TapedWalk.branch_planner`: another chooser
+continuing the branches). Forcing the recorded choice gives the recorded run, bit
 for bit to its end (tests/test_branch.py); a branch costs its replay (the
 control periods before the decision, no physics and no planning) and its own
 walking. During the run, at the decision it is making,
@@ -109,15 +110,17 @@ class _Recorded:
     """The footstep planner of a run, its calls seen by ``on_plan(planner, index, state,
     first)`` (which plans); everything else is the planner's."""
 
-    def __init__(self, planner, on_plan) -> None:
+    def __init__(self, planner, on_plan, in_branch: Callable[[], object] = lambda: None
+                 ) -> None:
         self._planner, self._on_plan, self._calls = planner, on_plan, 0
+        self._in_branch = in_branch  # the planner of a forked branch's own decisions (None: this)
 
     def plan(self, state: RobotState) -> FootstepPlan:
         index, self._calls = self._calls, self._calls + 1
         try:
             return self._on_plan(self._planner, index, state)
         except _BranchHere as here:  # a forked copy of the run: it goes on from here, this way
-            return self._planner.plan(state, first=here.first)
+            return (self._in_branch() or self._planner).plan(state, first=here.first)
 
 
 class _BranchHere(BaseException):
@@ -172,7 +175,11 @@ class TapedWalk(_Varied):
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         self.tape = Tape()
-        self.controller.planner = _Recorded(self.controller.planner, self._decision)
+        self.own_planner = self.controller.planner  # the walk's footstep planner, unwrapped
+        self.branch_planner = None  # who chooses in a branch, at its decision and after it (a
+        # footstep planner on the same body path); None: the walk's own planner
+        self.controller.planner = _Recorded(self.controller.planner, self._decision,
+                                            lambda: self.branch_planner)
         self._deciding: int | None = None  # the decision being made now
         self._forked: tuple[int, Callable, int] | None = None  # in a forked branch: its pipe,
         # its judge and its index among the tries
@@ -193,7 +200,7 @@ class TapedWalk(_Varied):
         """A decision of the run: the state kept, then the planner's choice (in a forked
         branch, after its own decision: the planner's choice alone)."""
         if self._forked is not None:
-            return planner.plan(state)
+            return (self.branch_planner or planner).plan(state)
         physics, noise = self.sim.state(), self.sim.sensors.noise_state()
         task = copy.deepcopy(self.task)
         periods = len(self.tape.measurements) - 1
@@ -279,9 +286,10 @@ class TapedWalk(_Varied):
                variation: BranchVariation | None = None) -> Branched:
         """The run walked again from decision ``at`` (an index into ``tape.decisions``), there
         taking the candidate ``first`` of its F (an index into its plan's candidates; None: the
-        recorded choice), after it choosing as this walk does; ``steps``: only that many steps
-        after the decision's own (then "step limit"; None: to the run's end); ``variation``:
-        the branch's own noise, friction and push."""
+        recorded choice), after it choosing as this walk does (its :attr:`branch_planner` if
+        set, which also rolls out ``first``); ``steps``: only that many steps after the
+        decision's own (then "step limit"; None: to the run's end); ``variation``: the
+        branch's own noise, friction and push."""
         decisions = self.tape.decisions
         if isinstance(at, bool) or not isinstance(at, (int, np.integer)) \
                 or not 0 <= at < len(decisions):
@@ -310,15 +318,16 @@ class _Branch(_Varied):
     def _decide(self, planner, index: int, state: RobotState) -> FootstepPlan:
         """Before the decision the recorded plans (the state checked against the recorded
         one); at it the candidate asked for; after it the planner's own choice."""
+        chooser = self.source.branch_planner or planner
         if index > self.at:
-            return planner.plan(state)
+            return chooser.plan(state)
         recorded = self.source.tape.decisions[index]
         if not (np.array_equal(state.to_vector(), recorded.state.to_vector())
                 and state.swing_leg == recorded.state.swing_leg):
             raise FootfallError(f"branch: the replay left the recorded run at decision {index}")
         if index < self.at or self.first is None:
             return copy.deepcopy(recorded.plan)
-        return planner.plan(state, first=self.first)
+        return chooser.plan(state, first=self.first)
 
     def _run(self) -> RunRecord:
         wall0 = time.perf_counter()

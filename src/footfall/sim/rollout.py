@@ -32,7 +32,7 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from footfall.control.footstep import FootstepPlan
+from footfall.control.footstep import FootstepPlan, FootstepPlanner
 from footfall.core.errors import FootfallError
 from footfall.core.params import Params, at_least, param, within
 from footfall.core.robot import LEG_NAMES
@@ -41,7 +41,8 @@ from footfall.data.demonstration import Demonstration
 from footfall.data.outcomes import MISSED, STANCE_SLID
 from footfall.data.runlog import RunRecord
 from footfall.expert.corrections import source_of
-from footfall.expert.protocol import Expert
+from footfall.expert.protocol import Expert, kept_verdict, teacher_verdict
+from footfall.features.scorer import RewardFor
 from footfall.sim.branch import Branched, BranchVariation, TapedWalk
 from footfall.sim.task import foot_slip
 
@@ -174,14 +175,19 @@ def outcome_of(branched: Branched, first_step: int, start_x: float, candidate: i
 
 
 def rollout_verdict(walk: TapedWalk, at: int, config: RolloutConfig = RolloutConfig(),
-                    expert: Expert | None = None) -> RolloutVerdict:
+                    expert: Expert | None = None, base_plan: FootstepPlan | None = None
+                    ) -> RolloutVerdict:
     """The rollout teacher at decision ``at`` of the walked ``walk`` (see the module);
-    ``expert``: whose best candidate is tried too (with ``config.expert_best``)."""
+    ``expert``: whose best candidate is tried too (with ``config.expert_best``);
+    ``base_plan``: the base chooser's plan of the decision's state where the base is not the
+    walk's own planner (it continues the branches: ``walk.branch_planner``)."""
     decisions = walk.tape.decisions
     if not 0 <= at < len(decisions):
         raise FootfallError(f"rollout: no decision {at} in this run (it made {len(decisions)})")
     decision = decisions[at]
-    plan = decision.plan
+    plan = decision.plan if base_plan is None else base_plan
+    if not np.array_equal(plan.candidates, decision.plan.candidates):
+        raise FootfallError(f"rollout: the base chooser's F at decision {at} is not the run's")
     ranked = np.argsort(-np.nan_to_num(plan.value, nan=-np.inf), kind="stable")
     ranked = ranked[np.isfinite(plan.value[ranked])][:config.candidates]
     tried = [plan.index] + [int(i) for i in ranked if i != plan.index]
@@ -210,21 +216,29 @@ class RolloutWalk(TapedWalk):
     """A walk whose footholds the rollout teacher chooses: at each decision the base chooser's
     plan (the walk's own planner), its verdict, and the foothold it teaches (:attr:`verdicts`
     keeps every verdict). Built as :class:`TapedWalk`, with the teacher's ``rollout``
-    settings and the ``expert`` whose best candidate it tries too; ``take`` False: the base
-    chooser walks on with its own choice and the verdicts are labels of its own states
-    (:func:`verdict_demonstrations`)."""
+    settings and the ``expert`` whose best candidate it tries too; ``take`` False: the walk's
+    own planner walks on with its own choice and the verdicts are labels of its states
+    (:func:`verdict_demonstrations`). ``base``: the base chooser's reward where it is not the
+    walk's (e.g. the accepted teacher's, labelling a learned function's runs): it ranks the
+    candidates tried and continues every branch, on the walk's body path."""
 
     def __init__(self, *args, rollout: RolloutConfig = RolloutConfig(),
-                 expert: Expert | None = None, take: bool = True, **kwargs) -> None:
+                 expert: Expert | None = None, take: bool = True,
+                 base: RewardFor | None = None, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         self.rollout, self.expert, self.take = rollout, expert, take
         self.verdicts: list[RolloutVerdict] = []
+        if base is not None:
+            own = self.own_planner
+            self.branch_planner = FootstepPlanner(self.hmap, base, own.path, self.robot,
+                                                  own.config)
 
     def _decide(self, planner, index: int, state: RobotState) -> FootstepPlan:
         if self._forked is not None:  # a branch: the base chooser from here on
-            return planner.plan(state)
-        plan = super()._decide(planner, index, state)  # kept as the base chooser planned
-        verdict = rollout_verdict(self, index, self.rollout, self.expert)
+            return (self.branch_planner or planner).plan(state)
+        plan = super()._decide(planner, index, state)  # kept as the walk's planner planned
+        base = None if self.branch_planner is None else self.branch_planner.plan(state)
+        verdict = rollout_verdict(self, index, self.rollout, self.expert, base_plan=base)
         self.verdicts.append(verdict)
         if verdict.best == plan.index or not self.take:
             return plan
@@ -249,18 +263,21 @@ def refused_of(verdict: RolloutVerdict, refuse: float) -> np.ndarray:
 
 
 def verdict_demonstrations(walk: RolloutWalk, record: RunRecord, run_key: str,
-                           every_step: bool = True, cap: int | None = None
-                           ) -> list[Demonstration]:
+                           every_step: bool = True, cap: int | None = None,
+                           untried: Expert | None = None) -> list[Demonstration]:
     """The rollout teacher's labels of the steps of ``record`` (the run ``walk`` walked,
     stored as ``run_key``): one demonstration a step, sourced ``run:<run_key>:step:<k>``, its
     choice the verdict's best, the tried candidates refused where they lie more than
-    ``rollout.refuse`` below it (no values: the untried ones are unknown); ``every_step``
-    False: only the steps where it taught another foothold than the run took; ``cap``: at
-    most this many, those it valued most above the run's own choice (ties: the earlier). A
-    step planned again after it was called off is labelled at its last decision."""
+    ``rollout.refuse`` below it -- by their branches alone --, the untried ones where
+    ``untried`` (the base teacher's face on a state alone) refuses them (None: never; no
+    values are kept: the teacher valued only what it tried); ``every_step`` False: only the
+    steps where it taught another foothold than the run took; ``cap``: at most this many,
+    those it valued most above the run's own choice (ties: the earlier). A step planned
+    again after it was called off is labelled at its last decision."""
     last = {len(walk.tape.decisions[v.decision].task.steps): v for v in walk.verdicts}
     settings = {"class": f"{__name__}.RolloutVerdict", "config": walk.rollout.to_dict(),
-                "expert_best": walk.expert is not None}
+                "expert_best": walk.expert is not None,
+                "untried": None if untried is None else type(untried).__name__}
     out, gains = [], []
     for step in record.steps:
         verdict = last.get(step.k)
@@ -273,6 +290,11 @@ def verdict_demonstrations(walk: RolloutWalk, record: RunRecord, run_key: str,
         if not np.array_equal(plan.candidates, step.candidates):
             raise FootfallError(f"rollout labels: step {step.k} is not its decision's")
         refused = np.zeros(step.candidates.shape[0], dtype=bool)
+        if untried is not None:  # the base teacher's word where no branch was walked
+            values, base_refused, judged = teacher_verdict(untried, walk.hmap, step.state,
+                                                           step.candidates)
+            refused = kept_verdict(values, base_refused, judged, verdict.best)[1].copy()
+            refused[verdict.tried] = False
         refused[verdict.tried[refused_of(verdict, walk.rollout.refuse)]] = True
         out.append(Demonstration(record.terrain_hash, step.state, step.candidates,
                                  verdict.best, source=source_of(run_key, step.k),

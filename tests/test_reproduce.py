@@ -329,3 +329,25 @@ def test_dagger_labels_every_step_of_the_students_runs_and_resumes(tmp_path):
     resumed = _rounds(tmp_path / "again", DAGGER)
     assert [(d.source, d.chosen, d.values.tobytes()) for d in resumed.demos] == \
         [(d.source, d.chosen, d.values.tobytes()) for d in whole.demos]
+
+
+def test_the_rollout_teacher_teaches_and_walks_in_a_reproduction(tmp_path):
+    """``reproduce --teacher rollout``: its labels of every step of the correction runs (its
+    verdicts, no values), its own runs as the reference line (with its settings logged), and on
+    a state alone -- the offline ranking -- its base, the accepted teacher."""
+    from footfall.sim.rollout import RolloutConfig
+
+    rollout = RolloutConfig(candidates=1, branches=1, horizon=0)  # the smallest teacher
+    config = replace(TINY, teacher="rollout", expert=None, every_step=True,
+                     supervision="refusals", veto=True, rollout=rollout)
+    results = run_reproduction(tmp_path, config, processes=1, log=lambda s: None)
+    with DemoStore(tmp_path / "reproduce.sqlite") as store:
+        labels = store.demonstrations(source_prefix="run:correct/")
+        teacher_runs = store.runs(key_prefix="eval/")
+        settings = [store.run(r["id"]).settings for r in teacher_runs
+                    if "/expert/" in r["key"]]
+    assert labels and all(d.expert["class"].endswith("RolloutVerdict") and d.values is None
+                          for d in labels)
+    assert settings and all(s["teacher"]["rollout"] == rollout.to_dict() for s in settings)
+    assert json.loads((tmp_path / "config.json").read_text())["rollout"] == rollout.to_dict()
+    assert results["ranking"] and (tmp_path / "report.md").exists()

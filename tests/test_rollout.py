@@ -1,6 +1,8 @@
 """The rollout teacher (footfall.sim.rollout): candidates tried in branches of a run, what
 followed each valued, the best taught -- on a run that falls where other footholds walk on."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -133,6 +135,11 @@ def test_the_rollout_teacher_labels_the_runs_own_states_as_it_goes(tmp_path):
         np.testing.assert_array_equal(d.candidates, step.candidates)
         assert d.values is None and not d.refused[d.chosen]
         assert d.expert["class"].endswith("RolloutVerdict")
+    # policy iteration: the rollout over the walking function itself, its choice the base
+    small = RolloutConfig(candidates=2, branches=1, horizon=1, base="walker")
+    _, demos = execute(replace(job, rollout=small))
+    assert [d.expert["verdict"]["base"] for d in demos] == [s.chosen for s in record.steps]
+    assert all(d.refused[d.expert["verdict"]["tried"]].sum() == d.refused.sum() for d in demos)
 
 
 def test_rollout_labels_refuse_what_went_worse_and_a_cap_keeps_the_largest_gains():
@@ -155,3 +162,60 @@ def test_rollout_labels_refuse_what_went_worse_and_a_cap_keeps_the_largest_gains
     capped = verdict_demonstrations(walk, record, "r", every_step=False, cap=1)
     assert len(capped) == 1
     assert gains[capped[0].source] == max(gains[d.source] for d in changed)
+
+
+def test_a_base_other_than_the_walk_ranks_the_tries_and_continues_the_branches():
+    """Labelling a run another function walks (a student's), the teacher improves on its own
+    base: the base's plan of each state gives the candidates tried and the tie, the base
+    chooses in every branch (forked and replayed alike), and the run keeps its own choices.
+    Untried candidates are refused as the base teacher's face refuses them; tried ones by
+    their branches alone."""
+    from footfall.control.footstep import FootstepPlanner
+    from footfall.expert.protocol import kept_verdict, teacher_verdict
+    from footfall.expert.synthetic import walking_expert
+    from footfall.expert.teachers import TEACHERS, state_judge
+    from footfall.sim.rollout import refused_of, verdict_demonstrations
+    from test_bad_models import make_model
+
+    student = make_model()  # a function of random weights walks; the accepted teacher labels
+    hmap = make_board([parse_board_spec("rocky:1.0")], seed=3)
+    walk_config = WalkConfig(max_steps=10)  # the first steps are on the flat approach
+    lead = walk_config.footstep.lead
+    settings = walking_expert(lead)
+    base = TEACHERS.get("accepted").walker(settings, walk_config.footstep.bias_weight,
+                                           lead).reward
+    config = RolloutConfig(candidates=2, branches=1, horizon=1, margin=0.0, refuse=0.0)
+    walk = RolloutWalk(hmap, student.reward_for, 1, walk_config, rollout=config,
+                       expert=SyntheticExpert(settings), take=False, base=lambda leg: base)
+    walk.branch_processes = 2
+    record = walk.run()
+    plain = TapedWalk(hmap, student.reward_for, 1, walk_config).run()
+    assert [s.chosen for s in record.steps] == [s.chosen for s in plain.steps]
+    own = walk.own_planner
+    planner = FootstepPlanner(hmap, lambda leg: base, own.path, walk.robot, own.config)
+    differs = 0
+    for v in walk.verdicts:
+        decision = walk.tape.decisions[v.decision]
+        base_plan = planner.plan(decision.state)
+        assert v.base == base_plan.index == v.tried[0]
+        if base_plan.index != decision.plan.index:  # the base is another chooser here
+            differs += 1
+            again = rollout_verdict(walk, v.decision, config, SyntheticExpert(settings),
+                                    base_plan=base_plan)  # replayed: the same answers
+            assert again.outcomes == v.outcomes
+    assert differs
+    judge = state_judge("rollout", settings, walk_config.footstep.bias_weight, lead)
+    assert type(judge) is type(TEACHERS.get("accepted").expert(
+        settings, walk_config.footstep.bias_weight, lead))
+    last = {len(walk.tape.decisions[v.decision].task.steps): v for v in walk.verdicts}
+    demos = verdict_demonstrations(walk, record, "r", untried=judge)
+    assert len(demos) == len(record.steps)
+    for d in demos:
+        step = record.steps[int(d.source.rsplit(":", 1)[1])]
+        v = last[step.k]  # a step planned again is labelled at its last decision
+        values, refused, judged = teacher_verdict(judge, hmap, step.state, step.candidates)
+        expected = kept_verdict(values, refused, judged, v.best)[1].copy()
+        expected[v.tried] = False
+        expected[v.tried[refused_of(v, 0.0)]] = True
+        np.testing.assert_array_equal(d.refused, expected)
+        assert d.chosen == v.best and not d.refused[d.chosen]

@@ -116,3 +116,43 @@ def test_the_keyboard_steps_marks_fine_and_undoes(teach):
     assert _labels(path) == ([], [])
     page.keyboard.press("ArrowLeft")
     page.wait_for_function(f"window.teach.state.step.k === {first['k']}")
+
+
+def test_a_step_the_rollout_teacher_labelled_shows_what_followed_each_candidate(tmp_path,
+                                                                               browser):
+    """Where the store holds the rollout teacher's label of a step, the page lists what followed
+    each candidate it tried in its branches -- here: fell; there: slid 22 mm -- and which it
+    taught; a step without one shows nothing of the kind."""
+    import numpy as np
+
+    from footfall.data.demonstration import Demonstration
+    from footfall.expert.corrections import source_of
+    from footfall.sim.rollout import BranchOutcome, RolloutVerdict, verdict_record
+
+    path = store_of_runs(tmp_path / "s.sqlite", runs=1, steps=4)
+    with DemoStore(path) as store:
+        run = store.run(store.runs()[0]["id"])
+        step = run.steps[0]
+        other = next(i for i in range(len(step.candidates)) if i != step.chosen)
+        outcomes = (BranchOutcome(step.chosen, 0, "fall: trunk tilted", True, False, 0.0, 0.0,
+                                  0.01, -0.99),
+                    BranchOutcome(other, 0, "step limit", False, False, 0.022, 0.0, 0.06, -0.01))
+        verdict = RolloutVerdict(0, step.chosen, np.array([step.chosen, other]),
+                                 np.array([-0.99, -0.01]), outcomes, other)
+        store.add_demonstrations([Demonstration(
+            run.terrain_hash, step.state, step.candidates, other, source=source_of(run.key, 0),
+            expert={"class": "footfall.sim.rollout.RolloutVerdict",
+                    "verdict": verdict_record(verdict)})])
+    with serving(TeachService(path)) as (_, _, address):
+        page = browser.new_page(viewport={"width": 1500, "height": 900})
+        _open_first_run(page, address)
+        page.select_option("#order", "run")
+        page.wait_for_function("window.teach.state.step.k === 0")
+        page.wait_for_selector("#branches:not([hidden])")
+        text = page.inner_text("#branches")
+        assert f"candidate {step.chosen} (the robot's choice): fell" in text
+        assert f"candidate {other} (taught): slid 22 mm" in text
+        page.keyboard.press("ArrowRight")
+        page.wait_for_function("window.teach.state.step.k === 1")
+        assert page.is_hidden("#branches")
+        page.close()

@@ -3,10 +3,13 @@ templates + features function learned again from exactly its labels, in its orde
 seed and settings, but another supervision and veto. A lab script, not part of footfall's
 interface; walk the models with student_dagger.py's EXTRA_MODELS.
 
-python student_supervision.py REPRODUCTION_FOLDER OUT.npz SUPERVISION VETO [THREADS]
+python student_supervision.py REPRODUCTION_FOLDER OUT.npz SUPERVISION VETO [THREADS] [LABELS]
 
 VETO: 0 none, 1 the learned veto as the labels give it (relative where they keep the judged
 values), abs an absolute veto (the judged values dropped: a classifier of the refusals).
+LABELS: another teacher's labels of the same steps (a store, e.g. demos correct --teacher
+rollout of the reproduction's runs): the labels of the same sources, in the same order; those it
+lacks are reported and left out.
 """
 import json
 import sys
@@ -21,13 +24,16 @@ from footfall.learning.train import TrainingDemo, learn_model
 def main():
     folder, out, supervision, veto = Path(sys.argv[1]), sys.argv[2], sys.argv[3], sys.argv[4]
     threads = int(sys.argv[5]) if len(sys.argv) > 5 else 1
+    labels = Path(sys.argv[6]) if len(sys.argv) > 6 else folder / "reproduce.sqlite"
     config = json.loads((folder / "config.json").read_text())
     adopted = FootholdModel.load(folder / "models" / "both.npz")
     sources = adopted.info["sources"]
-    with DemoStore(folder / "reproduce.sqlite", read_only=True) as store:
+    with DemoStore(labels, read_only=True) as store:
         by_source = {d.source: d for d in store.demonstrations()}
-        demos = [by_source[s] for s in sources]  # the adopted function's labels, its order
+        demos = [by_source[s] for s in sources if s in by_source]  # the adopted function's
+        # labels (or another teacher's of the same steps), in its order
         maps = {h: store.terrain(h) for h in {d.terrain_hash for d in demos}}
+    print(f"{len(demos)} of the adopted function's {len(sources)} labelled steps", flush=True)
     training = [TrainingDemo.of(d, maps[d.terrain_hash]) for d in demos]
     if veto == "abs":
         training = [replace(t, judged=None) for t in training]

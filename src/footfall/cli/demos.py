@@ -11,11 +11,11 @@ from footfall.control.footstep import FootstepConfig
 from footfall.core.errors import FootfallError
 from footfall.data.inventory import store_inventory
 from footfall.data.store import DemoStore
+from footfall.experiments.relabel import relabel_runs
 from footfall.expert.collect import collect_into_store
 from footfall.expert.corrections import DEFAULT_MARGIN, correct_stored_runs
 from footfall.expert.settings_file import load_expert
 from footfall.expert.synthetic import SyntheticExpert, walking_expert
-from footfall.experiments.relabel import relabel_runs
 from footfall.expert.teachers import TEACHERS
 from footfall.teach.agreement import agreement_lines
 from footfall.teach.judging import default_expert, store_agreement

@@ -240,8 +240,9 @@ def learner_options(f):
     how it learns its ranking functions."""
     f = click.option("--teacher", type=TEACHER, default=None,
                      help="Who corrects the runs and walks as the reference line [default: "
-                          "the reproduction's, docs/learning/teacher.md]: expert, guarded or "
-                          "accepted.")(f)
+                          "the reproduction's, docs/learning/teacher.md]: expert, guarded, "
+                          "accepted, or rollout (candidates tried in branches of every run: "
+                          "hours, not minutes).")(f)
     f = click.option("--supervision", type=SUPERVISION, default=None,
                      help="What the learners read of a correction [default: the reproduction's, "
                           "docs/learning/student.md]: choice, refusals or graded.")(f)

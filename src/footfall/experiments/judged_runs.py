@@ -14,7 +14,7 @@ from footfall.data.store import DemoStore
 from footfall.experiments.imitation import imitation_gap
 from footfall.expert.corrections import SEVERE_SHORTFALL, step_verdicts
 from footfall.expert.synthetic import SyntheticExpert
-from footfall.expert.teachers import TEACHERS
+from footfall.expert.teachers import state_judge
 from footfall.features.family import PAPER_FEATURE_SETS
 
 if TYPE_CHECKING:  # the settings' module runs the stages, which read these verdicts
@@ -58,7 +58,7 @@ def imitation_gaps(store: DemoStore, maps: dict[str, HeightMap], config: Reprodu
     """Per learned function, the test-board runs it failed and the teacher crossed (same board
     and seed), each judged by the teacher step by step (:mod:`footfall.experiments.imitation`)."""
     step = config.walk.footstep
-    teacher = TEACHERS.get(config.teacher).expert(config.expert, step.bias_weight, step.lead)
+    teacher = state_judge(config.teacher, config.expert, step.bias_weight, step.lead)
     log("the teacher's verdict on the learned functions' failed test-board runs")
     out = {}
     for fs in PAPER_FEATURE_SETS:

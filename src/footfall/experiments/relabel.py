@@ -29,8 +29,8 @@ from pathlib import Path
 import numpy as np
 
 from footfall.core.errors import FootfallError
-from footfall.core.robot import LEG_NAMES
 from footfall.core.files import writable_path
+from footfall.core.robot import LEG_NAMES
 from footfall.data.runlog import RunRecord
 from footfall.data.schema import SUFFIXES
 from footfall.data.store import DemoStore

@@ -81,7 +81,7 @@ from footfall.experiments.workspace import (
 from footfall.expert.collect import collect_demonstrations
 from footfall.expert.corrections import REPRODUCTION_MARGIN
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert, walking_expert
-from footfall.expert.teachers import TEACHERS
+from footfall.expert.teachers import TEACHERS, state_judge
 from footfall.learning.evaluation import expert_values, rank_scores
 from footfall.learning.learner import LEARNERS, get_learner
 from footfall.learning.model import LEG_GROUPS
@@ -89,6 +89,7 @@ from footfall.learning.ranker import SELECTIONS
 from footfall.learning.supervision import SUPERVISIONS
 from footfall.learning.train import FOLDS, check_budget
 from footfall.sim.episode import WalkConfig
+from footfall.sim.rollout import RolloutConfig
 from footfall.terrain import KINDS
 
 STORE_NAME = "reproduce.sqlite"
@@ -232,7 +233,14 @@ class ReproduceConfig(Params):
     teacher: str = param("accepted", check=lambda v: v in TEACHERS, must="a registered teacher",
                          doc="who corrects the runs and walks as the reference: 'accepted' (the "
                              "hand-tuned reward among the footholds the expert accepts; picked "
-                             "by the rule of docs/learning/teacher.md), 'guarded' or 'expert'")
+                             "by the rule of docs/learning/teacher.md), 'guarded', 'expert' or "
+                             "'rollout' (the accepted teacher's best candidates tried in "
+                             "branches of each run; on a state alone -- the offline ranking, "
+                             "the verdicts on test runs -- its base, the accepted teacher, "
+                             "answers)")
+    rollout: RolloutConfig = param(
+        factory=RolloutConfig, doc="the rollout teacher's settings, where the teacher is "
+                                   "'rollout' (sim.rollout; docs/learning/teacher.md)")
 
     def __post_init__(self) -> None:
         if self.expert is None and isinstance(self.walk, WalkConfig):
@@ -243,7 +251,7 @@ class ReproduceConfig(Params):
             raise FootfallError(f"learner {self.learner!r} cannot carry a learned veto; use "
                                 f"lambdarank or veto=False")
         step = self.walk.footstep  # a teacher these settings cannot make fails here, not mid-run
-        TEACHERS.get(self.teacher).expert(self.expert, step.bias_weight, step.lead)
+        state_judge(self.teacher, self.expert, step.bias_weight, step.lead)
 
     @classmethod
     def quick(cls, seed: int = 0) -> ReproduceConfig:
@@ -317,7 +325,8 @@ def correction_rounds(ws: Workspace, runner: Runner) -> Corrections:
         jobs = [RunJob(f"correct/r{r}/{name}" + (f"/s{k}" if k else ""), str(ws.paths[name]),
                        model_path, seed, config.walk, True, config.margin,
                        config.corrections_per_run, config.expert, inspect_seed=inspect,
-                       teacher=config.teacher, every_step=config.every_step)
+                       teacher=config.teacher, every_step=config.every_step,
+                       rollout=config.rollout)
                 for name, runs in zip(train, correction_seeds(config, r))
                 for k, (seed, inspect) in enumerate(runs)]
         runner.run(jobs, f"round {r} runs")
@@ -442,7 +451,7 @@ def _ranking(ws: Workspace, store: DemoStore, models: dict, log: Callable[[str],
     """The three functions ranked on the teacher's test-board demonstrations, by the expert."""
     config, test = ws.config, ws.maps["test0"]
     step = config.walk.footstep
-    teacher = TEACHERS.get(config.teacher).expert(config.expert, step.bias_weight, step.lead)
+    teacher = state_judge(config.teacher, config.expert, step.bias_weight, step.lead)
     demos = store.demonstrations(source_prefix="walker:test")
     if len(demos) < config.offline_demos:  # collected and stored in one transaction: all or none
         made = collect_demonstrations([test], teacher, config.offline_demos,

@@ -121,9 +121,9 @@ def execute(job: RunJob) -> RunOutput:
         if job.judge:
             run = teacher_walk(hmap, reward_for, job.seed, job.walk, job.teacher, job.expert,
                                rollout=job.rollout)
-        elif job.correct and rollout:  # it labels the run's own states as the run goes, the
-            # teacher it improves on its base chooser
-            base = walker.reward
+        elif job.correct and rollout:  # it labels the run's own states as the run goes,
+            # improving on the teacher's base chooser, or on the walking function itself
+            base = walker.reward if job.rollout.base == "teacher" else None
             run = RolloutWalk(hmap, reward_for, job.seed, job.walk, rollout=job.rollout,
                               expert=SyntheticExpert(job.expert), take=False,
                               base=None if base is None else (lambda leg: base))
@@ -133,7 +133,8 @@ def execute(job: RunJob) -> RunOutput:
         record = replace(record, key=job.key)
         demos = []
         if job.correct and rollout and not job.judge:
-            untried = state_judge(job.teacher, job.expert, footstep.bias_weight, footstep.lead)
+            untried = (state_judge(job.teacher, job.expert, footstep.bias_weight, footstep.lead)
+                       if job.rollout.base == "teacher" else None)  # the base's word, if it has one
             demos = verdict_demonstrations(run, record, job.key, job.every_step, job.cap,
                                            untried=untried)
         elif job.correct:

@@ -69,7 +69,7 @@ def method_job(ws: Workspace, key: str, board: str, method: str, seed: int) -> R
     path = str(ws.paths[board])
     if method == "expert":
         return RunJob(key, path, None, seed, config.walk, expert=config.expert, judge=True,
-                      teacher=config.teacher)
+                      teacher=config.teacher, rollout=config.rollout)
     if method == "default":
         return RunJob(key, path, None, seed, config.walk)
     return RunJob(key, path, str(ws.model_path(method)), seed, config.walk)

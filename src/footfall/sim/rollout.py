@@ -46,8 +46,12 @@ from footfall.features.scorer import RewardFor
 from footfall.sim.branch import Branched, BranchVariation, TapedWalk
 from footfall.sim.task import foot_slip
 
-__all__ = ["BranchOutcome", "RolloutConfig", "RolloutVerdict", "RolloutWalk", "branch_variations",
-           "refused_of", "rollout_verdict", "verdict_demonstrations"]
+__all__ = ["BranchOutcome", "RolloutConfig", "RolloutVerdict", "RolloutWalk", "branch_lines",
+           "branch_variations", "refused_of", "rollout_verdict", "verdict_demonstrations",
+           "verdict_record"]
+
+
+BASES = ("teacher", "walker")  # RolloutConfig.base: whose choices the rollout improves on
 
 
 @dataclass(frozen=True)
@@ -88,6 +92,10 @@ class RolloutConfig(Params):
                               "touched down off its foothold")
     w_progress: float = param(1.0, unit="value/m", range=at_least(0),
                               doc="per metre the body advanced in the branch")
+    base: str = param("teacher", choices=BASES,
+                      doc="labelling a run another function walks: who is improved on -- the "
+                          "teacher's own base (the accepted teacher) or the function walking "
+                          "(the walker: policy iteration, the rollout over the student)")
 
 
 @dataclass(frozen=True)
@@ -255,6 +263,25 @@ class RolloutWalk(TapedWalk):
         return settings
 
 
+def verdict_record(verdict: RolloutVerdict) -> dict:
+    """A verdict as its label keeps it (JSON, in the label's settings): the base chooser's
+    choice, the candidates tried, each one's value [value units] and every branch's outcome."""
+    return {"base": int(verdict.base), "tried": [int(c) for c in verdict.tried],
+            "values": [float(v) for v in verdict.values],
+            "outcomes": [asdict(o) for o in verdict.outcomes]}
+
+
+def branch_lines(kept: dict) -> list[dict]:
+    """What followed each candidate tried, for a person deciding (the teaching page): from a
+    :func:`verdict_record`, per candidate its index in F, its value [value units], whether it
+    was the base chooser's, and its branches' outcomes in words ("slid 22 mm", "fell")."""
+    words: dict[int, list[str]] = {}
+    for o in kept["outcomes"]:
+        words.setdefault(int(o["candidate"]), []).append(BranchOutcome(**o).describe())
+    return [{"candidate": int(c), "value": float(v), "base": int(c) == int(kept["base"]),
+             "outcomes": words.get(int(c), [])} for c, v in zip(kept["tried"], kept["values"])]
+
+
 def refused_of(verdict: RolloutVerdict, refuse: float) -> np.ndarray:
     """(m,) bool over ``verdict.tried``: the candidates more than ``refuse`` [value units]
     below the taught one's value."""
@@ -270,7 +297,8 @@ def verdict_demonstrations(walk: RolloutWalk, record: RunRecord, run_key: str,
     choice the verdict's best, the tried candidates refused where they lie more than
     ``rollout.refuse`` below it -- by their branches alone --, the untried ones where
     ``untried`` (the base teacher's face on a state alone) refuses them (None: never; no
-    values are kept: the teacher valued only what it tried); ``every_step`` False: only the
+    values are kept: the teacher valued only what it tried; its verdict, with every branch's
+    outcome, is kept in the label's settings: :func:`verdict_record`); ``every_step`` False: only the
     steps where it taught another foothold than the run took; ``cap``: at most this many,
     those it valued most above the run's own choice (ties: the earlier). A step planned
     again after it was called off is labelled at its last decision."""
@@ -298,7 +326,8 @@ def verdict_demonstrations(walk: RolloutWalk, record: RunRecord, run_key: str,
         refused[verdict.tried[refused_of(verdict, walk.rollout.refuse)]] = True
         out.append(Demonstration(record.terrain_hash, step.state, step.candidates,
                                  verdict.best, source=source_of(run_key, step.k),
-                                 expert=settings, refused=refused))
+                                 expert={**settings, "verdict": verdict_record(verdict)},
+                                 refused=refused))
     if cap is not None and len(out) > cap:
         keep = np.sort(np.argsort(-np.array(gains), kind="stable")[:cap])
         out = [out[i] for i in keep]

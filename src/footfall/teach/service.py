@@ -28,8 +28,9 @@ from footfall.data.inventory import terrain_label
 from footfall.data.label import check_labeler
 from footfall.data.runlog import RunRecord
 from footfall.data.store import DemoStore
-from footfall.expert.corrections import DEFAULT_MARGIN
+from footfall.expert.corrections import DEFAULT_MARGIN, source_of
 from footfall.expert.synthetic import ExpertConfig, SyntheticExpert
+from footfall.sim.rollout import branch_lines
 from footfall.teach.judging import default_expert, expert_key, judged_run, store_agreement
 from footfall.teach.review import (
     SNAP_RADIUS,
@@ -174,8 +175,21 @@ class TeachService:
             "expert_best": best, "shortfall": shortfall,
             "labels": [label.to_dict() for label in self.store().labels(run_id=run.id, k=k)],
             "marks": [mark.to_dict() for mark in self.store().marks(run_id=run.id, k=k)],
-            "snap_m": SNAP_RADIUS,
+            "snap_m": SNAP_RADIUS, "branches": self._branches(run, k),
         }, nonfinite="null")
+
+    def _branches(self, run: RunRecord, k: int) -> dict[str, Any] | None:
+        """What would have happened at step ``k``: the rollout teacher's branches of it, where
+        this store holds its label of the step (``demos correct --teacher rollout``, a
+        reproduction it taught) -- per candidate tried what followed, and the one it taught;
+        None where it holds none."""
+        if run.key is None:
+            return None
+        source = source_of(run.key, k)
+        for d in self.store().demonstrations(source_prefix=source):
+            if d.source == source and isinstance(d.expert.get("verdict"), dict):
+                return {"taught": d.chosen, "tried": branch_lines(d.expert["verdict"])}
+        return None
 
     def terrain_file(self, terrain_hash: str) -> bytes:
         """A stored board whole, as footfall's height-map file (``HeightMap.save``: a versioned,

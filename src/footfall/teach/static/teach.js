@@ -198,6 +198,7 @@ function drawStep(newStep) {
     `(${state.shownPos + 1} / ${state.order.length} in this order)`;
   $("facts").textContent = facts.join(" · ");
   drawLabels();
+  drawBranches();
   if (newStep) {
     top.setStep(s, marksNow());
     view3d.setStep(s, marksNow());
@@ -205,6 +206,27 @@ function drawStep(newStep) {
     top.setMarks(marksNow());
     view3d.setMarks(marksNow());
   }
+}
+
+function drawBranches() {  // what would have happened: the rollout teacher's branches here
+  const s = state.step, b = s.branches, el = $("branches");
+  el.replaceChildren();
+  el.hidden = !b;
+  if (!b) return;
+  const head = document.createElement("div");
+  head.textContent = "what would have happened (the rollout teacher's branches of this step):";
+  const list = document.createElement("ul");
+  for (const t of b.tried) {
+    const roles = [t.candidate === s.chosen ? "the robot's choice" : null,
+      t.candidate === b.taught ? "taught" : null].filter(Boolean);
+    const li = document.createElement("li");
+    li.textContent = `candidate ${t.candidate}${roles.length ? ` (${roles.join(", ")})` : ""}: ` +
+      t.outcomes.join("; ");
+    li.dataset.candidate = t.candidate;
+    li.classList.toggle("taught", t.candidate === b.taught);
+    list.append(li);
+  }
+  el.append(head, list);
 }
 
 function drawLabels() {  // the labels and marks text, the undo button, my progress in this run

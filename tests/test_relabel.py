@@ -64,6 +64,7 @@ def test_a_run_walked_by_another_function_is_refused_before_any_walking(runs, tm
     with pytest.raises(FootfallError, match="give --model the function that walked it"):
         relabel_runs([runs], tmp_path / "x.sqlite", str(model), "rollout",
                      walking_expert(0.01), SMALL)
+    assert not (tmp_path / "x.sqlite").exists()  # refused before anything was made
     with pytest.raises(FootfallError, match="no run logs"):
         relabel_runs([runs], tmp_path / "x.sqlite", None, "rollout", walking_expert(0.01),
                      SMALL, key_prefix="nothing/")

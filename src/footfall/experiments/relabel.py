@@ -71,6 +71,14 @@ def retraces(walked: RunRecord, logged: RunRecord) -> int | None:
     return None
 
 
+def _labelled(store: Path, key: str) -> bool:
+    """Whether the store at ``store`` (if it exists) holds labels of the run ``key``."""
+    if not store.exists():
+        return False
+    with DemoStore(store, read_only=True) as held:
+        return bool(held.demonstrations(source_prefix=f"run:{key}:step:"))
+
+
 def _reward_names(model: str | None, hmap) -> list[str]:
     """The reward names a run walked by ``model`` (None: the hand-tuned reward) logs."""
     reward_for = reward_source(model, hmap)
@@ -105,12 +113,11 @@ def relabel_runs(run_paths: Sequence[str | os.PathLike], out: str | os.PathLike,
             heads += [(str(path), h) for h in store.runs(key_prefix=key_prefix)]
     if not heads:
         raise FootfallError("the stores hold no run logs to correct")
-    with tempfile.TemporaryDirectory(prefix="footfall-relabel-") as scratch, \
-            DemoStore(target, create=True) as output:
+    with tempfile.TemporaryDirectory(prefix="footfall-relabel-") as scratch:
         jobs, logged, terrains, skipped = [], {}, {}, 0
         for path, head in heads:
             key = head["key"] or f"{path}#{head['id']}"
-            if output.demonstrations(source_prefix=f"run:{key}:step:"):
+            if _labelled(target, key):
                 skipped += 1
                 continue
             with DemoStore(path, read_only=True) as store:
@@ -133,24 +140,25 @@ def relabel_runs(run_paths: Sequence[str | os.PathLike], out: str | os.PathLike,
             logged[key] = run
         if todo is not None:
             todo(len(jobs))
-        pool = executor or LocalPool(1)
         steps = added = 0
-        try:
-            for job, (record, demos) in pool.map(jobs):
-                off = retraces(record, logged[job.key])
-                if off is not None:
-                    raise FootfallError(
-                        f"run {job.key} walked again leaves its log at step {off}: another "
-                        f"function or another version of footfall walked it")
-                used = {d.terrain_hash for d in demos}
-                output.add_demonstrations(
-                    demos,
-                    terrains=[terrains[h][0] for h in used])
-                steps += len(record.steps)
-                added += len(demos)
-                if progress is not None:
-                    progress(record)
-        finally:
-            if executor is None:
-                pool.close()
+        if jobs:  # the store is made (or opened) only once every run was found good to walk
+            pool = executor or LocalPool(1)
+            try:
+                with DemoStore(target, create=True) as output:
+                    for job, (record, demos) in pool.map(jobs):
+                        off = retraces(record, logged[job.key])
+                        if off is not None:
+                            raise FootfallError(
+                                f"run {job.key} walked again leaves its log at step {off}: "
+                                f"another function or another version of footfall walked it")
+                        used = {d.terrain_hash for d in demos}
+                        output.add_demonstrations(demos,
+                                                  terrains=[terrains[h][0] for h in used])
+                        steps += len(record.steps)
+                        added += len(demos)
+                        if progress is not None:
+                            progress(record)
+            finally:
+                if executor is None:
+                    pool.close()
     return Relabelled(str(target), len(jobs), skipped, steps, added, per_run, every_step)

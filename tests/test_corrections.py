@@ -128,3 +128,40 @@ def test_every_step_is_labelled_for_dagger_with_the_teachers_verdict():
     (d0,) = corrections_to_demonstrations(run, "r", inspect_run(run, hm, Stubborn(), 1.5)[:1],
                                           Stubborn())
     assert d0.chosen == 0 and d0.refused.tolist() == [False, True, False, False, False]
+
+
+def test_corrections_of_a_store_made_again_or_at_once_are_each_stored_once(tmp_path):
+    """``demos correct`` run twice, or twice at once, stores each correction once and says
+    how many it skipped; another teacher's label of the same step is another label."""
+    import threading
+    from dataclasses import replace
+
+    from footfall.expert.corrections import correct_stored_runs
+
+    hm = terrain()
+    runs = tmp_path / "runs.sqlite"
+    with DemoStore(runs, create=True) as store:
+        for i in range(3):
+            store.add_run(replace(_run(hm, [0.30, 0.34, 0.30]), key=f"r{i}"), terrains=[hm])
+    out = tmp_path / "labels.sqlite"
+    first = correct_stored_runs([runs], out, TableExpert(), 0.5, None, 0)
+    again = correct_stored_runs([runs], out, TableExpert(), 0.5, None, 0)
+    assert (first.added, first.skipped, again.added, again.skipped) == (6, 0, 0, 6)
+    at_once = tmp_path / "at-once.sqlite"
+    done = []
+    workers = [threading.Thread(target=lambda: done.append(
+        correct_stored_runs([runs], at_once, TableExpert(), 0.5, None, 0))) for _ in range(2)]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join()
+    assert sorted((d.added, d.skipped) for d in done) == [(0, 6), (6, 0)]
+    with DemoStore(at_once, read_only=True) as store:
+        sources = [d.source for d in store.demonstrations()]
+    assert len(sources) == len(set(sources)) == 6
+
+    class OtherExpert(TableExpert):
+        config = {"another": True}
+
+    other = correct_stored_runs([runs], out, OtherExpert(), 0.5, None, 0)
+    assert (other.added, other.skipped) == (6, 0)  # the same steps, another teacher's word

@@ -125,7 +125,8 @@ def demos_correct(run_paths: tuple[str, ...], output: str, margin: float,
     emit(as_json, done.as_dict(),
          f"added {done.added} corrections to {done.store}: {done.runs} "
          f"{_plural(done.runs, 'run')}, {done.steps} steps, {done.above_margin} short of the "
-         f"expert's best by more than {done.margin:g}")
+         f"expert's best by more than {done.margin:g}"
+         + (f"; {done.skipped} already there, skipped" if done.skipped else ""))
 
 
 def _correct_by_walking(run_paths, output, per_run, every_step, teacher, run_key, config,
@@ -140,6 +141,8 @@ def _correct_by_walking(run_paths, output, per_run, every_step, teacher, run_key
                             progress=step, todo=lambda n: todo.update(runs=n))
     skipped = (f"; {done.skipped} {_plural(done.skipped, 'run')} already labelled there, "
                f"skipped" if done.skipped else "")
+    if done.repeated:
+        skipped += f"; {done.repeated} labels already there, skipped"
     emit(as_json, done.as_dict(),
          f"added {done.added} labels to {done.store}: {done.runs} {_plural(done.runs, 'run')} "
          f"walked again, {done.steps} steps{skipped}")

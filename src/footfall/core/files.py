@@ -207,6 +207,26 @@ def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
         return os.fspath(a) == os.fspath(b)  # no such file exists; only the same text is one
 
 
+def distinct_inputs(paths: Iterable[str | os.PathLike], what: str = "input") -> list:
+    """``paths`` as given, refused where one file is named twice -- by the same name, another
+    path to it, a symbolic or a hard link -- since its contents would count twice.
+
+    Raises
+    ------
+    FootfallError
+        Naming the file given twice, and ``what`` it was given as.
+    """
+    seen: list = []
+    for p in paths:
+        for q in seen:
+            if same_file(p, q):
+                also = "" if os.fspath(p) == os.fspath(q) else f" (also as {q})"
+                raise FootfallError(f"{what} {p} is given twice{also}: its contents would "
+                                    f"count twice")
+        seen.append(p)
+    return seen
+
+
 def writable_path(path: str | os.PathLike, suffixes: tuple[str, ...] = (), *, what: str = "",
                   kind: str = "file", inputs: Iterable[str | os.PathLike | None] = ()) -> Path:
     """``path`` as a file to write, refused before any work whose result could not be kept.

@@ -39,7 +39,14 @@ from footfall.data.schema import FORMAT, SCHEMA_VERSION, STATE_LAYOUT
 from footfall.data.terrain_queries import TerrainQueries
 
 __all__ = ["DEFAULT_BUSY_TIMEOUT", "FORMAT", "SCHEMA_VERSION", "STATE_LAYOUT", "DemoStore",
-           "Demonstration", "RunRecord", "RunStep"]
+           "Demonstration", "RunRecord", "RunStep", "teacher_key"]
+
+
+def teacher_key(expert: dict) -> str:
+    """Who labelled, as a demonstration's settings say (canonical JSON), without what they say
+    of the one step (a rollout verdict): two labels of a step with the same key are the same
+    label given twice."""
+    return json.dumps({k: v for k, v in expert.items() if k != "verdict"}, sort_keys=True)
 
 
 class DemoStore(MarkQueries, LabelQueries, JudgementQueries, TerrainQueries):
@@ -112,6 +119,35 @@ class DemoStore(MarkQueries, LabelQueries, JudgementQueries, TerrainQueries):
         demos = as_demonstrations(demos)
         with self._write_after_terrains(list(terrains)) as con:
             return [self._insert_demonstration(con, d) for d in demos]
+
+    def add_new_demonstrations(self, demos: Iterable[Demonstration],
+                               terrains: Iterable[HeightMap] = ()) -> tuple[list[int], int]:
+        """As :meth:`add_demonstrations`, but a label the store already holds is not added
+        again: a demonstration of the same source (a run's step) by the same teacher
+        (:func:`teacher_key`), or one repeated in ``demos``. The check and the writes are
+        one transaction, so two writers at once add each label once.
+
+        Returns
+        -------
+        (list of int, int)
+            The new ids in the order of the demonstrations added, and how many were skipped.
+        """
+        demos = as_demonstrations(demos)
+        with self._write_after_terrains(list(terrains)) as con:
+            held = set()
+            sources = sorted({d.source for d in demos})
+            for i in range(0, len(sources), 500):
+                chunk = sources[i:i + 500]
+                rows = con.execute("SELECT source, expert FROM demonstrations WHERE source IN "
+                                   f"({', '.join('?' * len(chunk))})", chunk)
+                held |= {(source, teacher_key(json.loads(expert))) for source, expert in rows}
+            ids = []
+            for d in demos:
+                key = (d.source, teacher_key(d.expert))
+                if key not in held:
+                    held.add(key)
+                    ids.append(self._insert_demonstration(con, d))
+            return ids, len(demos) - len(ids)
 
     def _insert_demonstration(self, con: sqlite3.Connection, demo: Demonstration) -> int:
         self._require_terrain(con, demo.terrain_hash, "demonstrations")

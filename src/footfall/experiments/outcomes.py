@@ -19,6 +19,7 @@ import numpy as np
 
 from footfall.control.footstep import FootstepConfig
 from footfall.core.errors import FootfallError
+from footfall.core.files import distinct_inputs
 from footfall.core.robot import LITTLEDOG
 from footfall.data.outcomes import FALL_HORIZON, OUTCOME_LABELS
 from footfall.expert.grounding import (
@@ -76,7 +77,7 @@ def outcome_report(store_paths: Sequence[str | os.PathLike],
     FootfallError
         For no store, stores without runs, or an unknown outcome to fit.
     """
-    paths = [str(p) for p in store_paths]
+    paths = [str(p) for p in distinct_inputs(store_paths, "run store")]
     if not paths:
         raise FootfallError("give at least one store with run logs")
     if fit is not None and fit not in OUTCOME_LABELS:

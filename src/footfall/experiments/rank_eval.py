@@ -23,6 +23,7 @@ import numpy as np
 
 from footfall.control.footstep import FootstepConfig
 from footfall.core.errors import FootfallError
+from footfall.core.files import distinct_inputs
 from footfall.core.heightmap import HeightMap
 from footfall.core.robot import LITTLEDOG
 from footfall.data.outcomes import FALL_HORIZON, OUTCOME_LABELS, stored_outcomes
@@ -180,6 +181,7 @@ def rank_eval_many(model_paths: Sequence[str | os.PathLike], store_path: str | o
     FootfallError
         As :func:`rank_eval`; also for no scorer at all.
     """
+    model_paths = distinct_inputs(model_paths, "model")
     if not model_paths and reward is None:
         raise FootfallError("give a model file or --reward NAME")
     if not (isinstance(margin, (int, float)) and math.isfinite(margin) and margin >= 0):

@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from footfall.core.errors import FootfallError
-from footfall.core.files import writable_path
+from footfall.core.files import distinct_inputs, writable_path
 from footfall.core.robot import LEG_NAMES
 from footfall.data.runlog import RunRecord
 from footfall.data.schema import SUFFIXES
@@ -54,6 +54,8 @@ class Relabelled:
     added: int  # labels stored now
     per_run: int | None  # labels a run at most (None: every one the teacher gave)
     every_step: bool  # every step labelled, not only where the teacher taught another
+    repeated: int = 0  # labels of the runs walked now that the store held by then (another
+    # command labelling the same runs at once): not added again
 
     def as_dict(self) -> dict:
         """Plain data for JSON, in field order."""
@@ -71,12 +73,16 @@ def retraces(walked: RunRecord, logged: RunRecord) -> int | None:
     return None
 
 
-def _labelled(store: Path, key: str) -> bool:
-    """Whether the store at ``store`` (if it exists) holds labels of the run ``key``."""
+def _labelled(store: Path, key: str, rollout: RolloutConfig) -> bool:
+    """Whether the store at ``store`` (if it exists) holds this teacher's labels of the run
+    ``key`` (the rollout teacher's with these settings; another teacher's labels of the same
+    steps, e.g. a reproduction's own, do not count)."""
     if not store.exists():
         return False
     with DemoStore(store, read_only=True) as held:
-        return bool(held.demonstrations(source_prefix=f"run:{key}:step:"))
+        return any(d.expert.get("class", "").endswith(".RolloutVerdict")
+                   and d.expert.get("config") == rollout.to_dict()
+                   for d in held.demonstrations(source_prefix=f"run:{key}:step:"))
 
 
 def _reward_names(model: str | None, hmap) -> list[str]:
@@ -106,6 +112,7 @@ def relabel_runs(run_paths: Sequence[str | os.PathLike], out: str | os.PathLike,
         For a bad output path, stores without runs, a run the model did not walk (its log
         names another reward), or a run that walks again otherwise than its log.
     """
+    run_paths = distinct_inputs(run_paths, "run store")
     target = writable_path(out, SUFFIXES, what="store", kind="store")
     heads = []
     for path in run_paths:
@@ -117,7 +124,7 @@ def relabel_runs(run_paths: Sequence[str | os.PathLike], out: str | os.PathLike,
         jobs, logged, terrains, skipped = [], {}, {}, 0
         for path, head in heads:
             key = head["key"] or f"{path}#{head['id']}"
-            if _labelled(target, key):
+            if _labelled(target, key, rollout):
                 skipped += 1
                 continue
             with DemoStore(path, read_only=True) as store:
@@ -140,7 +147,7 @@ def relabel_runs(run_paths: Sequence[str | os.PathLike], out: str | os.PathLike,
             logged[key] = run
         if todo is not None:
             todo(len(jobs))
-        steps = added = 0
+        steps = added = repeated = 0
         if jobs:  # the store is made (or opened) only once every run was found good to walk
             pool = executor or LocalPool(1)
             try:
@@ -152,13 +159,15 @@ def relabel_runs(run_paths: Sequence[str | os.PathLike], out: str | os.PathLike,
                                 f"run {job.key} walked again leaves its log at step {off}: "
                                 f"another function or another version of footfall walked it")
                         used = {d.terrain_hash for d in demos}
-                        output.add_demonstrations(demos,
-                                                  terrains=[terrains[h][0] for h in used])
+                        ids, again = output.add_new_demonstrations(
+                            demos, terrains=[terrains[h][0] for h in used])
                         steps += len(record.steps)
-                        added += len(demos)
+                        added += len(ids)
+                        repeated += again  # labelled meanwhile by another command
                         if progress is not None:
                             progress(record)
             finally:
                 if executor is None:
                     pool.close()
-    return Relabelled(str(target), len(jobs), skipped, steps, added, per_run, every_step)
+    return Relabelled(str(target), len(jobs), skipped, steps, added, per_run, every_step,
+                      repeated)

@@ -44,6 +44,7 @@ from pathlib import Path
 from footfall.core.atomic import write_text_atomic
 from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
+from footfall.core.files import distinct_inputs
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, at_least, param
 from footfall.data.store import DemoStore
@@ -242,11 +243,9 @@ def run_student_curve(sources: Sequence[str | Path], out: str | Path,
     references; return the summary (also ``curve.json``, ``.md``, ``.png`` in ``out``)."""
     config = StudentCurveConfig() if config is None else config
     out = Path(out)
-    sources = [Path(s) for s in sources]
+    sources = [Path(s) for s in distinct_inputs(sources, "reproduction")]
     if not sources:
         raise FootfallError("a student curve needs at least one reproduction to continue")
-    if len({s.resolve() for s in sources}) != len(sources):
-        raise FootfallError("the same reproduction given twice: each draw is its own")
     claim_folder(out, {**config.to_dict(), "sources": [str(s.resolve()) for s in sources]},
                  "a student curve", free=FREE)
     executor = executor or LocalPool(processes)

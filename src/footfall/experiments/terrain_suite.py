@@ -46,6 +46,7 @@ from pathlib import Path
 
 from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
+from footfall.core.files import distinct_inputs
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, at_least, param, within
 from footfall.core.seeds import SeedStreams
@@ -207,6 +208,7 @@ def run_suite(out: str | Path, config: SuiteConfig | None = None,
     """Walk (or resume) the suite into ``out``; return the summary (also suite.json, suite.md)."""
     config = SuiteConfig() if config is None else config
     out = Path(out)
+    distinct_inputs([file for _, file in config.models], "model")  # one file, two choosers
     claim_folder(out, config.to_dict(), "a terrain suite", free=("kinds", "who", "models"))
     for _, file in config.models:  # a bad model file: one line before anything is walked
         FootholdModel.load(file)

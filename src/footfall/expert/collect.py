@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from footfall.core.errors import FootfallError
-from footfall.core.files import writable_path
+from footfall.core.files import distinct_inputs, writable_path
 from footfall.core.heightmap import HeightMap
 from footfall.core.limits import check_count
 from footfall.core.robot import DEFAULT_STRIDE, LITTLEDOG, RobotDescription
@@ -270,6 +270,7 @@ def collect_into_store(terrains: Sequence[str | os.PathLike], path: str | os.Pat
     n = check_count(n, "the number of demonstrations", minimum=1)  # before any file is read
     if steps not in RECORDED_STEPS:
         raise FootfallError(f"steps must be one of {', '.join(RECORDED_STEPS)}, got {steps!r}")
+    terrains = distinct_inputs(terrains, "terrain")
     out = writable_path(path, STORE_SUFFIXES, what="store", kind="store", inputs=terrains)
     hmaps = [HeightMap.load(p) for p in terrains]
     if out.exists():

@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from footfall.core.errors import FootfallError
-from footfall.core.files import writable_path
+from footfall.core.files import distinct_inputs, writable_path
 from footfall.core.heightmap import HeightMap
 from footfall.data.runlog import RunRecord
 from footfall.data.schema import SUFFIXES
@@ -158,6 +158,7 @@ class StoredCorrections:
     per_run: int | None  # labels a run at most (None: every step above the margin)
     seed: int
     every_step: bool = False  # every step labelled, not only those above the margin
+    skipped: int = 0  # corrections the store already held (the same step, the same teacher)
 
     def as_dict(self) -> dict:
         """Plain data for JSON, in field order."""
@@ -181,6 +182,7 @@ def correct_stored_runs(run_paths: Sequence[str | os.PathLike], out: str | os.Pa
     FootfallError
         For a bad output path, an unreadable store, or stores without runs.
     """
+    run_paths = distinct_inputs(run_paths, "run store")
     target = writable_path(out, SUFFIXES, what="store", kind="store")
     demos, terrains, runs, steps, above = [], {}, 0, 0, 0
     for path in run_paths:
@@ -202,6 +204,7 @@ def correct_stored_runs(run_paths: Sequence[str | os.PathLike], out: str | os.Pa
         raise FootfallError("the stores hold no run logs to correct")
     used = {d.terrain_hash for d in demos}
     with DemoStore(target, create=True) as store:
-        store.add_demonstrations(demos, terrains=[h for k, h in terrains.items() if k in used])
-    return StoredCorrections(str(target), runs, steps, above, len(demos), float(margin), per_run,
-                             seed, every_step)
+        ids, skipped = store.add_new_demonstrations(
+            demos, terrains=[h for k, h in terrains.items() if k in used])
+    return StoredCorrections(str(target), runs, steps, above, len(ids), float(margin), per_run,
+                             seed, every_step, skipped)

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from footfall.core.errors import FootfallError
-from footfall.core.files import writable_path
+from footfall.core.files import distinct_inputs, writable_path
 from footfall.core.heightmap import HeightMap
 from footfall.core.limits import check_count
 from footfall.core.robot import LITTLEDOG, RobotDescription
@@ -481,6 +481,7 @@ def learn_from_store(store: str | os.PathLike | None, path: str | os.PathLike, f
         trials, a store without such demonstrations, trial stores without runs), or bad
         learning settings.
     """
+    trials = distinct_inputs(trials, "--trials store")
     out = writable_path(path, inputs=(store, *trials))
     if store is None and not trials:
         raise FootfallError("give a store of demonstrations, trial stores, or both")

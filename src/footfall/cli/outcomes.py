@@ -10,6 +10,7 @@ from footfall.cli.output import emit, json_option
 from footfall.core.files import writable_path
 from footfall.data.outcomes import OUTCOME_LABELS as LABELS
 from footfall.experiments.outcomes import outcome_report
+from footfall.expert.settings_file import FORMAT as EXPERT_FORMAT
 from footfall.expert.settings_file import load_expert, save_expert
 
 
@@ -78,7 +79,9 @@ def outcomes_cmd(store_paths: tuple[str, ...], expert_config: str | None, horizo
     expert's value and each of its terms predict it; with --fit, an expert grounded in it."""
     if output is not None and fit is None:
         raise click.UsageError("-o/--output writes the grounded expert: give --fit too")
-    out = (writable_path(output, inputs=(*store_paths, expert_config)) if output is not None
+    out = (writable_path(output, (".json",), what="-o", kind="expert settings",
+                         inputs=(*store_paths, expert_config), writes=EXPERT_FORMAT)
+           if output is not None
            else None)
     report, fitted = outcome_report(store_paths, load_expert(expert_config) if expert_config
                                     else None, horizon, fit)

@@ -14,6 +14,8 @@ import json
 import math
 import os
 import re
+import sqlite3
+import zipfile
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any, Callable, Literal
@@ -207,6 +209,45 @@ def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
         return os.fspath(a) == os.fspath(b)  # no such file exists; only the same text is one
 
 
+FORMAT_PEEK_BYTES = 1 << 20  # [bytes] the most a file's kind is read from (a JSON file's head)
+
+
+def footfall_format(path: str | os.PathLike) -> str | None:
+    """The footfall kind of the existing file at ``path`` -- the ``format`` a footfall ``.npz``
+    archive, store or JSON file names (e.g. ``footfall.model``) -- or None for anything else:
+    no such file, another program's file, an unreadable one. Reads a few bytes; never
+    changes the file (a store is opened read-only and immutable)."""
+    p = Path(path)
+    try:
+        if not p.is_file():
+            return None
+        with open(p, "rb") as fh:
+            head = fh.read(16)
+        if head.startswith(b"PK"):  # a zip archive: an .npz's "format" member
+            with zipfile.ZipFile(p) as archive:
+                info = archive.getinfo("format.npy")
+                if info.file_size > 4096:
+                    return None
+                with archive.open(info) as member:
+                    value = np.lib.format.read_array(member, allow_pickle=False)
+            return str(value) if value.dtype.kind == "U" and value.ndim == 0 else None
+        if head == b"SQLite format 3\x00":
+            con = sqlite3.connect(f"{p.resolve().as_uri()}?mode=ro&immutable=1", uri=True)
+            try:
+                row = con.execute("SELECT value FROM meta WHERE key = 'format'").fetchone()
+            finally:
+                con.close()
+            return str(row[0]) if row else None
+        if head.lstrip()[:1] == b"{":
+            with open(p, "rb") as fh:
+                data = json.loads(fh.read(FORMAT_PEEK_BYTES))
+            kind = data.get("format") if isinstance(data, dict) else None
+            return kind if isinstance(kind, str) and kind.startswith("footfall") else None
+    except Exception:  # not a file of any kind footfall reads: no kind to protect
+        return None
+    return None
+
+
 def distinct_inputs(paths: Iterable[str | os.PathLike], what: str = "input") -> list:
     """``paths`` as given, refused where one file is named twice -- by the same name, another
     path to it, a symbolic or a hard link -- since its contents would count twice.
@@ -228,7 +269,8 @@ def distinct_inputs(paths: Iterable[str | os.PathLike], what: str = "input") -> 
 
 
 def writable_path(path: str | os.PathLike, suffixes: tuple[str, ...] = (), *, what: str = "",
-                  kind: str = "file", inputs: Iterable[str | os.PathLike | None] = ()) -> Path:
+                  kind: str = "file", inputs: Iterable[str | os.PathLike | None] = (),
+                  writes: str | None = None) -> Path:
     """``path`` as a file to write, refused before any work whose result could not be kept.
 
     ``suffixes`` (lower case, with the dot, e.g. ``(".mp4",)``), if given, are
@@ -236,12 +278,16 @@ def writable_path(path: str | os.PathLike, suffixes: tuple[str, ...] = (), *, wh
     ``kind`` (e.g. ``"video"``) name the output in messages. ``inputs`` are the
     files the same work reads (None entries are skipped): writing over one of
     them -- by its name, a symbolic link or a hard link -- would destroy it.
+    ``writes`` is the footfall kind written (e.g. ``footfall.model``): an existing
+    file of another footfall kind (:func:`footfall_format`) is refused, one of
+    its own kind may be written over.
 
     Raises
     ------
     FootfallError
         If ``path`` is a directory, its directory does not exist or cannot be
-        written to, its suffix is not one of ``suffixes``, or it is one of ``inputs``.
+        written to, its suffix is not one of ``suffixes``, it is one of ``inputs``,
+        or it is a footfall file of another kind than ``writes``.
     """
     p = Path(path)
     lead = f"{what}: " if what else ""
@@ -262,4 +308,9 @@ def writable_path(path: str | os.PathLike, suffixes: tuple[str, ...] = (), *, wh
         known = " or ".join(suffixes)
         raise FootfallError(f"{lead}{p}: unknown {kind} format {p.suffix or '(no suffix)'!r} "
                             f"(use {known})")
+    if writes is not None:
+        found = footfall_format(p)
+        if found is not None and found != writes:
+            raise FootfallError(f"{lead}{p} is a {found} file, not a {writes}: writing it "
+                                f"would destroy it; choose another output")
     return p

@@ -27,6 +27,7 @@ from footfall.core.heightmap import HeightMap, board_records
 from footfall.core.seeds import check_seed_span
 from footfall.core.stats import wilson_interval
 from footfall.data.runlog import RunRecord
+from footfall.data.schema import FORMAT as STORE_FORMAT
 from footfall.data.schema import SUFFIXES as STORE_SUFFIXES
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor, LocalPool
@@ -302,7 +303,8 @@ def _checked_log(log_path: str | os.PathLike | None, inputs: tuple = ()) -> Path
     open, a new one is made only when the run is stored (a refused run leaves no file)."""
     if log_path is None:
         return None
-    path = writable_path(log_path, STORE_SUFFIXES, what="--log", kind="store", inputs=inputs)
+    path = writable_path(log_path, STORE_SUFFIXES, what="--log", kind="store", inputs=inputs,
+                         writes=STORE_FORMAT)
     if path.exists():
         with DemoStore(path):
             pass

@@ -32,6 +32,7 @@ from footfall.core.errors import FootfallError
 from footfall.core.files import distinct_inputs, writable_path
 from footfall.core.robot import LEG_NAMES
 from footfall.data.runlog import RunRecord
+from footfall.data.schema import FORMAT as STORE_FORMAT
 from footfall.data.schema import SUFFIXES
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor, LocalPool
@@ -113,7 +114,7 @@ def relabel_runs(run_paths: Sequence[str | os.PathLike], out: str | os.PathLike,
         names another reward), or a run that walks again otherwise than its log.
     """
     run_paths = distinct_inputs(run_paths, "run store")
-    target = writable_path(out, SUFFIXES, what="store", kind="store")
+    target = writable_path(out, SUFFIXES, what="store", kind="store", writes=STORE_FORMAT)
     heads = []
     for path in run_paths:
         with DemoStore(path, read_only=True) as store:

@@ -24,6 +24,7 @@ from footfall.core.files import distinct_inputs, writable_path
 from footfall.core.heightmap import HeightMap
 from footfall.core.limits import check_count
 from footfall.core.robot import DEFAULT_STRIDE, LITTLEDOG, RobotDescription
+from footfall.data.schema import FORMAT as STORE_FORMAT
 from footfall.data.schema import SUFFIXES as STORE_SUFFIXES
 from footfall.data.store import Demonstration, DemoStore
 from footfall.expert.protocol import Expert, expert_settings
@@ -271,7 +272,8 @@ def collect_into_store(terrains: Sequence[str | os.PathLike], path: str | os.Pat
     if steps not in RECORDED_STEPS:
         raise FootfallError(f"steps must be one of {', '.join(RECORDED_STEPS)}, got {steps!r}")
     terrains = distinct_inputs(terrains, "terrain")
-    out = writable_path(path, STORE_SUFFIXES, what="store", kind="store", inputs=terrains)
+    out = writable_path(path, STORE_SUFFIXES, what="store", kind="store", inputs=terrains,
+                         writes=STORE_FORMAT)
     hmaps = [HeightMap.load(p) for p in terrains]
     if out.exists():
         with DemoStore(out):  # refuse a bad store before walking, not after

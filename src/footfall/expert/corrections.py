@@ -22,6 +22,7 @@ from footfall.core.errors import FootfallError
 from footfall.core.files import distinct_inputs, writable_path
 from footfall.core.heightmap import HeightMap
 from footfall.data.runlog import RunRecord
+from footfall.data.schema import FORMAT as STORE_FORMAT
 from footfall.data.schema import SUFFIXES
 from footfall.data.store import Demonstration, DemoStore
 from footfall.expert.protocol import Expert, expert_settings, kept_verdict, teacher_verdict
@@ -183,7 +184,7 @@ def correct_stored_runs(run_paths: Sequence[str | os.PathLike], out: str | os.Pa
         For a bad output path, an unreadable store, or stores without runs.
     """
     run_paths = distinct_inputs(run_paths, "run store")
-    target = writable_path(out, SUFFIXES, what="store", kind="store")
+    target = writable_path(out, SUFFIXES, what="store", kind="store", writes=STORE_FORMAT)
     demos, terrains, runs, steps, above = [], {}, 0, 0, 0
     for path in run_paths:
         with DemoStore(path, read_only=True) as store:

@@ -45,6 +45,7 @@ from footfall.learning.dataset import (
 )
 from footfall.learning.function import RankingFunction, check_function
 from footfall.learning.learner import Learner, get_learner
+from footfall.learning.model import FORMAT as MODEL_FORMAT
 from footfall.learning.model import LEG_GROUPS, FootholdModel
 from footfall.learning.supervision import Supervision, get_supervision
 from footfall.learning.trials import DEFAULT_PAIRS, TrialFoothold, trial_footholds, trial_pairs
@@ -482,7 +483,7 @@ def learn_from_store(store: str | os.PathLike | None, path: str | os.PathLike, f
         learning settings.
     """
     trials = distinct_inputs(trials, "--trials store")
-    out = writable_path(path, inputs=(store, *trials))
+    out = writable_path(path, inputs=(store, *trials), writes=MODEL_FORMAT)
     if store is None and not trials:
         raise FootfallError("give a store of demonstrations, trial stores, or both")
     training = []

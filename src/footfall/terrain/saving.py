@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from footfall.core.files import writable_path
+from footfall.core.heightmap import FORMAT as MAP_FORMAT
 from footfall.core.heightmap import HeightMap
 from footfall.terrain.modules import make_board, make_module, parse_board_spec
 from footfall.terrain.scans import import_terrain
@@ -72,7 +73,7 @@ def save_module(kind: str, difficulty: float, seed: int, path: str | os.PathLike
     FootfallError
         For a bad output path (or one not ending in .npz), an unknown kind, a difficulty outside [0, 1] or a bad seed.
     """
-    out = writable_path(path, MAP_SUFFIXES, kind="height map")
+    out = writable_path(path, MAP_SUFFIXES, kind="height map", writes=MAP_FORMAT)
     return _save(make_module(kind, difficulty, seed), out)
 
 
@@ -92,7 +93,7 @@ def save_board(specs: Sequence[str], seed: int, path: str | os.PathLike,
         file that is missing, not a height map, without data or too large, a board
         above the ``max_map_cells`` limit, or a bad seed.
     """
-    out = writable_path(path, MAP_SUFFIXES, kind="height map", inputs=specs)
+    out = writable_path(path, MAP_SUFFIXES, kind="height map", writes=MAP_FORMAT, inputs=specs)
     return _save(make_board([parse_board_spec(s) for s in specs], seed, flat_ends=flat_ends), out)
 
 
@@ -109,6 +110,6 @@ def save_imported(source: str | os.PathLike, path: str | os.PathLike,
     FootfallError
         For a bad output path or a source the import refuses.
     """
-    out = writable_path(path, MAP_SUFFIXES, kind="height map", inputs=(source,))
+    out = writable_path(path, MAP_SUFFIXES, kind="height map", writes=MAP_FORMAT, inputs=(source,))
     return _save(import_terrain(source, resolution=resolution, z_scale=z_scale, nodata=nodata),
                  out)

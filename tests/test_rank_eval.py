@@ -3,7 +3,9 @@ value -- measured by the same numbers, on demonstrations and on the steps of run
 
 import json
 import math
+import shutil
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -97,11 +99,13 @@ def test_the_command_ranks_a_model_or_a_named_scorer_and_refuses_bad_use(store, 
     assert code == 0 and out.startswith("hand-tuned on 12 demonstrations: top-1 ")
     assert out.rstrip().endswith("above the margin n/a, severe n/a")
     # several scorers on the same decisions: each as it is alone, the named one last
-    code, out, _ = run(capsys, "rank-eval", model, model, "--reward", "hand-tuned", path,
+    copy = Path(path).parent / "copy.npz"  # the same function in another file
+    shutil.copyfile(model, copy)
+    code, out, _ = run(capsys, "rank-eval", model, copy, "--reward", "hand-tuned", path,
                        "--no-expert", "--json")
     many = json.loads(out)
-    assert code == 0 and [m["model"] for m in many] == [str(model), str(model), "hand-tuned"]
-    assert many[0] == many[1] == result
+    assert code == 0 and [m["model"] for m in many] == [str(model), str(copy), "hand-tuned"]
+    assert many[0] == {**many[1], "model": str(model)} and many[0] == result
     code, out, _ = run(capsys, "rank-eval", model, "--reward", "hand-tuned", path, "--no-expert")
     assert code == 0 and out.splitlines()[1].startswith("hand-tuned on 12 demonstrations")
     for args, message in [

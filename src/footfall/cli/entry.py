@@ -13,6 +13,7 @@ import importlib
 import signal
 import sys
 import threading
+import warnings
 from collections.abc import Iterator
 
 import click
@@ -44,7 +45,8 @@ class LazyGroup(click.Group):
     def get_command(self, ctx: click.Context | None, name: str) -> click.Command | None:
         if name not in self.commands and name in self.table:
             module, attribute, _ = self.table[name]
-            self.add_command(getattr(importlib.import_module(module), attribute), name)
+            command = getattr(importlib.import_module(module), attribute)
+            self.add_command(refusing_repeats(command), name)
         return self.commands.get(name)
 
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
@@ -54,6 +56,41 @@ class LazyGroup(click.Group):
                 for name in self.list_commands(ctx)]
         with formatter.section("Commands"):
             formatter.write_dl(rows)
+
+
+def repeated_option(command: click.Command, args: list[str]) -> str | None:
+    """The first option of ``command`` that ``args`` give twice and that takes one value (or is
+    a flag), as given; None if there is none. Options end at ``--``."""
+    args = args[:args.index("--")] if "--" in args else args
+    for param in command.params:
+        if not isinstance(param, click.Option) or param.multiple or param.count \
+                or not param.expose_value:
+            continue
+        names = [*param.opts, *param.secondary_opts]
+        given = [a for a in args if a in names
+                 or any(n.startswith("--") and a.startswith(n + "=") for n in names)]
+        if len(given) > 1:
+            return given[1].split("=", 1)[0]
+    return None
+
+
+def refusing_repeats(command: click.Command) -> click.Command:
+    """``command`` (and a group's commands) refusing an option given twice: click would take
+    the last silently (``--seed 1 --seed 2``), and which one the user meant is unknown."""
+    if isinstance(command, click.Group):
+        for sub in command.commands.values():
+            refusing_repeats(sub)
+        return command
+    parse = command.parse_args
+
+    def parse_args(ctx: click.Context, args: list[str]) -> list[str]:
+        twice = repeated_option(command, args)
+        if twice is not None:
+            raise click.UsageError(f"{twice} is given twice: give it once", ctx)
+        return parse(ctx, args)
+
+    command.parse_args = parse_args  # type: ignore[method-assign]
+    return command
 
 
 @click.group(cls=LazyGroup, table=COMMANDS,
@@ -95,10 +132,16 @@ def _terminate_interrupts() -> Iterator[None]:
         signal.signal(signal.SIGTERM, previous)
 
 
+MISSING_GLYPH = r"Glyph \d+ .* missing from (current )?font"  # Matplotlib's warning on a
+# character of a name or label its font cannot draw: the picture shows a box, not a failure
+
+
 def _run(args: list[str], debug: bool) -> int:
     try:
         load_plugins()  # their learners, feature sets and terrain kinds become choices
-        cli.main(args=args, prog_name="footfall", standalone_mode=False)
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message=MISSING_GLYPH, category=UserWarning)
+            cli.main(args=args, prog_name="footfall", standalone_mode=False)
     except FootfallError as exc:
         if debug:
             raise

@@ -61,6 +61,7 @@ from typing import Callable
 
 from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
+from footfall.core.folders import holding_folders
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, at_least, param, within
 from footfall.core.registry import Registry
@@ -363,6 +364,7 @@ def ablation_markdown(config: AblationConfig, summary: dict) -> str:
 
 
 # ------------------------------------------------------------------ the job
+@holding_folders
 def run_ablation(out: str | os.PathLike, config: AblationConfig | None = None,
                  processes: int | None = None, log: Callable[[str], None] = print,
                  executor: Executor | None = None) -> dict:

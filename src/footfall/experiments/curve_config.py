@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from footfall.core.limits import current_limits
 from footfall.core.params import Params, above, at_least, param
 from footfall.core.seeds import SeedStreams
 from footfall.features.family import PAPER_FEATURE_SETS
@@ -19,10 +20,14 @@ EXTENSIBLE = ("sizes", "draws", "feature_sets", "learners")  # settings a resume
 # are those its store holds)
 
 
+MIN_SIZE = 10  # [demonstrations] the smallest point: each leg group's learner needs 5 folds,
+# and the walker's demonstrations alternate front and hind legs
+
+
 def _sizes(value: object) -> bool:
     return isinstance(value, tuple) and len(value) > 0 and all(
-        isinstance(n, int) and not isinstance(n, bool) and n >= 5 for n in value) and \
-        list(value) == sorted(set(value))
+        isinstance(n, int) and not isinstance(n, bool) and MIN_SIZE <= n <= current_limits().max_count
+        for n in value) and list(value) == sorted(set(value))
 
 
 @dataclass(frozen=True)
@@ -30,7 +35,9 @@ class CurveConfig(Params):
     """What a learning curve measures; written next to its results (docs/configuration.md)."""
 
     sizes: tuple[int, ...] = param((25, 50, 100, 200, 400, 800, 1600), check=_sizes,
-                                   must="increasing whole numbers >= 5",
+                                   must=f"increasing whole numbers from {MIN_SIZE} (5 "
+                                        f"cross-validation folds of each leg group) up to "
+                                        f"the max_count limit",
                                    doc="demonstrations learned from at each point")
     draws: int = param(3, range=at_least(1), doc="independent draws of training boards and "
                                                  "demonstrations per point")

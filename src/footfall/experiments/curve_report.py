@@ -53,6 +53,10 @@ def compare_points(a: dict, b: dict, n: int, a_point: tuple[str, str],
             raise FootfallError(f"the curves differ in {key}: their points are not paired")
 
     b_n = n if b_n is None else b_n
+    if b_point == a_point and b_n == n and (a is b or a == b):
+        raise FootfallError(f"the two points are one ({a_point[0]}/{a_point[1]} at {n} "
+                            f"demonstrations of the same curve): compare another size, "
+                            f"feature set, learner or line")
 
     def find(summary: dict, point: tuple[str, str], size: int) -> dict[int, np.ndarray]:
         found = {p["draw"]: np.asarray(p["losses"], dtype=float) for p in summary["points"]

@@ -45,6 +45,7 @@ import numpy as np
 
 from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
+from footfall.core.folders import holding_folders
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, at_least, param
 from footfall.core.seeds import SeedStreams
@@ -130,6 +131,7 @@ def _jobs(methods: dict[str, str | None], paths: dict[str, Path], seeds: list[in
     return jobs
 
 
+@holding_folders
 def run_curve_walk(curve_out: str | Path, config: CurveWalkConfig | None = None,
                    processes: int | None = None, log: Callable[[str], None] = print,
                    executor: Executor | None = None) -> dict:

@@ -45,6 +45,7 @@ from footfall.core.atomic import write_text_atomic
 from footfall.core.compute import worker_pool
 from footfall.core.errors import FootfallError
 from footfall.core.files import load_npz, save_npz
+from footfall.core.folders import hold_folder, holding_folders
 from footfall.core.robot import LITTLEDOG
 from footfall.data.demonstration import Demonstration
 from footfall.data.store import DemoStore
@@ -335,6 +336,7 @@ def _pool(processes: int) -> Iterator[ProcessPoolExecutor | None]:
         yield pool
 
 
+@holding_folders
 def run_learning_curve(out: Path, config: CurveConfig | None = None,
                        log: Callable[[str], None] = print, processes: int = 1) -> dict:
     """Measure the curve into ``out``: ``results.json``, ``report.md``, ``learning-curve.png``,
@@ -348,7 +350,9 @@ def run_learning_curve(out: Path, config: CurveConfig | None = None,
     config = CurveConfig() if config is None else config
     if out.exists() and not out.is_dir():
         raise FootfallError(f"output path is not a directory: {out}")
-    (out / "models").mkdir(parents=True, exist_ok=True)
+    out.mkdir(parents=True, exist_ok=True)
+    hold_folder(out, "a learning curve")  # a second command into it is refused
+    (out / "models").mkdir(exist_ok=True)
     results_path = out / "results.json"
     points, lines = _resumed(results_path, config)
     if points:

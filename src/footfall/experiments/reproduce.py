@@ -55,6 +55,7 @@ from typing import Callable
 
 from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
+from footfall.core.folders import holding_folders
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, above, at_least, param, within
 from footfall.core.robot import LITTLEDOG
@@ -375,6 +376,7 @@ def _calibration_boards_walked(config: ReproduceConfig, choice) -> dict:
 
 
 # ------------------------------------------------------------------ the job
+@holding_folders
 def run_reproduction(out: str | os.PathLike, config: ReproduceConfig | None = None,
                      processes: int | None = None, log: Callable[[str], None] = print,
                      on_run: Callable[[str], None] | None = None,

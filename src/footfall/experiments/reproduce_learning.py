@@ -134,7 +134,7 @@ def _learn_in_worker(out: Path, config, feature_set: str, store_path: Path,
                      ids: list[int]) -> list[str]:
     """A worker's part: one of the paper's functions learned from the corrections ``ids`` (read
     from the store, in this order) and saved; the lines it would have logged."""
-    ws = open_workspace(out, config)
+    ws = open_workspace(out, config, hold=False)  # the command's folder, held by its process
     with DemoStore(store_path, read_only=True) as store:
         demos = store.demonstrations(ids=ids)
     lines = [_heading(ws, feature_set)]

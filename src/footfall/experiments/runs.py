@@ -27,6 +27,7 @@ from threadpoolctl import threadpool_limits
 
 from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
+from footfall.core.folders import hold_folder
 from footfall.core.heightmap import HeightMap
 from footfall.core.progress import BatchProgress
 from footfall.core.robot import LITTLEDOG
@@ -205,17 +206,22 @@ class Runner:
             self.on_run(record.key)
 
 
-def claim_folder(out: Path, settings: dict, what: str, free: tuple[str, ...] = ()) -> None:
+def claim_folder(out: Path, settings: dict, what: str, free: tuple[str, ...] = (),
+                 hold: bool = True) -> None:
     """Make the folder ``out`` an experiment's, with ``settings`` in its ``config.json``.
 
     A folder that holds ``what`` (e.g. "a reproduction") with other settings is refused,
-    so that a resumed experiment never mixes runs of two settings. Settings named in
+    so that a resumed experiment never mixes runs of two settings, and so is one another
+    process holds (:func:`footfall.core.folders.hold_folder`: two runs at once); ``hold``
+    False: a worker process of the command that holds it. Settings named in
     ``free`` may differ: they choose which runs are walked, not how (their run keys tell
     the runs apart).
     """
     if out.exists() and not out.is_dir():
         raise FootfallError(f"output path is not a directory: {out}")
     out.mkdir(parents=True, exist_ok=True)
+    if hold:  # for this process's run: a second command is refused
+        hold_folder(out, what)
     path = out / "config.json"
     if path.exists():
         try:

@@ -45,6 +45,7 @@ from footfall.core.atomic import write_text_atomic
 from footfall.core.compute import usable_cores
 from footfall.core.errors import FootfallError
 from footfall.core.files import distinct_inputs
+from footfall.core.folders import holding_folders
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, at_least, param
 from footfall.data.store import DemoStore
@@ -235,6 +236,7 @@ def curve_jobs(config: StudentCurveConfig, walk_config, expert, teacher: str,
     return jobs
 
 
+@holding_folders
 def run_student_curve(sources: Sequence[str | Path], out: str | Path,
                       config: StudentCurveConfig | None = None, processes: int | None = None,
                       log: Callable[[str], None] = print, executor: Executor | None = None

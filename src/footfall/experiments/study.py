@@ -44,6 +44,7 @@ import numpy as np
 from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
 from footfall.core.files import plain_json
+from footfall.core.folders import holding_folders
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import Executor
 from footfall.experiments.paired import RunOutcome, compare
@@ -118,6 +119,7 @@ def seed_folder(out: Path, seed: int) -> Path:
     return out / f"seed{seed}"
 
 
+@holding_folders
 def run_study(out: str | os.PathLike, seeds: list[int], quick: bool = False,
               executor: Executor | None = None, processes: int | None = None,
               log: Callable[[str], None] = print,

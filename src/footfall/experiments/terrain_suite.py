@@ -47,6 +47,7 @@ from pathlib import Path
 from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
 from footfall.core.files import distinct_inputs
+from footfall.core.folders import holding_folders
 from footfall.core.heightmap import HeightMap
 from footfall.core.params import Params, at_least, param, within
 from footfall.core.seeds import SeedStreams
@@ -202,6 +203,7 @@ def _file_digest(file: str) -> str:
         raise FootfallError(f"{file}: cannot read the model ({exc.strerror})") from None
 
 
+@holding_folders
 def run_suite(out: str | Path, config: SuiteConfig | None = None,
               processes: int | None = None, log: Callable[[str], None] = print,
               executor: Executor | None = None) -> dict:

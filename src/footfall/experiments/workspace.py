@@ -175,10 +175,12 @@ class Workspace:
             self.by_hash[self.maps[name].content_hash()] = self.maps[name]
 
 
-def open_workspace(out: str | os.PathLike, config: ReproduceConfig) -> Workspace:
-    """The folder ``out`` made ready: refused if it holds other settings; boards made once."""
+def open_workspace(out: str | os.PathLike, config: ReproduceConfig,
+                   hold: bool = True) -> Workspace:
+    """The folder ``out`` made ready: refused if it holds other settings or another command
+    runs in it (``hold`` False: a worker of the command that holds it); boards made once."""
     out = Path(out)
-    claim_folder(out, config.to_dict(), "a reproduction")
+    claim_folder(out, config.to_dict(), "a reproduction", hold=hold)
     (out / "models").mkdir(exist_ok=True)
     paths = board_files(out, {name: (spec, seed, name != "flat")
                               for name, (spec, seed) in boards(config).items()})

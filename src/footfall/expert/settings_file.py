@@ -14,14 +14,16 @@ from pathlib import Path
 from footfall.core.atomic import write_text_atomic
 from footfall.core.errors import FootfallError
 from footfall.core.files import parse_json_text, plain_json
-from footfall.expert.synthetic import ExpertConfig
+from footfall.expert.synthetic import ExpertConfig, check_judges
 
 FORMAT = "footfall.expert"
 VERSION = 1
 
 
 def save_expert(path: str | os.PathLike, config: ExpertConfig, provenance: dict) -> None:
-    """Write ``config`` and its ``provenance`` (plain JSON) to ``path``, atomically."""
+    """Write ``config`` and its ``provenance`` (plain JSON) to ``path``, atomically; settings
+    that judge nothing (every weight 0) are refused, not written."""
+    check_judges(config, "the expert to write")
     body = {"format": FORMAT, "version": VERSION, "expert": config.to_dict(),
             "provenance": plain_json(provenance, nonfinite="null")}
     write_text_atomic(path, json.dumps(body, indent=1) + "\n")
@@ -50,6 +52,7 @@ def load_expert(path: str | os.PathLike) -> ExpertConfig:
         raise FootfallError(f"{p}: expert settings version {version!r} is not one this footfall "
                             f"reads (1 to {VERSION})")
     try:
-        return ExpertConfig.from_dict(data.get("expert"))
+        config = ExpertConfig.from_dict(data.get("expert"))
     except FootfallError as exc:
         raise FootfallError(f"{p}: {exc}") from None
+    return check_judges(config, f"expert settings {p}")

@@ -33,7 +33,7 @@ import math
 import weakref
 from collections import OrderedDict
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -191,6 +191,18 @@ class ExpertConfig(Params):
         super().__post_init__()
         if self.slip_distance < self.ray_step:
             raise FootfallError("expert config: slip_distance must be at least ray_step")
+
+
+
+def check_judges(config: ExpertConfig, what: str) -> ExpertConfig:
+    """``config`` as the settings of an expert that judges, or refused: one whose every weight
+    is 0 values every foothold alike (the hand-tuned reward would look flawless by it).
+    ``what`` names the settings in the message. (An all-zero config is a basis inside the
+    grounding's fit, not an expert: the check is where settings come in or go out.)"""
+    if not any(getattr(config, f.name) for f in fields(config) if f.name.startswith("w_")):
+        raise FootfallError(f"{what}: every weight is 0: an expert that values every foothold "
+                            f"alike judges nothing")
+    return config
 
 
 WALKER_PLACEMENT_ERROR: float = 0.007

@@ -20,7 +20,7 @@ from footfall.cli.fuzz.targets import TARGETS, run_case
 from footfall.core.errors import FootfallError
 
 EXAMPLES = {"map-file": 120, "model-file": 60, "store": 40, "scan-import": 120, "cli": 40,
-            "lying-file": 26, "concurrency": 2}
+            "lying-file": 26, "concurrency": 2, "classes": 30}
 
 
 @pytest.fixture(scope="module")
@@ -144,3 +144,12 @@ FOUND = [
 def test_cases_the_long_run_found_stay_fixed(name, case, bases, tmp_path):
     outcome = run_case(TARGETS.get(name), case, bases, tmp_path / "case")
     assert not outcome.failed, f"{outcome.kind}: {outcome.detail}"
+
+
+@pytest.mark.parametrize("case", [("correct",), ("folder",)], ids=["corrections", "folder"])
+def test_two_commands_into_one_store_or_folder_at_once(case, bases, tmp_path):
+    """Every race of the concurrency target beyond walk-many's, once: two corrections into one
+    output store (each label once), two folder-owning commands into one folder (one walks,
+    the other is refused in one line or walks after it; each run once)."""
+    outcome = run_case(TARGETS.get("concurrency"), case, bases, tmp_path / "case")
+    assert outcome.kind == "ok", f"{outcome.kind}: {outcome.detail}"

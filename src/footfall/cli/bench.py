@@ -164,7 +164,7 @@ def bench_teach_cmd(walks: int, copies: int, runs: int, steps: int, labels: int,
 
 
 FUZZ_TARGETS = ("map-file", "model-file", "store", "scan-import", "cli", "lying-file",
-                "concurrency")
+                "concurrency", "classes")
 """The fuzz targets by name (footfall.cli.fuzz.targets.TARGETS, which needs Hypothesis)."""
 
 

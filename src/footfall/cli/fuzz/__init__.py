@@ -21,4 +21,4 @@ The test suite (``tests/test_fuzz.py``) runs the same targets through Hypothesis
 small budget.
 """
 
-from footfall.cli.fuzz import commands, concurrency, files, lying, stores  # noqa: F401,E402 - the targets register
+from footfall.cli.fuzz import classes, commands, concurrency, files, lying, stores  # noqa: F401,E402 - the targets register

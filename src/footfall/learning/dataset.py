@@ -183,3 +183,23 @@ def distinct_examples(examples: Sequence[Example]) -> list[Example]:
             seen.add(e.key)
             out.append(e)
     return out
+
+
+
+def check_informative(candidates: Sequence[np.ndarray], went_wrong: Sequence[bool]) -> None:
+    """Refuse what says nothing to learn from: demonstrations alone whose candidate sets (each
+    (n, 3) [m]) are every one a single foothold (there was nothing to choose), or trial
+    footholds (``went_wrong``: each one's outcome) of which none went wrong (nothing to rank
+    below the others).
+
+    Raises
+    ------
+    FootfallError
+        Saying which, in the words of the input.
+    """
+    if went_wrong and not any(went_wrong):
+        raise FootfallError(f"none of the {len(went_wrong)} footholds of the trial runs went "
+                            f"wrong (slid, missed or fell): nothing to rank below the others")
+    if candidates and not went_wrong and all(np.ptp(c, axis=0).max() == 0 for c in candidates):
+        raise FootfallError(f"each of the {len(candidates)} demonstrations' candidates are one "
+                            f"foothold: a choice among them says nothing to learn from")

@@ -35,6 +35,7 @@ from footfall.learning.dataset import (
     DEFAULT_TRAINING_CANDIDATES,
     Example,
     check_feature_set,
+    check_informative,
     create_families,
     distinct_examples,
     make_example,
@@ -186,6 +187,7 @@ def _fit_families(unfitted: tuple[FeatureFamily, ...], demos: Sequence[TrainingD
     footholds, each alone, drawn at random to fill the library's slots: every demonstrated
     foothold is a template, and the robot's own thousands would swamp the library."""
     check_family_options(unfitted, family_options or {})
+    check_informative([d.candidates for d in demos], [t.bad for t in trials])  # before any work
     options = {name: dict(opts) for name, opts in (family_options or {}).items()}
     if any(f.name == "templates" for f in unfitted):
         options["templates"] = {"library_size": library_size, "bandwidth_rms": bandwidth_rms,
@@ -215,9 +217,6 @@ def _trial_examples(trials: Sequence[TrialFoothold], families: tuple[FeatureFami
     the comparisons of one run's foothold that went wrong (with ``folds`` board: a board's)."""
     if not trials:
         return []
-    if not any(t.bad for t in trials):
-        raise FootfallError(f"none of the {len(trials)} footholds of the trial runs went wrong "
-                            f"(slid, missed or fell): nothing to rank below the others")
     single, kept = [], []
     for t in trials:  # one foothold at a time: each was chosen in a state of its own
         try:
@@ -376,9 +375,6 @@ def learn_model(demos: Sequence[TrainingDemo], feature_set: str, learner: str = 
     config = config or FeatureConfig()
     if not demos and not trials:
         raise FootfallError("no demonstrations or trials to learn from")
-    if demos and not trials and all(np.ptp(d.candidates, axis=0).max() == 0 for d in demos):
-        raise FootfallError(f"each of the {len(demos)} demonstrations' candidates are one "
-                            f"foothold: a choice among them says nothing to learn from")
     resolutions = {d.hmap.resolution for d in demos} | {t.hmap.resolution for t in trials}
     started = time.perf_counter()
     rng = np.random.default_rng(seed)

@@ -320,7 +320,7 @@ def test_collect_appends_and_info_counts(tmp_path, terrain_file, fake_expert, ca
     assert first["added_by_terrain"] == {digest: 4}
     assert first["expert"]["config"] == {"noise": 0.002, "second_best_prob": 0.0}
     # Appends; the terrain is stored once; only footholds on the rocky module by default.
-    code, out, _ = run(capsys, "demos", "collect", "--terrain", terrain_file, terrain_file,
+    code, out, _ = run(capsys, "demos", "collect", "--terrain", terrain_file,
                        "-n", 2, "--seed", 1, "-o", store, "--second-best", 0.5)
     assert code == 0 and out.startswith(f"added 2 demonstrations (ids 5..6) to {store}: now 6")
     with DemoStore(store) as s:

@@ -18,11 +18,9 @@ from footfall.terrain.saving import save_board
 BOARDS, RUNS, FIRST_RUN = (7500, 7501, 7502), 21, 1000
 
 
-def main():
-    out = Path(sys.argv[1])
-    processes = int(sys.argv[2]) if len(sys.argv) > 2 else 2
+def unseen_boards(out: Path) -> tuple[dict, dict]:
+    """The three test boards in ``out`` (made once): name -> file, and hash -> map."""
     out.mkdir(parents=True, exist_ok=True)
-    config = ReproduceConfig()
     boards, terrains = {}, {}
     for seed in BOARDS:
         path = out / f"test-{seed}.npz"
@@ -31,6 +29,14 @@ def main():
         boards[path.stem] = str(path)
         hmap = HeightMap.load(path)
         terrains[hmap.content_hash()] = hmap
+    return boards, terrains
+
+
+def main():
+    out = Path(sys.argv[1])
+    processes = int(sys.argv[2]) if len(sys.argv) > 2 else 2
+    config = ReproduceConfig()
+    boards, terrains = unseen_boards(out)
     store = DemoStore(out / "test.sqlite", create=True)
     runner = Runner(store, terrains, LocalPool(processes), None, print)
     crossed = {}

@@ -11,15 +11,13 @@ import sys
 from itertools import combinations
 from pathlib import Path
 
-from footfall.core.heightmap import HeightMap
+from rollout_test import FIRST_RUN, RUNS, unseen_boards  # the same runs
+
 from footfall.core.stats import mcnemar_exact
 from footfall.data.store import DemoStore
 from footfall.experiments.executors import LocalPool
 from footfall.experiments.reproduce import ReproduceConfig
 from footfall.experiments.runs import RunJob, Runner
-from footfall.terrain.saving import save_board
-
-BOARDS, RUNS, FIRST_RUN = (7500, 7501, 7502), 21, 1000  # rollout_test.py's runs
 
 
 def main():
@@ -27,16 +25,8 @@ def main():
     processes = next((int(a.split("=")[1]) for a in sys.argv[1:]
                       if a.startswith("--processes=")), 2)
     out, named = Path(args[0]), dict(a.split("=", 1) for a in args[1:])
-    out.mkdir(parents=True, exist_ok=True)
     config = ReproduceConfig()
-    boards, terrains = {}, {}
-    for seed in BOARDS:
-        path = out / f"test-{seed}.npz"
-        if not path.exists():
-            save_board(["rocky:1.0", "steps:1.0"], seed=seed, path=str(path))
-        boards[path.stem] = str(path)
-        hmap = HeightMap.load(path)
-        terrains[hmap.content_hash()] = hmap
+    boards, terrains = unseen_boards(out)
     with DemoStore(out / "test.sqlite", create=True) as store:
         runner = Runner(store, terrains, LocalPool(processes), None, print)
         crossed = {}

@@ -137,13 +137,18 @@ def _twice_work(bases: Bases, scratch: Path, command: str, how: str) -> None:
         elif how == "hardlink":
             os.link(first, other)
         names[one], names[two] = first, other
-    argv = [a.format(scratch=scratch, **names) for a in TWICE[command]]
+    _refused_because([a.format(scratch=scratch, **names) for a in TWICE[command]], scratch,
+                     "is given twice", f"{command}: an input given twice ({how})")
+
+
+def _refused_because(argv: list[str], scratch: Path, reason: str, what: str) -> None:
+    """``footfall ARGV`` must be refused in one line that says ``reason`` (the refusal
+    propagates, counted by the harness); refused for another reason, it is garbage."""
     try:
         cli_work(argv, must_refuse=True, cwd=scratch)()
     except FootfallError as exc:
-        if "given twice" not in str(exc):
-            raise Garbage(f"{command}: an input given twice ({how}) refused for another "
-                          f"reason: {exc}") from None
+        if reason not in str(exc):
+            raise Garbage(f"{what} refused for another reason: {exc}") from None
         raise
 
 
@@ -179,15 +184,9 @@ def _class_work(case: tuple, bases: Bases, scratch: Path) -> Callable[[], None]:
         elif kind == "twice":
             _twice_work(bases, scratch, what, how)
         elif kind == "option":
-            argv = [a.format(scratch=scratch, store=bases.store, flat=bases.flat)
-                    for a in OPTIONS[what]]
-            try:
-                cli_work(argv, must_refuse=True, cwd=scratch)()
-            except FootfallError as exc:
-                if "is given twice" not in str(exc):
-                    raise Garbage(f"an option given twice refused for another reason: "
-                                  f"{exc}") from None
-                raise
+            _refused_because([a.format(scratch=scratch, store=bases.store, flat=bases.flat)
+                              for a in OPTIONS[what]], scratch, "is given twice",
+                             "an option given twice")
         else:
             _nothing_work(bases, scratch, what)
     return work

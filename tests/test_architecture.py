@@ -400,6 +400,16 @@ LAZY_IMPORTS = {
         "holds arrays, scored without LightGBM)",
     ("footfall.learning.veto", "lightgbm"):
         "a second to import: only learning a veto needs it (its trees are arrays in the model)",
+    ("footfall.terrain.scans", "footfall.terrain.bags"):
+        "rosbags: a fifth of a second to import; only a ROS 2 bag's reader needs it",
+    ("footfall.terrain.scans", "footfall.terrain.lidar"):
+        "laspy and rasterio: most of a second to import; only a LAS / LAZ reader needs them",
+    ("footfall.terrain.scans", "footfall.terrain.geotiff"):
+        "rasterio: a third of a second to import; only a GeoTIFF reader needs it",
+    ("footfall.terrain.layer_files", "footfall.terrain.bags"):
+        "rosbags: only a layer written as a ROS 2 bag needs it",
+    ("footfall.terrain.layer_files", "footfall.terrain.geotiff"):
+        "rasterio: only a layer written as a GeoTIFF needs it",
     ("footfall.cli.bench", "footfall.cli.fuzz.campaign"):
         "the fuzz suite is built on Hypothesis, a test extra: only `footfall bench fuzz`",
 }

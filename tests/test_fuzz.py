@@ -19,7 +19,8 @@ from footfall.cli.fuzz.harness import Garbage, Multiline, cli_work, guarded
 from footfall.cli.fuzz.targets import TARGETS, run_case
 from footfall.core.errors import FootfallError
 
-EXAMPLES = {"map-file": 120, "model-file": 60, "store": 40, "scan-import": 120, "cli": 40,
+EXAMPLES = {"map-file": 120, "model-file": 60, "store": 40, "scan-import": 120,
+            "survey-import": 60, "cli": 40,
             "lying-file": 26, "concurrency": 2, "classes": 30}
 
 
@@ -135,6 +136,13 @@ FOUND = [
     # an input name with an unpaired surrogate: comparing it with the output raised
     # UnicodeEncodeError
     ("cli", (3, [(57, False, 79, "\x1bf\x8e\xb2\xb8\udc50")])),
+    # a LAZ chunk table counting 1.7 billion chunks: the LAZ decoder allocated 26 GB for them
+    # and the process died
+    ("survey-import", (".laz", [("zero_run", 1081530686), ("delete", 2084654369)], {})),
+    # a LAS header counting 2.2 billion variable-length records: laspy read past the end of
+    # the file for hours
+    ("survey-import", (".laz", [("delete", 793289931), ("flip", 1186724181),
+                                ("truncate", 1275442510)], {})),
     # a model whose robot has its hips 0.61 m from the body origin: NaN rewards
     ("model-file", [("zip", "sizes", 708), ("meta", 100760, "replace", 0.61)]),
 ]

@@ -58,8 +58,9 @@ def expect_error(path, pattern, **kwargs):
 
 
 # ------------------------------------------------------------------- registry
-def test_registry_lists_the_five_formats():
-    assert SUFFIXES == (".npz", ".npy", ".png", ".ply", ".xyz")
+def test_registry_lists_the_formats():
+    assert SUFFIXES == (".npz", ".npy", ".png", ".ply", ".xyz", ".las", ".laz", ".tif", ".tiff",
+                        ".mcap", ".db3")
 
 
 def test_suffix_is_case_insensitive(tmp_path):
@@ -70,9 +71,10 @@ def test_suffix_is_case_insensitive(tmp_path):
 
 
 def test_unknown_suffix_lists_the_known_ones(tmp_path):
-    path = tmp_path / "terrain.tif"
+    path = tmp_path / "terrain.dem"
     path.write_bytes(b"II*\x00")
-    expect_error(path, re.escape("known: .npz, .npy, .png, .ply, .xyz"))
+    expect_error(path, re.escape("known: .npz, .npy, .png, .ply, .xyz, .las, .laz, .tif, "
+                                 ".tiff, .mcap, .db3 or a ROS 2 bag folder"))
 
 
 def test_no_suffix_is_unknown(tmp_path):

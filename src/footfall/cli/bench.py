@@ -163,7 +163,7 @@ def bench_teach_cmd(walks: int, copies: int, runs: int, steps: int, labels: int,
     emit(as_json, result, format_teach(result))
 
 
-FUZZ_TARGETS = ("map-file", "model-file", "store", "scan-import", "cli", "lying-file",
+FUZZ_TARGETS = ("map-file", "model-file", "store", "scan-import", "survey-import", "cli", "lying-file",
                 "concurrency", "classes")
 """The fuzz targets by name (footfall.cli.fuzz.targets.TARGETS, which needs Hypothesis)."""
 

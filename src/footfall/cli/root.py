@@ -64,6 +64,8 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
                           "kind."),
     "demo": ("footfall.cli.experiments", "demo",
              "Build a board, score it densely and draw the terrain, features and templates."),
+    "score": ("footfall.cli.score", "score_cmd",
+              "Score every cell of MAP with a foothold scorer and write the scores as a layer."),
     "bench": ("footfall.cli.bench", "bench",
               "Benchmarks: print figures, compared with a baseline run in the same process."),
     "teach": ("footfall.cli.teach", "teach",

@@ -6,6 +6,7 @@ import click
 
 from footfall.cli.choices import SEED, TERRAIN_KIND, ChoiceArgument, Finite
 from footfall.cli.output import emit, json_option
+from footfall.core.errors import FootfallError
 from footfall.plots.relief import save_relief_of_file
 from footfall.terrain.saving import MapSummary, save_board, save_imported, save_module
 
@@ -71,20 +72,86 @@ def terrain_board(specs: tuple[str, ...], seed: int, flat_ends: bool, output: st
     _emit_map(as_json, summary, _file_module_notes(summary))
 
 
+def _classes(value: str | None) -> tuple[int, ...] | None:
+    """``--classes 2,6`` as class numbers 0-255; refused in one line otherwise."""
+    if value is None:
+        return None
+    try:
+        classes = tuple(int(c) for c in value.split(","))
+    except ValueError:
+        raise FootfallError(f"--classes must be class numbers separated by commas (e.g. 2 or "
+                            f"2,6), got {value!r}") from None
+    if not all(0 <= c <= 255 for c in classes):
+        raise FootfallError(f"--classes must be ASPRS class numbers 0 .. 255, got {value!r}")
+    return classes
+
+
+def _import_notes(summary: MapSummary) -> tuple[str, ...]:
+    """What an import chose where the user did not: a bag's topic and message, a cloud's
+    class filter, a raster's band and window, and where a georeferenced map lies."""
+    meta = summary.metadata
+    notes = []
+    if meta.get("source_format") == "ros2-bag":
+        notes.append(f"  {meta['topic']}, layer {meta['layer']} (of "
+                     f"{', '.join(meta['layers'])}), message {meta['message']} of "
+                     f"{meta['messages']} (at {meta['time']:.3f} s)")
+    if "class_filter" in meta:
+        notes.append(f"  points kept: {meta['class_filter']}, {meta['points_used']} of "
+                     f"{meta['points_in_file']}; {meta['rasterization']}")
+    if "band" in meta:
+        notes.append(f"  band {meta['band']} ({meta['band_dtype']}), window "
+                     f"{meta['window']} of {meta['raster_size']} pixels; cell size from "
+                     f"{meta['cell_size_from']}")
+    if "georeference" in meta:
+        t = meta["georeference"]["transform"]
+        notes.append(f"  local frame: cell (0, 0) at (0, 0); the raster's top-left corner at "
+                     f"({t[2]:.3f}, {t[5]:.3f}) in the file's coordinates, kept in the map")
+    return tuple(notes)
+
+
 @terrain.command("import")
 @click.argument("source")
 @click.option("--resolution", type=Finite(min=0.0, min_open=True), default=None,
-              help="Cell size [m] (required for .npy, .png and point clouds).")
+              help="Cell size [m] (required for .npy, .png and point clouds; for a GeoTIFF "
+                   "in degrees or feet, its pixel size in metres).")
 @click.option("--z-scale", type=Finite(min=0.0, min_open=True), default=None,
               help="Metres per raw height unit (required for 16-bit PNG).")
 @click.option("--nodata", type=Finite(), default=None, help="Raw value that means no data.")
+@click.option("--topic", default=None, help="ROS 2 bag: the GridMap topic (needed where the "
+              "bag holds several; they are listed).")
+@click.option("--layer", default=None,
+              help="ROS 2 bag: the map's layer [default: elevation].")
+@click.option("--message", type=int, default=None,
+              help="ROS 2 bag: the message's index on the topic, negative from the end "
+                   "[default: the last].")
+@click.option("--time", "at_time", type=Finite(), default=None, metavar="SECONDS",
+              help="ROS 2 bag: the last message at or before this time since the bag's start.")
+@click.option("--classes", default=None, metavar="N[,N...]",
+              help="LAS / LAZ: the point classes kept [default: ground (class 2) where the "
+                   "file classifies points, else every point].")
+@click.option("--statistic", type=click.Choice(["max", "min", "mean"]), default=None,
+              help="LAS / LAZ: a cell's height from its points [default: max, the highest "
+                   "return].")
+@click.option("--band", type=click.IntRange(min=1), default=None,
+              help="GeoTIFF: the band read [default: 1].")
+@click.option("--bounds", nargs=4, type=Finite(), default=None,
+              metavar="XMIN YMIN XMAX YMAX",
+              help="GeoTIFF: read only this window, in the file's coordinates.")
 @click.option("-o", "--output", required=True, help="Output height map (.npz).")
 @json_option
 def terrain_import(source: str, resolution: float | None, z_scale: float | None,
-                   nodata: float | None, output: str, as_json: bool) -> None:
-    """Import SOURCE (.npy, 16-bit .png, .ply, .xyz, .npz) as a footfall height map."""
-    _emit_map(as_json, save_imported(source, output, resolution=resolution, z_scale=z_scale,
-                                     nodata=nodata))
+                   nodata: float | None, topic: str | None, layer: str | None,
+                   message: int | None, at_time: float | None, classes: str | None,
+                   statistic: str | None, band: int | None,
+                   bounds: tuple[float, ...] | None, output: str, as_json: bool) -> None:
+    """Import SOURCE as a footfall height map: .npy, 16-bit .png, .ply, .xyz, .npz, a ROS 2
+    bag of grid_map_msgs/GridMap (a bag folder, .mcap or .db3), a LAS / LAZ point cloud or
+    a GeoTIFF (.tif)."""
+    summary = save_imported(source, output, resolution=resolution, z_scale=z_scale,
+                            nodata=nodata, topic=topic, layer=layer, message=message,
+                            time=at_time, classes=_classes(classes), statistic=statistic,
+                            band=band, bounds=tuple(bounds) if bounds else None)
+    _emit_map(as_json, summary, _import_notes(summary))
 
 
 @terrain.command("show")

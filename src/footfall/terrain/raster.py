@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -21,6 +21,9 @@ from footfall.core.errors import FootfallError
 from footfall.core.heightmap import MAX_COORDINATE, HeightMap
 from footfall.core.limits import Limits, current_limits
 
+LOCAL_FRAME = "local"  # the frame of a surveyed map's local coordinates
+# (footfall.terrain.georeference)
+STATISTICS = ("max", "min", "mean")  # what a rasterised cell holds of its points' heights
 MAX_CELLS = Limits().max_map_cells  # the default of the limit on rasterised grids (raise the
 # limit max_map_cells, not this constant: the limit in force is current_limits().max_map_cells)
 
@@ -34,6 +37,8 @@ class ScanOptions:
     nodata: float | None  # raw value meaning "no data"
     origin: tuple[float, float] | None  # [m]
     frame: str | None
+    formats: dict = field(default_factory=dict)  # the options of one format alone (a bag's
+    # topic, a point cloud's class filter, a raster's band ...): name -> value, given ones only
 
 
 # ----------------------------------------------------------------- validation
@@ -56,7 +61,7 @@ def _positive(path: Path, name: str, value: Any, unit: str) -> float | None:
 
 
 def scan_options(path: Path, resolution: Any, z_scale: Any, nodata: Any, origin: Any,
-              frame: Any) -> ScanOptions:
+              frame: Any, formats: dict | None = None) -> ScanOptions:
     res = _positive(path, "resolution", resolution, "m/cell")
     zs = _positive(path, "z_scale", z_scale, "m per raw unit")
     nd = None if nodata is None else _number(path, "nodata", nodata)
@@ -72,7 +77,8 @@ def scan_options(path: Path, resolution: Any, z_scale: Any, nodata: Any, origin:
                                 f"got {origin!r}")
     if frame is not None and (not isinstance(frame, str) or not frame):
         raise FootfallError(f"{path}: frame must be a non-empty string, got {frame!r}")
-    return ScanOptions(res, zs, nd, org, frame)  # type: ignore[arg-type]
+    given = {k: v for k, v in (formats or {}).items() if v is not None}
+    return ScanOptions(res, zs, nd, org, frame, given)  # type: ignore[arg-type]
 
 
 def require_resolution(path: Path, opts: ScanOptions, kind: str) -> float:
@@ -130,8 +136,11 @@ def check_grid_cells(path: Path, shape: tuple[int, ...], what: str) -> None:
 
 
 # ------------------------------------------------------------- rasterisation
-def rasterize_cloud(points: np.ndarray, resolution: float, z_scale: float, nodata: float | None
-               ) -> tuple[np.ndarray, tuple[float, float], dict]:
+def rasterize_cloud(points: np.ndarray, resolution: float, z_scale: float, nodata: float | None,
+                    statistic: str = "max") -> tuple[np.ndarray, tuple[float, float], dict]:
+    """A cloud's grid (nx, ny) [m], the centre of its cell (0, 0) [m] and its point counts:
+    each cell the ``statistic`` (:data:`STATISTICS`) of its points' z, NaN without one
+    (the anchoring rule of :func:`rasterize_points`)."""
     pts = np.asarray(points, dtype=np.float64)
     if pts.size == 0:
         raise FootfallError("the point cloud is empty")
@@ -170,9 +179,16 @@ def rasterize_cloud(points: np.ndarray, resolution: float, z_scale: float, nodat
                             f"use a coarser resolution")
     nx, ny = int(nx_f), int(ny_f)
     i, j = fi.astype(np.int64), fj.astype(np.int64)
-    grid = np.full(nx * ny, -np.inf)
-    np.maximum.at(grid, i * ny + j, z)
-    grid[grid == -np.inf] = np.nan
+    cell = i * ny + j
+    if statistic == "mean":
+        counts = np.bincount(cell, minlength=nx * ny)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            grid = np.bincount(cell, weights=z, minlength=nx * ny) / counts
+    else:
+        empty = -np.inf if statistic == "max" else np.inf
+        grid = np.full(nx * ny, empty)
+        (np.maximum if statistic == "max" else np.minimum).at(grid, cell, z)
+        grid[grid == empty] = np.nan
     info = {"points_read": n_read, "points_used": int(x.size),
             "points_dropped_nonfinite": n_nonfinite, "points_dropped_nodata": n_nodata}
     return grid.reshape(nx, ny), (x0, y0), info

@@ -99,11 +99,13 @@ def save_board(specs: Sequence[str], seed: int, path: str | os.PathLike,
 
 def save_imported(source: str | os.PathLike, path: str | os.PathLike,
                   resolution: float | None = None, z_scale: float | None = None,
-                  nodata: float | None = None) -> MapSummary:
+                  nodata: float | None = None, **formats) -> MapSummary:
     """Import a scan (:func:`~footfall.terrain.scans.import_terrain`) into ``path``.
 
     ``resolution`` [m/cell], ``z_scale`` [m per raw unit] and ``nodata`` (the
-    raw value meaning no data) as for the import.
+    raw value meaning no data) as for the import; ``formats``: the options of one
+    format alone (a bag's ``topic``, ``layer``, ``message``, ``time``; a point cloud's
+    ``classes``, ``statistic``; a raster's ``band``, ``bounds``).
 
     Raises
     ------
@@ -111,5 +113,5 @@ def save_imported(source: str | os.PathLike, path: str | os.PathLike,
         For a bad output path or a source the import refuses.
     """
     out = writable_path(path, MAP_SUFFIXES, kind="height map", writes=MAP_FORMAT, inputs=(source,))
-    return _save(import_terrain(source, resolution=resolution, z_scale=z_scale, nodata=nodata),
-                 out)
+    return _save(import_terrain(source, resolution=resolution, z_scale=z_scale, nodata=nodata,
+                                **formats), out)

@@ -27,7 +27,17 @@ Supported suffixes (case-insensitive), :data:`SUFFIXES`, read by :func:`import_t
     comma-separated; the first three columns are x, y, z [m], further
     columns are ignored, ``#`` starts a comment.
 
-Point clouds are rasterised as by :func:`footfall.terrain.raster.rasterize_points`
+``.mcap``, ``.db3`` or a bag folder
+    A ROS 2 bag of ``grid_map_msgs/GridMap`` (:mod:`footfall.terrain.bags`): one
+    layer of one message, chosen by ``topic``, ``layer``, ``message`` or ``time``.
+``.las``, ``.laz``
+    A LiDAR point cloud (:mod:`footfall.terrain.lidar`): the kept ``classes``
+    gridded at ``resolution`` by a ``statistic`` per cell, in the local frame.
+``.tif``, ``.tiff``
+    A GeoTIFF elevation model (:mod:`footfall.terrain.geotiff`): one ``band``,
+    optionally a window (``bounds``), in the local frame.
+
+Point clouds (``.ply``, ``.xyz``) are rasterised as by :func:`footfall.terrain.raster.rasterize_points`
 (the highest point per cell, empty cells NaN, points with non-finite
 coordinates dropped); the readers' shared steps are :mod:`footfall.terrain.raster`.
 
@@ -57,7 +67,9 @@ from footfall.core.heightmap import HeightMap
 from footfall.core.limits import current_limits
 from footfall.core.npz import HEADER_ERRORS, npy_header
 from footfall.core.paths import readable_file
+from footfall.terrain.grid_map import DEFAULT_LAYER
 from footfall.terrain.raster import (
+    LOCAL_FRAME,
     ScanOptions,
     check_grid_cells,
     file_sha256,
@@ -261,21 +273,120 @@ def _cloud(reader: Callable[[Path, ScanOptions], np.ndarray], fmt: str
     return read
 
 
+def _refuse(path: Path, opts: ScanOptions, names: tuple[str, ...], why: str) -> None:
+    """Refuse the general options ``names`` where they were given: ``why`` says what the
+    format carries instead."""
+    given = [n for n in names if getattr(opts, n) is not None]
+    if given:
+        raise FootfallError(f"{path}: {why}; do not pass {', '.join(given)}")
+
+
+def _read_bag(path: Path, opts: ScanOptions) -> HeightMap:
+    from footfall.terrain.bags import BagChoice, read_grid_map
+
+    _refuse(path, opts, ("resolution", "z_scale", "nodata", "origin", "frame"),
+            "a ROS 2 bag's grid map carries its own geometry, frame and holes")
+    f = opts.formats
+    hmap, _ = read_grid_map(path, BagChoice(f.get("topic"), f.get("layer", DEFAULT_LAYER),
+                                            f.get("message"), f.get("time")))
+    return hmap
+
+
+def _georeferenced(path: Path, heights: np.ndarray, resolution: float, fmt: str,
+                   meta: dict) -> HeightMap:
+    """A map of a georeferenced file in the local frame (:mod:`footfall.terrain.georeference`)."""
+    return make_map(path, heights, resolution, (0.0, 0.0), LOCAL_FRAME,
+                    {"source": str(path), "source_sha256": file_sha256(path),
+                     "source_format": fmt, "importer": "footfall.terrain.scans", **meta})
+
+
+def _read_lidar(path: Path, opts: ScanOptions) -> HeightMap:
+    from footfall.terrain.lidar import read_lidar
+
+    _refuse(path, opts, ("z_scale", "nodata", "origin", "frame"),
+            "a LAS / LAZ file carries its own scale, and is placed in its local frame")
+    resolution = require_resolution(path, opts, "LAS / LAZ point cloud")
+    classes = opts.formats.get("classes")
+    try:
+        heights, res, meta = read_lidar(path, resolution,
+                                        None if classes is None else tuple(classes),
+                                        opts.formats.get("statistic", "max"))
+    except FootfallError as exc:
+        raise FootfallError(f"{path}: {exc}") from None
+    return _georeferenced(path, heights, res, path.suffix.lower()[1:], meta)
+
+
+def _read_geotiff(path: Path, opts: ScanOptions) -> HeightMap:
+    from footfall.terrain.geotiff import read_geotiff
+
+    _refuse(path, opts, ("origin", "frame"), "a GeoTIFF is placed by its own transform, in "
+            "its local frame")
+    try:
+        heights, res, meta = read_geotiff(path, opts.formats.get("band", 1), opts.resolution,
+                                          opts.formats.get("bounds"))
+    except FootfallError as exc:
+        raise FootfallError(f"{path}: {exc}") from None
+    if opts.nodata is not None:
+        heights[heights == opts.nodata] = np.nan
+    z_scale = 1.0 if opts.z_scale is None else opts.z_scale
+    with np.errstate(over="ignore", invalid="ignore"):  # inf is refused by HeightMap by name
+        heights = heights * z_scale
+    if np.isnan(heights).all():
+        raise FootfallError(f"{path}: no data (every cell is nodata)")
+    return _georeferenced(path, heights, res, "geotiff", {**meta, "z_scale": z_scale})
+
+
 _READERS: dict[str, Callable[[Path, ScanOptions], HeightMap]] = {
     ".npz": _read_npz,
     ".npy": _read_npy,
     ".png": _read_png,
     ".ply": _cloud(_read_ply, "ply"),
     ".xyz": _cloud(_read_xyz, "xyz"),
+    ".las": _read_lidar,
+    ".laz": _read_lidar,
+    ".tif": _read_geotiff,
+    ".tiff": _read_geotiff,
+    ".mcap": _read_bag,
+    ".db3": _read_bag,
 }
+BAG_FOLDER = "(a ROS 2 bag folder)"  # the key of a folder among the readers' names
 
 SUFFIXES: tuple[str, ...] = tuple(_READERS)  # the file suffixes import_terrain understands
+
+# The options of one format alone, and the readers that take each (the rest refuse it).
+FORMAT_OPTIONS: dict[str, tuple[str, ...]] = {
+    "topic": (".mcap", ".db3", BAG_FOLDER),
+    "layer": (".mcap", ".db3", BAG_FOLDER),
+    "message": (".mcap", ".db3", BAG_FOLDER),
+    "time": (".mcap", ".db3", BAG_FOLDER),
+    "classes": (".las", ".laz"),
+    "statistic": (".las", ".laz"),
+    "band": (".tif", ".tiff"),
+    "bounds": (".tif", ".tiff"),
+}
+_FORMAT_NAMES = {".mcap": "ROS 2 bags", ".db3": "ROS 2 bags", BAG_FOLDER: "ROS 2 bags",
+                 ".las": "LAS / LAZ point clouds", ".laz": "LAS / LAZ point clouds",
+                 ".tif": "GeoTIFF rasters", ".tiff": "GeoTIFF rasters"}
+
+
+def _check_format_options(path: Path, key: str, given: dict) -> None:
+    """Refuse an option of another format than the file's (``key``: its suffix or folder)."""
+    for name in given:
+        readers = FORMAT_OPTIONS[name]
+        if key not in readers:
+            raise FootfallError(f"{path}: {name} applies to {_FORMAT_NAMES[readers[0]]} only")
 
 
 # ---------------------------------------------------------------------- entry
 def import_terrain(path: str | os.PathLike, *, resolution: float | None = None,
                    z_scale: float | None = None, origin: tuple[float, float] | None = None,
-                   frame: str | None = None, nodata: float | None = None) -> HeightMap:
+                   frame: str | None = None, nodata: float | None = None,
+                   topic: str | None = None, layer: str | None = None,
+                   message: int | None = None, time: float | None = None,
+                   classes: tuple[int, ...] | None = None, statistic: str | None = None,
+                   band: int | None = None,
+                   bounds: tuple[float, float, float, float] | None = None) -> HeightMap:
+    # long: one entry for every format, its options documented in one place
     """Read elevation data from a file into a :class:`HeightMap`, by file suffix.
 
     Parameters
@@ -306,6 +417,17 @@ def import_terrain(path: str | os.PathLike, *, resolution: float | None = None,
         float ``.npy`` is always no data). Use ``nodata=0`` for PNGs whose
         0 count marks missing pixels.
 
+    topic, layer, message, time : optional
+        ROS 2 bags only: the GridMap topic (needed where there are several), the layer
+        (default ``elevation``), the message's index (negative from the end; default
+        the last) or the last message at or before ``time`` [s] after the bag's start.
+    classes, statistic : optional
+        LAS / LAZ only: the ASPRS classes kept (default: ground where classified) and
+        a cell's height from its points (``max``, the default, ``min`` or ``mean``).
+    band, bounds : optional
+        GeoTIFF only: the band read (default 1) and a window (x min, y min, x max,
+        y max) in the file's coordinates.
+
     Returns
     -------
     HeightMap
@@ -324,11 +446,18 @@ def import_terrain(path: str | os.PathLike, *, resolution: float | None = None,
         invalid argument, an empty cloud, fewer than 2 x 2 cells, or no data.
     """
     p = Path(path)
+    formats = {"topic": topic, "layer": layer, "message": message, "time": time,
+               "classes": classes, "statistic": statistic, "band": band, "bounds": bounds}
+    if p.is_dir() and p.suffix.lower() not in SUFFIXES:  # a ROS 2 bag folder
+        opts = scan_options(p, resolution, z_scale, nodata, origin, frame, formats)
+        _check_format_options(p, BAG_FOLDER, opts.formats)
+        return _read_bag(p, opts)
     suffix = p.suffix.lower()
     reader = _READERS.get(suffix)
     if reader is None:
         raise FootfallError(f"{p}: unknown terrain file type {suffix or '(no suffix)'!r}; "
-                            f"known: {', '.join(SUFFIXES)}")
+                            f"known: {', '.join(SUFFIXES)} or a ROS 2 bag folder")
     readable_file(p)  # missing, not a file, permission denied, too large
-    opts = scan_options(p, resolution, z_scale, nodata, origin, frame)
+    opts = scan_options(p, resolution, z_scale, nodata, origin, frame, formats)
+    _check_format_options(p, suffix, opts.formats)
     return reader(p, opts)

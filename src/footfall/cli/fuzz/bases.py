@@ -13,12 +13,15 @@ import io
 from dataclasses import dataclass
 from pathlib import Path
 
+import laspy
 import numpy as np
 from PIL import Image
 
 from footfall.cli.entry import main
 from footfall.core.errors import FootfallError
 from footfall.core.heightmap import HeightMap
+from footfall.terrain.bags import write_grid_map
+from footfall.terrain.geotiff import write_geotiff
 
 
 @dataclass(frozen=True)
@@ -31,7 +34,8 @@ class Bases:
     store: Path  # demonstrations on ``map`` and the log of one run (.sqlite)
     model: Path  # learned from ``store`` (.npz)
     flat: Path  # a short flat board (two modules, no flat ends): a quick walk
-    scans: dict  # {".npy": path, ".png": ..., ".ply": ..., ".xyz": ...}
+    scans: dict  # {".npy": path, ".png": ..., ".ply": ..., ".xyz": ..., ".mcap", ".db3",
+    # ".las", ".laz", ".tif": the surveyed formats, each written by its own library}
     empty: Path
     text: Path
 
@@ -82,8 +86,29 @@ def make_bases(root: str | Path) -> Bases:
               "property float z\nend_header\n").format(len(points))
     scans[".ply"].write_text(header + "\n".join(" ".join(f"{v:.5f}" for v in p)
                                                 for p in points) + "\n")
+    scans.update(_survey_bases(root, grid, points))
     empty, text = root / "empty.npz", root / "notes.npz"
     empty.write_bytes(b"")
     text.write_text("these are not the heights you are looking for\n")
     return Bases(root, paths["map.npz"], paths["small.npz"], paths["store.sqlite"],
                  paths["model.npz"], paths["flat.npz"], scans, empty, text)
+
+
+def _survey_bases(root: Path, grid: np.ndarray, points: np.ndarray) -> dict[str, Path]:
+    """The grid as a ROS 2 bag of a GridMap (MCAP and SQLite 3, by rosbags' writer) and a
+    GeoTIFF (by rasterio), and the points as LAS and LAZ (by laspy)."""
+    hmap = HeightMap(grid, 0.008, (0.0, 0.0), "odom")
+    out = {suffix: root / f"survey{suffix}" for suffix in (".mcap", ".db3", ".las", ".laz",
+                                                           ".tif")}
+    write_grid_map(out[".mcap"], {"elevation": grid, "variance": grid * 0}, hmap,
+                   topic="/map", storage="mcap")
+    write_grid_map(out[".db3"], {"elevation": grid}, hmap, topic="/map", storage="sqlite3")
+    write_geotiff(out[".tif"], {"elevation": grid}, hmap)
+    for suffix in (".las", ".laz"):
+        header = laspy.LasHeader(point_format=6, version="1.4")
+        header.scales = [1e-4] * 3
+        las = laspy.LasData(header)
+        las.x, las.y, las.z = points[:, 0], points[:, 1], points[:, 2]
+        las.classification = np.where(np.arange(len(points)) % 4, 2, 5).astype(np.uint8)
+        las.write(out[suffix])
+    return out

@@ -204,3 +204,42 @@ def _scan_work(case: tuple, bases: Bases, scratch: Path) -> Callable[[], None]:
 
 
 register_target(Target("scan-import", scan_cases, _scan_work))
+
+
+# ------------------------------------------------- surveyed maps: bags, LAS / LAZ, GeoTIFF
+_survey_options = st.fixed_dictionaries({}, optional={
+    "topic": st.sampled_from(["/map", "/elevation_mapping/elevation_map", "", "/x"]),
+    "layer": st.sampled_from(["elevation", "variance", "", "footfall_score"]),
+    "message": st.integers(-3, 3),
+    "time": st.one_of(st.sampled_from(values._SPECIAL_NUMBERS), st.floats()),
+    "classes": st.lists(st.integers(0, 255), min_size=1, max_size=3).map(tuple),
+    "statistic": st.sampled_from(["max", "min", "mean"]),
+    "band": st.integers(1, 3),
+    "bounds": st.tuples(*[st.sampled_from([-1e9, -0.1, 0.0, 0.05, 0.2, 1e9])] * 4),
+    "resolution": st.one_of(st.sampled_from([0.005, 0.02]), st.sampled_from(
+        values._SPECIAL_NUMBERS)),
+})
+survey_cases = st.tuples(st.sampled_from([".mcap", ".db3", ".las", ".laz", ".tif"]),
+                         st.lists(st.tuples(st.sampled_from(["flip", "truncate", "insert",
+                                                             "delete", "zero_run"]),
+                                            st.integers(0, 2 ** 31 - 1)), max_size=3),
+                         _survey_options)
+
+
+def _survey_work(case: tuple, bases: Bases, scratch: Path) -> Callable[[], None]:
+    suffix, edits, options = case
+
+    def work() -> None:
+        path = scratch / f"survey{suffix}"
+        data = bases.scans[suffix].read_bytes()
+        for edit, k in edits:
+            data = craft.patch_zip(data, edit, k)
+        path.write_bytes(data)
+        given = dict(options)
+        if suffix in (".las", ".laz"):  # a cloud needs a cell size; mostly a usable one
+            given.setdefault("resolution", 0.01)
+        check_map(import_terrain(path, **given))
+    return work
+
+
+register_target(Target("survey-import", survey_cases, _survey_work))

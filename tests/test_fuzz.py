@@ -143,6 +143,10 @@ FOUND = [
     # the file for hours
     ("survey-import", (".laz", [("delete", 793289931), ("flip", 1186724181),
                                 ("truncate", 1275442510)], {})),
+    # a GeoTIFF cut short of its geotransform: rasterio's NotGeoreferencedWarning beside the line
+    ("survey-import", (".tif", [("truncate", 170478)], {})),
+    # a grid_map layer whose damaged floats hold a signalling NaN: NumPy's cast warning
+    ("survey-import", (".db3", [("insert", 41090)], {})),
     # a model whose robot has its hips 0.61 m from the body origin: NaN rewards
     ("model-file", [("zip", "sizes", 708), ("meta", 100760, "replace", 0.61)]),
 ]

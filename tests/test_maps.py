@@ -6,6 +6,8 @@ with its cells placed by the format's conventions as the test states them, not b
 writers, so that an import that got a convention wrong cannot agree with itself.
 """
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -342,6 +344,7 @@ def test_a_geotiff_round_trips_heights_holes_and_resolution(tmp_path):
 
 
 def test_geotiffs_in_degrees_or_damaged_are_refused_in_one_line(tmp_path, capsys):
+    import rasterio
     band, _, want = dem(rows=10, cols=12)
     geographic = write_geotiff(tmp_path / "wgs84.tif", band, from_origin(8.5, 47.4, 1e-6, 1e-6),
                                crs="EPSG:4326")
@@ -363,6 +366,16 @@ def test_geotiffs_in_degrees_or_damaged_are_refused_in_one_line(tmp_path, capsys
     code, _, err = run(capsys, "terrain", "import", good, "--topic", "/x", "-o",
                        tmp_path / "o.npz")
     assert_user_error(code, err, "topic applies to ROS 2 bags only")
+    bare = tmp_path / "bare.tif"  # no geotransform: pixel size and place unknown
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", rasterio.errors.NotGeoreferencedWarning)
+        with rasterio.open(bare, "w", driver="GTiff", width=12, height=10, count=1,
+                           dtype="float32") as ds:
+            ds.write(band, 1)
+    code, _, err = run(capsys, "terrain", "import", bare, "-o", tmp_path / "o.npz")
+    assert_user_error(code, err, "no geotransform (no pixel size or place); give --resolution")
+    stated = import_terrain(bare, resolution=0.01)
+    assert stated.resolution == 0.01 and stated.shape == (12, 10)
     with use_limits(Limits(max_map_cells=100)):
         with pytest.raises(FootfallError, match="120 cells, above the limit of 100"):
             import_terrain(good)

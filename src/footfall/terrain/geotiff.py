@@ -15,14 +15,16 @@ Rows of a raster run from north to south, footfall's ``heights[i, j]`` along +x 
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+import warnings
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import rasterio
-from rasterio.errors import RasterioError
+from rasterio.errors import NotGeoreferencedWarning, RasterioError
 from rasterio.transform import Affine
 from rasterio.windows import Window
 
@@ -47,7 +49,7 @@ def _open_errors() -> tuple[type[BaseException], ...]:
             MemoryError, OverflowError)
 
 
-def _window(ds: Any, bounds: tuple[float, float, float, float] | None) -> Any:
+def _window(ds: Any, t: Any, bounds: tuple[float, float, float, float] | None) -> Any:
     """The pixel window ``bounds`` touches (the whole raster for None), within the raster."""
     if bounds is None:
         return Window(0, 0, ds.width, ds.height)
@@ -55,7 +57,7 @@ def _window(ds: Any, bounds: tuple[float, float, float, float] | None) -> Any:
     if not (x1 > x0 and y1 > y0):
         raise FootfallError(f"bounds must be x min, y min, x max, y max with max > min, got "
                             f"{list(bounds)}")
-    t = ds.transform  # north-up (checked): column = (x - c) / a, row = (y - f) / e
+    # t: the raster's transform, north-up (checked): column = (x - c) / a, row = (y - f) / e
     col0, col1 = math.floor((x0 - t.c) / t.a + _EDGE), math.ceil((x1 - t.c) / t.a - _EDGE)
     row0, row1 = math.floor((y1 - t.f) / t.e + _EDGE), math.ceil((y0 - t.f) / t.e - _EDGE)
     col0, row0 = max(col0, 0), max(row0, 0)
@@ -82,13 +84,20 @@ def read_geotiff(path: Path, band: int = 1, resolution: float | None = None,
         cells than ``max_map_cells``.
     """
     try:
-        with rasterio.open(path) as ds:
+        with contextlib.ExitStack() as stack, warnings.catch_warnings():
+            warnings.simplefilter("ignore", NotGeoreferencedWarning)  # said below, in a line
+            ds = stack.enter_context(rasterio.open(path))
             if ds.driver != "GTiff":
                 raise FootfallError(f"a {ds.driver} raster, not a GeoTIFF")
             if not 1 <= band <= ds.count:
                 raise FootfallError(f"the file has {ds.count} band(s); band {band} does not "
                                     "exist")
             t = ds.transform
+            if t.is_identity:  # GDAL's answer for a file without a geotransform
+                if resolution is None:
+                    raise FootfallError("the raster has no geotransform (no pixel size or "
+                                        "place); give --resolution to state its cell size")
+                t = Affine(resolution, 0.0, 0.0, 0.0, -resolution, ds.height * resolution)
             if t.b != 0 or t.d != 0 or t.a <= 0 or t.e >= 0:
                 raise FootfallError(f"the raster is not north-up (transform {list(t)[:6]}); "
                                     "footfall reads north-up rasters")
@@ -97,14 +106,15 @@ def read_geotiff(path: Path, band: int = 1, resolution: float | None = None,
             unit = crs_unit(ds.crs)
             if resolution is None:
                 check_metres("the raster's coordinates", unit, "--resolution")
-            window = _window(ds, bounds)
+            window = _window(ds, t, bounds)
             cells = int(window.width) * int(window.height)
             limit = current_limits().max_map_cells
             if cells > limit:
                 raise FootfallError(f"the raster{' window' if bounds else ''} has {cells} "
                                     f"cells, above the limit of {limit} (raise it with "
                                     "--limit max_map_cells=N, or read a part with --bounds)")
-            data = ds.read(band, window=window).astype(np.float64)
+            with np.errstate(invalid="ignore"):  # a signalling NaN: a quiet one, a hole
+                data = ds.read(band, window=window).astype(np.float64)
             nodata = ds.nodatavals[band - 1]
             win_t = (t.a, 0.0, t.c + int(window.col_off) * t.a, 0.0, t.e,
                      t.f + int(window.row_off) * t.e)

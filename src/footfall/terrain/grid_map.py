@@ -112,7 +112,8 @@ def unwrapped(matrix: np.ndarray, outer_start: int, inner_start: int) -> np.ndar
 
 def heights_of(matrix: np.ndarray, outer_start: int = 0, inner_start: int = 0) -> np.ndarray:
     """footfall's heights ``[i, j]`` (float64, NaN where no data) of a stored layer matrix."""
-    return unwrapped(matrix, outer_start, inner_start)[::-1, ::-1].astype(np.float64)
+    with np.errstate(invalid="ignore"):  # a signalling NaN of damaged data: a quiet NaN, a hole
+        return unwrapped(matrix, outer_start, inner_start)[::-1, ::-1].astype(np.float64)
 
 
 def layer_of(heights: np.ndarray) -> tuple[np.ndarray, list[tuple[str, int, int]]]:

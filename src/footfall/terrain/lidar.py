@@ -173,6 +173,12 @@ def read_lidar(path: Path, resolution: float, classes: tuple[int, ...] | None = 
         text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise FootfallError(f"not a readable LAS / LAZ file, or a truncated one ({text})"
                             ) from None
+    except BaseException as exc:  # the LAZ decoder (Rust) panics on some damaged chunks:
+        if type(exc).__name__ != "PanicException":  # pyo3's, a BaseException by design
+            raise
+        text = str(exc).splitlines()[0] if str(exc) else "a panic"
+        raise FootfallError(f"not a readable LAZ file: its decoder failed on damaged data "
+                            f"({text})") from None
     finally:
         quiet.level = level
     if points is None or len(points) == 0:

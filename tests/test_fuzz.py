@@ -147,6 +147,8 @@ FOUND = [
     ("survey-import", (".tif", [("truncate", 170478)], {})),
     # a grid_map layer whose damaged floats hold a signalling NaN: NumPy's cast warning
     ("survey-import", (".db3", [("insert", 41090)], {})),
+    # a run step whose slip is 6.6e16 m: accepted by `store check` as a distance
+    ("store", ([("cell", "run_steps", 2509, 318420, 6.590407141598128e+16)], "check")),
     # a model whose robot has its hips 0.61 m from the body origin: NaN rewards
     ("model-file", [("zip", "sizes", 708), ("meta", 100760, "replace", 0.61)]),
 ]

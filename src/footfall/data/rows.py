@@ -172,6 +172,9 @@ def run_head(row: tuple) -> dict[str, Any]:
             "result": json_object(result, "result"), "n_steps": n_steps}
 
 
+MAX_SLIP = 1e3  # [m] no stance foot of a run travels this far: a larger slip is a damaged row
+
+
 def run_step(row: tuple) -> RunStep:
     """A run step from its ``run_steps`` row (STEP_COLUMNS)."""
     k, swing_leg, st, st_s, st_d, c, c_s, c_d, r, r_s, r_d, chosen, t0, t1, td, td_s, td_d, \
@@ -183,7 +186,9 @@ def run_step(row: tuple) -> RunStep:
     touchdown = array(td, td_s, td_d, "touchdown", finite=False)
     if np.isinf(touchdown).any():
         raise FootfallError("touchdown holds an infinite coordinate")
+    travel = real(slip, "slip", nullable=True)
+    if not (math.isnan(travel) or 0.0 <= travel <= MAX_SLIP):
+        raise FootfallError(f"slip must be a distance from 0 to {MAX_SLIP:g} m, got {travel!r}")
     return RunStep(integer(k, "k"), state, array(c, c_s, c_d, "candidates"), rewards,
                    integer(chosen, "chosen"), real(t0, "t_liftoff"),
-                   real(t1, "t_touchdown", nullable=True), touchdown,
-                   real(slip, "slip", nullable=True))
+                   real(t1, "t_touchdown", nullable=True), touchdown, travel)

@@ -149,6 +149,8 @@ FOUND = [
     ("survey-import", (".db3", [("insert", 41090)], {})),
     # a run step whose slip is 6.6e16 m: accepted by `store check` as a distance
     ("store", ([("cell", "run_steps", 2509, 318420, 6.590407141598128e+16)], "check")),
+    # an input map named by an unpaired surrogate: reading its size raised UnicodeEncodeError
+    ("cli", (2, [(30, False, 30, "\udb06")])),
     # a model whose robot has its hips 0.61 m from the body origin: NaN rewards
     ("model-file", [("zip", "sizes", 708), ("meta", 100760, "replace", 0.61)]),
 ]

@@ -33,6 +33,8 @@ def readable_file(path: str | os.PathLike) -> Path:
         raise FootfallError(f"{p}: permission denied") from None
     except OSError as exc:
         raise FootfallError(f"{p}: cannot read ({exc.strerror or exc})") from None
+    except ValueError:  # a name the file system cannot hold (NUL, an unpaired surrogate)
+        raise FootfallError(f"{ascii(str(p))}: not a file name this system can hold") from None
     if not stat.S_ISREG(st.st_mode):
         raise FootfallError(f"{p}: not a regular file")
     if not os.access(p, os.R_OK):

@@ -151,6 +151,9 @@ FOUND = [
     ("store", ([("cell", "run_steps", 2509, 318420, 6.590407141598128e+16)], "check")),
     # an input map named by an unpaired surrogate: reading its size raised UnicodeEncodeError
     ("cli", (2, [(30, False, 30, "\udb06")])),
+    # a flipped byte that SQLite's integrity check quotes: its message was not UTF-8
+    ("store", ([("cell", "run_steps", 1780, 2971, -6.901954443138086e-142),
+                ("bytes", "flip", 2147483647)], "check")),
     # a model whose robot has its hips 0.61 m from the body origin: NaN rewards
     ("model-file", [("zip", "sizes", 708), ("meta", 100760, "replace", 0.61)]),
 ]

@@ -133,6 +133,9 @@ def _sqlite_errors(report: StoreReport, what: str) -> Iterator[None]:
         yield
     except sqlite3.Error as exc:
         report.problems.append(f"corrupt demonstration store (reading {what}: {one_line(exc)})")
+    except UnicodeDecodeError:  # SQLite's own message about the damage holds bytes of it
+        report.problems.append(f"corrupt demonstration store (reading {what}: SQLite's error "
+                               "message is not UTF-8)")
 
 
 def _check_rows(con: sqlite3.Connection, report: StoreReport, version: int) -> None:

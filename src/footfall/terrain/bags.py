@@ -81,11 +81,10 @@ def grid_map_typestore() -> Any:
     return store
 
 
-def _read_errors() -> tuple[type[BaseException], ...]:
-    """What a damaged bag raises inside ``rosbags`` and its storage libraries."""
-    return (ReaderError, SerdeError, TypesysError, apsw.Error, OSError, ValueError, KeyError, IndexError,
-            TypeError, AttributeError, AssertionError, EOFError, struct.error, sqlite3.Error,
-            UnicodeError, OverflowError, MemoryError, RuntimeError)
+# What a damaged bag raises inside rosbags and its storage libraries.
+_READ_ERRORS = (ReaderError, SerdeError, TypesysError, apsw.Error, OSError, ValueError, KeyError,
+                IndexError, TypeError, AttributeError, AssertionError, EOFError, struct.error,
+                sqlite3.Error, UnicodeError, OverflowError, MemoryError, RuntimeError)
 
 
 def check_bag_path(path: Path) -> None:
@@ -137,7 +136,7 @@ def read_grid_map(path: str | os.PathLike, choice: BagChoice = BagChoice()
         msg, info = _pick_message(p, choice)
     except FootfallError as exc:
         raise FootfallError(f"{p}: {exc}") from None
-    except _read_errors() as exc:
+    except _READ_ERRORS as exc:
         raise FootfallError(f"{p}: not a readable ROS 2 bag, or a damaged one "
                             f"({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
                             ) from None
@@ -173,8 +172,8 @@ def _pick_message(p: Path, choice: BagChoice) -> tuple[Any, dict]:
         connections = [c for c in reader.connections if c.topic == topic]
         count = sum(c.msgcount for c in connections)
         start = reader.start_time
-        stamps = [t for _, t, _ in _headers(reader, connections)] if choice.time is not None \
-            else None
+        stamps = ([t for _, t, _ in reader.messages(connections=connections)]
+                  if choice.time is not None else None)
         index = _message_index(choice, count, stamps, start)
         for k, (conn, t, raw) in enumerate(reader.messages(connections=connections)):
             if k == index:
@@ -183,11 +182,6 @@ def _pick_message(p: Path, choice: BagChoice) -> tuple[Any, dict]:
                              "time": (t - start) / NS, "stamp_ns": int(t)}
     raise FootfallError(f"topic {topic!r} holds {count} messages by the bag's index, but "
                         f"fewer could be read (message {index})")
-
-
-def _headers(reader: Any, connections: list) -> list:
-    """(connection, time [ns], None) of every message on ``connections``, without decoding."""
-    return [(c, t, None) for c, t, _ in reader.messages(connections=connections)]
 
 
 def _message_index(choice: BagChoice, count: int, stamps: list | None, start: int) -> int:
@@ -247,11 +241,7 @@ def _message_map(msg: Any, layer: str, path: Path, info: dict) -> HeightMap:
             "message": info["message"], "messages": info["messages"],
             "time": info["time"], "map_centre": list(geometry.centre),
             "start_index": [int(msg.outer_start_index), int(msg.inner_start_index)]}
-    try:
-        return HeightMap(heights, resolution, geometry.origin(heights.shape), geometry.frame,
-                         meta)
-    except FootfallError as exc:
-        raise FootfallError(f"{exc}") from None
+    return HeightMap(heights, resolution, geometry.origin(heights.shape), geometry.frame, meta)
 
 
 # --------------------------------------------------------------------- writing

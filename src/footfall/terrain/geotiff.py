@@ -44,9 +44,9 @@ _SQUARE = 1e-9  # relative difference of pixel width and height still taken as s
 _EDGE = 1e-6  # [pixels] a bound this close to a pixel edge is on it (survey coordinates round)
 
 
-def _open_errors() -> tuple[type[BaseException], ...]:
-    return (RasterioError, OSError, ValueError, IndexError, TypeError, RuntimeError,
-            MemoryError, OverflowError)
+# What a damaged raster raises inside rasterio (GDAL).
+_OPEN_ERRORS = (RasterioError, OSError, ValueError, IndexError, TypeError, RuntimeError,
+                MemoryError, OverflowError)
 
 
 def _window(ds: Any, t: Any, bounds: tuple[float, float, float, float] | None) -> Any:
@@ -122,7 +122,7 @@ def read_geotiff(path: Path, band: int = 1, resolution: float | None = None,
             dtype, size = ds.dtypes[band - 1], (ds.width, ds.height)
     except FootfallError:
         raise
-    except _open_errors() as exc:
+    except _OPEN_ERRORS as exc:
         text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise FootfallError(f"not a readable GeoTIFF, or a damaged one ({text})") from None
     if nodata is not None and not math.isnan(nodata):
